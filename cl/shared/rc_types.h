@@ -1,0 +1,138 @@
+/* Structs shared by the host (C++20) and the OpenCL kernels (OpenCL C 1.2), declared once.
+ *
+ * Rules that keep both compilers agreeing on the layout: no bool, size_t or float3 (a float3 is
+ * 16 bytes in OpenCL C); vectors are rc_float4 (16-byte aligned on both sides); every struct
+ * states its size, and src/clrt/layout.cpp checks sizeof/offsetof on the host while
+ * tests/clrt/layout_test.cpp checks them on the device. */
+#ifndef RAYCLASS_RC_TYPES_H
+#define RAYCLASS_RC_TYPES_H
+
+#ifdef __OPENCL_VERSION__
+typedef uint rc_uint;
+typedef float4 rc_float4;
+#else
+#include <cstdint>
+typedef uint32_t rc_uint;
+struct alignas(16) rc_float4 {
+    float x, y, z, w;
+};
+#endif
+
+/* Marks "no primitive" in hits, id buffers and the id AOV. */
+#define RC_NO_HIT 0xFFFFFFFFu
+
+/* Primitive ids are global: triangles [0, nTriangles), then spheres, then quadrics. Equal hit
+ * distances are broken by the lower id in every query path. */
+
+/* A triangle's vertices in world space (w unused). 48 bytes. */
+typedef struct RcTriangle {
+    rc_float4 v0, v1, v2;
+} RcTriangle;
+
+/* What shading needs of a triangle: vertex normals (w = 0 for all three when the mesh has none,
+ * then the geometric normal is used), material and object. 64 bytes. */
+typedef struct RcTriangleShading {
+    rc_float4 n0, n1, n2;
+    rc_uint material;
+    rc_uint object;
+    rc_uint hasNormals;
+    rc_uint pad;
+} RcTriangleShading;
+
+/* centerRadius = (cx, cy, cz, r). 32 bytes. */
+typedef struct RcSphere {
+    rc_float4 centerRadius;
+    rc_uint material;
+    rc_uint object;
+    rc_uint pad0, pad1;
+} RcSphere;
+
+/* Q(p) = A x^2 + B y^2 + C z^2 + D xy + E xz + F yz + G x + H y + I z + J = 0, clipped to the box
+ * [boxMin, boxMax]. c0 = (A, B, C, D), c1 = (E, F, G, H), c2 = (I, J, 0, 0). 96 bytes. */
+typedef struct RcQuadric {
+    rc_float4 c0, c1, c2;
+    rc_float4 boxMin, boxMax;
+    rc_uint material;
+    rc_uint object;
+    rc_uint pad0, pad1;
+} RcQuadric;
+
+/* Whitted material. kd, ks: Phong diffuse and specular (rgb); kr, kt: mirror reflection and
+ * transmission (rgb); emission (rgb). With fresnel != 0 the reflected share of kt follows the
+ * dielectric Fresnel term of ior. 96 bytes. */
+typedef struct RcMaterial {
+    rc_float4 kd, ks, kr, kt, emission;
+    float shininess;
+    float ior;
+    rc_uint fresnel;
+    rc_uint pad;
+} RcMaterial;
+
+/* A point light: position (w unused) and rgb intensity (w unused). 32 bytes. */
+typedef struct RcLight {
+    rc_float4 position;
+    rc_float4 intensity;
+} RcLight;
+
+/* Pinhole camera. The eye ray of pixel (x, y) (row 0 at the top) is
+ * normalize(forward + sx * right + sy * up), sx = (2 (x + 0.5) / width - 1) * tanHalfFovX,
+ * sy = (1 - 2 (y + 0.5) / height) * tanHalfFovY: the same formula in every eye-ray path.
+ * right/up/forward are unit vectors. 80 bytes. */
+typedef struct RcCamera {
+    rc_float4 position;
+    rc_float4 forward, right, up;
+    float tanHalfFovX;
+    float tanHalfFovY;
+    rc_uint width;
+    rc_uint height;
+} RcCamera;
+
+/* Kinds of rays, for statistics and shading decisions. */
+#define RC_RAY_EYE 0u
+#define RC_RAY_SHADOW 1u
+#define RC_RAY_REFLECTION 2u
+#define RC_RAY_REFRACTION 3u
+
+/* A ray of a generation. origin.w = tmin (0 for spawned rays: their origin is already offset),
+ * direction.w = tmax (unit direction). weight = rgb throughput from the eye (w unused); depth = 0
+ * for eye rays. 64 bytes. */
+typedef struct RcRay {
+    rc_float4 origin;
+    rc_float4 direction;
+    rc_float4 weight;
+    rc_uint pixel;
+    rc_uint depth;
+    rc_uint kind;
+    rc_uint pad;
+} RcRay;
+
+/* Nearest hit of a ray: distance t along the unit direction, primitive id (RC_NO_HIT on a miss),
+ * and the barycentric (u, v) for triangles. 16 bytes. */
+typedef struct RcHit {
+    float t;
+    rc_uint prim;
+    float u, v;
+} RcHit;
+
+/* A light's contribution that becomes visible if the shadow ray from origin to the light is
+ * unblocked. origin.w = 0, direction.w = distance to the light. 48 bytes. */
+typedef struct RcShadowRay {
+    rc_float4 origin;
+    rc_float4 direction;
+    rc_float4 contribution; /* rgb; w = 1 when the ray is live, 0 for an empty slot */
+} RcShadowRay;
+
+/* Scalar parameters of a render passed to every kernel. 64 bytes. */
+typedef struct RcRenderParams {
+    rc_uint nTriangles;
+    rc_uint nSpheres;
+    rc_uint nQuadrics;
+    rc_uint nLights;
+    rc_uint maxDepth;
+    float minWeight;
+    rc_uint pad0, pad1;
+    rc_float4 ambient;    /* rgb ambient light, times kd */
+    rc_float4 background; /* rgb radiance of rays that leave the scene */
+} RcRenderParams;
+
+#endif
