@@ -1,0 +1,199 @@
+// Ray-primitive intersection on the host, in float (the same arithmetic as cl/intersect.cl, for
+// tests and host-side queries) and in double (the reference renderer's oracle).
+//
+// Triangles: Moeller & Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection" (1997).
+// Spheres: the cancellation-free discriminant of Haines et al., "Precision Improvements for
+// Ray/Sphere Intersection", Ray Tracing Gems ch. 7 (2019).
+// Quadrics: the implicit quadratic along the ray with the stable root pair, clipped to a box.
+//
+// Every routine accepts only hits with tMin < t < tMax. Among equal distances the lower primitive
+// id wins (HitIsBetter), in every query path, so all paths agree exactly.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <utility>
+
+#include <glm/glm.hpp>
+
+#include "rayclass/scene/scene.h"
+#include "rc_types.h"
+
+namespace rayclass::geometry {
+
+template <typename T>
+struct Ray {
+    glm::vec<3, T> o;
+    glm::vec<3, T> d;  // need not be unit; t is measured in units of |d|
+    T tMin = T(0);
+    T tMax = std::numeric_limits<T>::infinity();
+};
+
+template <typename T>
+struct Hit {
+    T t = std::numeric_limits<T>::infinity();
+    uint32_t prim = RC_NO_HIT;
+    T u = 0, v = 0;  // barycentrics of vertices 1 and 2 for triangles
+    bool Valid() const { return prim != RC_NO_HIT; }
+};
+
+template <typename T>
+inline bool HitIsBetter(T t, uint32_t prim, const Hit<T>& best) {
+    return t < best.t || (t == best.t && prim < best.prim);
+}
+
+template <typename T>
+bool IntersectTriangle(const Ray<T>& ray, const glm::vec<3, T>& p0, const glm::vec<3, T>& p1,
+                       const glm::vec<3, T>& p2, T& t, T& u, T& v) {
+    const auto e1 = p1 - p0;
+    const auto e2 = p2 - p0;
+    const auto pv = glm::cross(ray.d, e2);
+    const T det = glm::dot(e1, pv);
+    if (det == T(0)) return false;  // parallel or degenerate: no single hit point
+    const T invDet = T(1) / det;
+    const auto tv = ray.o - p0;
+    u = glm::dot(tv, pv) * invDet;
+    if (u < T(0) || u > T(1)) return false;
+    const auto qv = glm::cross(tv, e1);
+    v = glm::dot(ray.d, qv) * invDet;
+    if (v < T(0) || u + v > T(1)) return false;
+    t = glm::dot(e2, qv) * invDet;
+    return t > ray.tMin && t < ray.tMax;
+}
+
+template <typename T>
+bool IntersectSphere(const Ray<T>& ray, const glm::vec<3, T>& center, T radius, T& t) {
+    const auto f = ray.o - center;
+    const T a = glm::dot(ray.d, ray.d);
+    const T b = -glm::dot(f, ray.d);  // half of the usual -b
+    const auto l = f + (b / a) * ray.d;
+    const T disc = a * (radius * radius - glm::dot(l, l));
+    if (disc < T(0)) return false;
+    const T c = glm::dot(f, f) - radius * radius;
+    const T q = b + std::copysign(std::sqrt(disc), b);
+    T t0 = q == T(0) ? T(0) : c / q;
+    T t1 = q / a;
+    if (t0 > t1) std::swap(t0, t1);
+    if (t0 > ray.tMin && t0 < ray.tMax) {
+        t = t0;
+        return true;
+    }
+    if (t1 > ray.tMin && t1 < ray.tMax) {
+        t = t1;
+        return true;
+    }
+    return false;
+}
+
+template <typename T>
+T QuadricValue(const std::array<T, 10>& c, const glm::vec<3, T>& p) {
+    return c[0] * p.x * p.x + c[1] * p.y * p.y + c[2] * p.z * p.z + c[3] * p.x * p.y +
+           c[4] * p.x * p.z + c[5] * p.y * p.z + c[6] * p.x + c[7] * p.y + c[8] * p.z + c[9];
+}
+
+template <typename T>
+glm::vec<3, T> QuadricGradient(const std::array<T, 10>& c, const glm::vec<3, T>& p) {
+    return {T(2) * c[0] * p.x + c[3] * p.y + c[4] * p.z + c[6],
+            T(2) * c[1] * p.y + c[3] * p.x + c[5] * p.z + c[7],
+            T(2) * c[2] * p.z + c[4] * p.x + c[5] * p.y + c[8]};
+}
+
+template <typename T>
+bool IntersectQuadric(const Ray<T>& ray, const std::array<T, 10>& c, const glm::vec<3, T>& lo,
+                      const glm::vec<3, T>& hi, T& t) {
+    const auto& o = ray.o;
+    const auto& d = ray.d;
+    const T a = c[0] * d.x * d.x + c[1] * d.y * d.y + c[2] * d.z * d.z + c[3] * d.x * d.y +
+                c[4] * d.x * d.z + c[5] * d.y * d.z;
+    const T b = T(2) * (c[0] * o.x * d.x + c[1] * o.y * d.y + c[2] * o.z * d.z) +
+                c[3] * (o.x * d.y + o.y * d.x) + c[4] * (o.x * d.z + o.z * d.x) +
+                c[5] * (o.y * d.z + o.z * d.y) + c[6] * d.x + c[7] * d.y + c[8] * d.z;
+    const T cc = QuadricValue(c, o);
+    T roots[2];
+    int nRoots = 0;
+    if (a == T(0)) {
+        if (b == T(0)) return false;
+        roots[nRoots++] = -cc / b;
+    } else {
+        const T disc = b * b - T(4) * a * cc;
+        if (disc < T(0)) return false;
+        const T q = T(-0.5) * (b + std::copysign(std::sqrt(disc), b));
+        T r0 = q / a;
+        T r1 = q == T(0) ? r0 : cc / q;
+        if (r0 > r1) std::swap(r0, r1);
+        roots[nRoots++] = r0;
+        roots[nRoots++] = r1;
+    }
+    for (int i = 0; i < nRoots; ++i) {
+        const T ti = roots[i];
+        if (!(ti > ray.tMin && ti < ray.tMax)) continue;
+        const auto p = o + ti * d;
+        if (p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z &&
+            p.z <= hi.z) {
+            t = ti;
+            return true;
+        }
+    }
+    return false;
+}
+
+template <typename T>
+std::array<T, 10> QuadricCoefficients(const scene::Quadric& q) {
+    std::array<T, 10> c;
+    for (int i = 0; i < 10; ++i) c[i] = T(q.c[i]);
+    return c;
+}
+
+// Tests primitive `id` of `scene` and updates `best` when the hit is better (nearer, or equally
+// near with a lower id). Returns whether it updated.
+template <typename T>
+bool IntersectPrimitive(const scene::Scene& scene, uint32_t id, const Ray<T>& ray, Hit<T>& best) {
+    using V = glm::vec<3, T>;
+    // A hit at exactly best.t may still win on its lower id, so the bound is one ulp beyond it.
+    Ray<T> r = ray;
+    r.tMax = std::min(ray.tMax, std::nextafter(best.t, std::numeric_limits<T>::infinity()));
+    T t = 0, u = 0, v = 0;
+    bool hit = false;
+    if (id < scene.SphereBase()) {
+        const auto& tri = scene.triangles[id];
+        hit = IntersectTriangle(r, V(tri.p[0]), V(tri.p[1]), V(tri.p[2]), t, u, v);
+    } else if (id < scene.QuadricBase()) {
+        const auto& s = scene.spheres[id - scene.SphereBase()];
+        hit = IntersectSphere(r, V(s.center), T(s.radius), t);
+    } else {
+        const auto& q = scene.quadrics[id - scene.QuadricBase()];
+        hit = IntersectQuadric(r, QuadricCoefficients<T>(q), V(q.boxMin), V(q.boxMax), t);
+    }
+    if (!hit || !HitIsBetter(t, id, best)) return false;
+    best.t = t;
+    best.prim = id;
+    best.u = u;
+    best.v = v;
+    return true;
+}
+
+// Nearest hit over every primitive: the baseline every acceleration is checked against.
+template <typename T>
+Hit<T> IntersectBruteForce(const scene::Scene& scene, const Ray<T>& ray) {
+    Hit<T> best;
+    best.t = ray.tMax;
+    for (uint32_t id = 0; id < scene.PrimitiveCount(); ++id) IntersectPrimitive(scene, id, ray, best);
+    if (!best.Valid()) best.t = std::numeric_limits<T>::infinity();
+    return best;
+}
+
+// Whether anything blocks the segment (tMin, tMax) of the ray: the shadow query.
+template <typename T>
+bool Occluded(const scene::Scene& scene, const Ray<T>& ray) {
+    Hit<T> best;
+    best.t = ray.tMax;
+    for (uint32_t id = 0; id < scene.PrimitiveCount(); ++id) {
+        if (IntersectPrimitive(scene, id, ray, best)) return true;
+    }
+    return false;
+}
+
+}  // namespace rayclass::geometry
