@@ -2,8 +2,10 @@
 
 namespace rayclass {
 
-ClError::ClError(std::string call, int code, std::string detail)
-    : Error(call + " failed: " + std::to_string(code) + (detail.empty() ? "" : "\n" + detail)),
+ClError::ClError(const std::string& call, int code, const std::string& name,
+                 const std::string& detail)
+    : Error(call + " failed with " + name + " (" + std::to_string(code) + ")" +
+            (detail.empty() ? "" : "\n" + detail)),
       code_(code) {}
 
 }  // namespace rayclass

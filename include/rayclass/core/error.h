@@ -40,7 +40,8 @@ private:
 // program builds, the build log.
 class ClError : public Error {
 public:
-    ClError(std::string call, int code, std::string detail = {});
+    ClError(const std::string& call, int code, const std::string& name,
+            const std::string& detail = {});
     int code() const { return code_; }
 
 private:

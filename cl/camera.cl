@@ -1,0 +1,28 @@
+/* Eye rays: one per pixel, the formula documented at RcCamera in rc_types.h. A launch writes the
+ * rays of pixels [first, first + n) so big images go through in batches. */
+#include "rc_types.h"
+
+#pragma OPENCL FP_CONTRACT OFF
+
+inline float3 rc_eye_direction(__constant const RcCamera* cam, uint x, uint y) {
+    const float sx = (2.0f * ((float)x + 0.5f) / (float)cam->width - 1.0f) * cam->tanHalfFovX;
+    const float sy = (1.0f - 2.0f * ((float)y + 0.5f) / (float)cam->height) * cam->tanHalfFovY;
+    return normalize(cam->forward.xyz + sx * cam->right.xyz + sy * cam->up.xyz);
+}
+
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_generate_eye_rays(
+    __constant const RcCamera* cam, uint first, uint n, __global RcRay* rays) {
+    const uint i = get_global_id(0);
+    if (i >= n) return;
+    const uint pixel = first + i;
+    const uint x = pixel % cam->width, y = pixel / cam->width;
+    RcRay r;
+    r.origin = (float4)(cam->position.xyz, 0.0f);
+    r.direction = (float4)(rc_eye_direction(cam, x, y), INFINITY);
+    r.weight = (float4)(1.0f, 1.0f, 1.0f, 1.0f);
+    r.pixel = pixel;
+    r.depth = 0;
+    r.kind = RC_RAY_EYE;
+    r.pad = 0;
+    rays[i] = r;
+}

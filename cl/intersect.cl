@@ -1,0 +1,153 @@
+/* Ray-primitive intersection in float, the device twin of include/rayclass/geometry/intersect.h
+ * (same formulas, same order of operations, no contraction), so host and device agree on a grid
+ * of rays. Every routine accepts only tmin < t < tmax. */
+#include "rc_types.h"
+
+#pragma OPENCL FP_CONTRACT OFF
+
+/* Moeller & Trumbore 1997. u, v: barycentrics of vertices 1 and 2. */
+inline int rc_intersect_triangle(float3 o, float3 d, float tmin, float tmax, float3 p0, float3 p1,
+                                 float3 p2, float* t, float* u, float* v) {
+    const float3 e1 = p1 - p0;
+    const float3 e2 = p2 - p0;
+    const float3 pv = cross(d, e2);
+    const float det = dot(e1, pv);
+    if (det == 0.0f) return 0;
+    const float invDet = 1.0f / det;
+    const float3 tv = o - p0;
+    *u = dot(tv, pv) * invDet;
+    if (*u < 0.0f || *u > 1.0f) return 0;
+    const float3 qv = cross(tv, e1);
+    *v = dot(d, qv) * invDet;
+    if (*v < 0.0f || *u + *v > 1.0f) return 0;
+    *t = dot(e2, qv) * invDet;
+    return *t > tmin && *t < tmax;
+}
+
+/* Cancellation-free discriminant, Ray Tracing Gems ch. 7. */
+inline int rc_intersect_sphere(float3 o, float3 d, float tmin, float tmax, float4 centerRadius,
+                               float* t) {
+    const float3 f = o - centerRadius.xyz;
+    const float r = centerRadius.w;
+    const float a = dot(d, d);
+    const float b = -dot(f, d);
+    const float3 l = f + (b / a) * d;
+    const float disc = a * (r * r - dot(l, l));
+    if (disc < 0.0f) return 0;
+    const float c = dot(f, f) - r * r;
+    const float q = b + copysign(sqrt(disc), b);
+    float t0 = q == 0.0f ? 0.0f : c / q;
+    float t1 = q / a;
+    if (t0 > t1) {
+        const float s = t0;
+        t0 = t1;
+        t1 = s;
+    }
+    if (t0 > tmin && t0 < tmax) {
+        *t = t0;
+        return 1;
+    }
+    if (t1 > tmin && t1 < tmax) {
+        *t = t1;
+        return 1;
+    }
+    return 0;
+}
+
+inline float rc_quadric_value(float4 c0, float4 c1, float4 c2, float3 p) {
+    return c0.x * p.x * p.x + c0.y * p.y * p.y + c0.z * p.z * p.z + c0.w * p.x * p.y +
+           c1.x * p.x * p.z + c1.y * p.y * p.z + c1.z * p.x + c1.w * p.y + c2.x * p.z + c2.y;
+}
+
+inline float3 rc_quadric_gradient(float4 c0, float4 c1, float4 c2, float3 p) {
+    return (float3)(2.0f * c0.x * p.x + c0.w * p.y + c1.x * p.z + c1.z,
+                    2.0f * c0.y * p.y + c0.w * p.x + c1.y * p.z + c1.w,
+                    2.0f * c0.z * p.z + c1.x * p.x + c1.y * p.y + c2.x);
+}
+
+inline int rc_inside_box(float3 p, float3 lo, float3 hi) {
+    return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
+}
+
+/* The quadric along the ray, a t^2 + b t + c, with the stable root pair; the nearest root in
+ * (tmin, tmax) whose point lies in the clip box wins. */
+inline int rc_intersect_quadric(float3 o, float3 d, float tmin, float tmax,
+                                __global const RcQuadric* q, float* t) {
+    const float4 c0 = q->c0, c1 = q->c1, c2 = q->c2;
+    const float a = c0.x * d.x * d.x + c0.y * d.y * d.y + c0.z * d.z * d.z + c0.w * d.x * d.y +
+                    c1.x * d.x * d.z + c1.y * d.y * d.z;
+    const float b = 2.0f * (c0.x * o.x * d.x + c0.y * o.y * d.y + c0.z * o.z * d.z) +
+                    c0.w * (o.x * d.y + o.y * d.x) + c1.x * (o.x * d.z + o.z * d.x) +
+                    c1.y * (o.y * d.z + o.z * d.y) + c1.z * d.x + c1.w * d.y + c2.x * d.z;
+    const float c = rc_quadric_value(c0, c1, c2, o);
+    float roots[2];
+    int nRoots = 0;
+    if (a == 0.0f) {
+        if (b == 0.0f) return 0;
+        roots[nRoots++] = -c / b;
+    } else {
+        const float disc = b * b - 4.0f * a * c;
+        if (disc < 0.0f) return 0;
+        const float qq = -0.5f * (b + copysign(sqrt(disc), b));
+        float r0 = qq / a;
+        float r1 = qq == 0.0f ? r0 : c / qq;
+        if (r0 > r1) {
+            const float s = r0;
+            r0 = r1;
+            r1 = s;
+        }
+        roots[nRoots++] = r0;
+        roots[nRoots++] = r1;
+    }
+    const float3 lo = q->boxMin.xyz, hi = q->boxMax.xyz;
+    for (int i = 0; i < nRoots; ++i) {
+        const float ti = roots[i];
+        if (!(ti > tmin && ti < tmax)) continue;
+        if (rc_inside_box(o + ti * d, lo, hi)) {
+            *t = ti;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Waechter & Binder, Ray Tracing Gems ch. 6: move p off the surface by 256 ulps along n (unit,
+ * on the side the new ray leaves towards), or by an absolute 2^-16 near the origin. */
+inline float rc_offset_component(float p, float n) {
+    const int ulps = convert_int_rtz(256.0f * n);
+    const float stepped = as_float(as_int(p) + (p < 0.0f ? -ulps : ulps));
+    return fabs(p) < (1.0f / 32.0f) ? p + (1.0f / 65536.0f) * n : stepped;
+}
+
+inline float3 rc_offset_ray_origin(float3 p, float3 n) {
+    return (float3)(rc_offset_component(p.x, n.x), rc_offset_component(p.y, n.y),
+                    rc_offset_component(p.z, n.z));
+}
+
+/* Nearest hit of one ray over primitive `id`, with the lower-id tie-break. Returns 1 when it
+ * improved *best. */
+inline int rc_intersect_primitive(uint id, float3 o, float3 d, float tmin, float tmax,
+                                  __global const RcTriangle* triangles,
+                                  __global const RcSphere* spheres,
+                                  __global const RcQuadric* quadrics, uint nTriangles,
+                                  uint nSpheres, RcHit* best) {
+    /* A hit at exactly best->t may still win on its lower id. */
+    const float bound = fmin(tmax, nextafter(best->t, INFINITY));
+    float t = 0.0f, u = 0.0f, v = 0.0f;
+    int hit;
+    if (id < nTriangles) {
+        __global const RcTriangle* tri = triangles + id;
+        hit = rc_intersect_triangle(o, d, tmin, bound, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, &t,
+                                    &u, &v);
+    } else if (id < nTriangles + nSpheres) {
+        hit = rc_intersect_sphere(o, d, tmin, bound, spheres[id - nTriangles].centerRadius, &t);
+    } else {
+        hit = rc_intersect_quadric(o, d, tmin, bound, quadrics + (id - nTriangles - nSpheres), &t);
+    }
+    if (!hit || !(t < best->t || (t == best->t && id < best->prim))) return 0;
+    best->t = t;
+    best->prim = id;
+    best->u = u;
+    best->v = v;
+    return 1;
+}

@@ -1,0 +1,174 @@
+/* Whitted shading of one hit: emission + ambient, one shadow ray per point light carrying the
+ * light's contribution (shading happens before the shadow query; the host adds it only when the
+ * ray is unblocked), and the reflection and refraction rays with their weights. The reference
+ * renderer (src/render/reference.cpp) implements the same model in double. */
+#include "rc_types.h"
+#include "intersect.cl"
+
+#pragma OPENCL FP_CONTRACT OFF
+
+typedef struct RcSurface {
+    float3 p;      /* hit point */
+    float3 ng;     /* unit geometric normal, facing the incoming ray */
+    float3 ns;     /* unit shading normal, same side as ng */
+    int entering;  /* the ray arrives from the side the geometric normal points to */
+    uint material;
+} RcSurface;
+
+inline RcSurface rc_surface(float3 o, float3 d, RcHit hit, __global const RcTriangle* triangles,
+                            __global const RcTriangleShading* triShading,
+                            __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+                            uint nTriangles, uint nSpheres) {
+    RcSurface s;
+    const uint id = hit.prim;
+    if (id < nTriangles) {
+        __global const RcTriangle* tri = triangles + id;
+        const float3 p0 = tri->v0.xyz, p1 = tri->v1.xyz, p2 = tri->v2.xyz;
+        const float w = 1.0f - hit.u - hit.v;
+        /* From barycentrics, not o + t d: the error then scales with the vertices, not with t. */
+        s.p = w * p0 + hit.u * p1 + hit.v * p2;
+        float3 n = cross(p1 - p0, p2 - p0);
+        const float len = length(n);
+        n = len > 0.0f ? n / len : -d;
+        s.ng = n;
+        __global const RcTriangleShading* sh = triShading + id;
+        s.ns = sh->hasNormals ? w * sh->n0.xyz + hit.u * sh->n1.xyz + hit.v * sh->n2.xyz : n;
+        s.material = sh->material;
+    } else if (id < nTriangles + nSpheres) {
+        const float4 cr = spheres[id - nTriangles].centerRadius;
+        const float3 rel = o + hit.t * d - cr.xyz;
+        s.ng = normalize(rel);
+        /* Re-project onto the sphere so the point's error does not grow with t. */
+        s.p = cr.xyz + cr.w * s.ng;
+        s.ns = s.ng;
+        s.material = spheres[id - nTriangles].material;
+    } else {
+        __global const RcQuadric* q = quadrics + (id - nTriangles - nSpheres);
+        s.p = o + hit.t * d;
+        const float3 g = rc_quadric_gradient(q->c0, q->c1, q->c2, s.p);
+        const float len = length(g);
+        s.ng = len > 0.0f ? g / len : -d;
+        s.ns = s.ng;
+        s.material = q->material;
+    }
+    s.entering = dot(d, s.ng) < 0.0f;
+    if (!s.entering) s.ng = -s.ng;
+    s.ns = normalize(s.ns);
+    if (dot(s.ns, s.ng) < 0.0f) s.ns = -s.ns;
+    return s;
+}
+
+/* Unpolarised dielectric Fresnel reflectance; eta = n_incident / n_transmitted. 1 on total
+ * internal reflection. */
+inline float rc_fresnel_dielectric(float cosi, float eta) {
+    const float sin2t = eta * eta * (1.0f - cosi * cosi);
+    if (sin2t >= 1.0f) return 1.0f;
+    const float cost = sqrt(1.0f - sin2t);
+    const float rs = (eta * cosi - cost) / (eta * cosi + cost);
+    const float rp = (cosi - eta * cost) / (cosi + eta * cost);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+inline int rc_worth_spawning(float3 w, uint depth, __constant const RcRenderParams* params) {
+    return depth <= params->maxDepth && fmax(w.x, fmax(w.y, w.z)) >= params->minWeight;
+}
+
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade(
+    __global const RcRay* rays, __global const RcHit* hits, uint n,
+    __global const RcTriangle* triangles, __global const RcTriangleShading* triShading,
+    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+    __global const RcMaterial* materials, __global const RcLight* lights,
+    __constant const RcRenderParams* params, __global float4* radiance, __global float4* normals,
+    __global RcShadowRay* shadowRays, __global RcRay* secondary) {
+    const uint i = get_global_id(0);
+    if (i >= n) return;
+    const RcRay ray = rays[i];
+    const RcHit hit = hits[i];
+    const uint nLights = params->nLights;
+    const float3 weight = ray.weight.xyz;
+
+    for (uint l = 0; l < nLights; ++l) shadowRays[i * nLights + l].contribution = (float4)(0.0f);
+    secondary[2 * i].weight.w = 0.0f;
+    secondary[2 * i + 1].weight.w = 0.0f;
+
+    if (hit.prim == RC_NO_HIT) {
+        radiance[i] = (float4)(weight * params->background.xyz, 0.0f);
+        normals[i] = (float4)(0.0f);
+        return;
+    }
+    const float3 o = ray.origin.xyz, d = ray.direction.xyz;
+    const RcSurface s = rc_surface(o, d, hit, triangles, triShading, spheres, quadrics,
+                                   params->nTriangles, params->nSpheres);
+    __global const RcMaterial* m = materials + s.material;
+    const float3 kd = m->kd.xyz, ks = m->ks.xyz;
+    radiance[i] = (float4)(weight * (m->emission.xyz + kd * params->ambient.xyz), 0.0f);
+    normals[i] = (float4)(s.ns, 0.0f);
+
+    const float3 above = rc_offset_ray_origin(s.p, s.ng);
+    for (uint l = 0; l < nLights; ++l) {
+        const float3 toLight = lights[l].position.xyz - s.p;
+        const float dist2 = dot(toLight, toLight);
+        const float3 ldir = toLight / sqrt(dist2);
+        const float cosl = dot(s.ns, ldir);
+        if (cosl <= 0.0f || dot(s.ng, ldir) <= 0.0f) continue;
+        const float3 r = 2.0f * cosl * s.ns - ldir;
+        const float cosb = fmax(dot(r, -d), 0.0f);
+        const float3 brdf = kd * cosl + ks * pow(cosb, m->shininess);
+        const float3 c = weight * lights[l].intensity.xyz / dist2 * brdf;
+        if (fmax(c.x, fmax(c.y, c.z)) <= 0.0f) continue;
+        const float3 toLightFromOrigin = lights[l].position.xyz - above;
+        const float dist = length(toLightFromOrigin);
+        RcShadowRay sr;
+        sr.origin = (float4)(above, 0.0f);
+        sr.direction = (float4)(toLightFromOrigin / dist, dist);
+        sr.contribution = (float4)(c, 1.0f);
+        shadowRays[i * nLights + l] = sr;
+    }
+
+    const float3 kr = m->kr.xyz, kt = m->kt.xyz;
+    if (fmax(fmax(kr.x, fmax(kr.y, kr.z)), fmax(kt.x, fmax(kt.y, kt.z))) <= 0.0f) return;
+    const float cosi = fmin(fmax(-dot(d, s.ns), 0.0f), 1.0f);
+    const float eta = s.entering ? 1.0f / m->ior : m->ior;
+    const float sin2t = eta * eta * (1.0f - cosi * cosi);
+    const int tir = sin2t >= 1.0f;
+    float3 krEff = kr, ktEff = kt;
+    if (m->fresnel) {
+        const float f = rc_fresnel_dielectric(cosi, eta);
+        krEff = kr + kt * f;
+        ktEff = kt * (1.0f - f);
+    } else if (tir) {
+        krEff = kr + kt;
+        ktEff = (float3)(0.0f);
+    }
+    const uint depth = ray.depth + 1;
+    const float3 wr = weight * krEff;
+    if (rc_worth_spawning(wr, depth, params)) {
+        float3 rdir = d + 2.0f * cosi * s.ns;
+        /* A shading normal can tilt the mirror direction below the surface: fall back to ng. */
+        if (dot(rdir, s.ng) <= 0.0f) rdir = d - 2.0f * dot(d, s.ng) * s.ng;
+        RcRay out;
+        out.origin = (float4)(above, 0.0f);
+        out.direction = (float4)(normalize(rdir), INFINITY);
+        out.weight = (float4)(wr, 1.0f);
+        out.pixel = ray.pixel;
+        out.depth = depth;
+        out.kind = RC_RAY_REFLECTION;
+        out.pad = 0;
+        secondary[2 * i] = out;
+    }
+    const float3 wt = weight * ktEff;
+    if (!tir && rc_worth_spawning(wt, depth, params)) {
+        const float3 tdir = eta * d + (eta * cosi - sqrt(1.0f - sin2t)) * s.ns;
+        if (dot(tdir, s.ng) < 0.0f) {
+            RcRay out;
+            out.origin = (float4)(rc_offset_ray_origin(s.p, -s.ng), 0.0f);
+            out.direction = (float4)(normalize(tdir), INFINITY);
+            out.weight = (float4)(wt, 1.0f);
+            out.pixel = ray.pixel;
+            out.depth = depth;
+            out.kind = RC_RAY_REFRACTION;
+            out.pad = 0;
+            secondary[2 * i + 1] = out;
+        }
+    }
+}

@@ -1,0 +1,70 @@
+// The OpenCL Whitted renderer: eye rays from a kernel, then generation by generation a ray query
+// (behind RayQuery, so accelerations swap in locally), a shading kernel that spawns shadow,
+// reflection and refraction rays, and a shadow query. Contributions are accumulated per pixel on
+// the host in ray order, so a render is reproducible bit for bit.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include "rayclass/clrt/context.h"
+#include "rayclass/image/image.h"
+#include "rayclass/render/device_scene.h"
+#include "rayclass/render/options.h"
+#include "rayclass/render/stats.h"
+#include "rayclass/scene/scene.h"
+
+namespace rayclass::render {
+
+// Sums the device time of every launch per kernel name.
+class KernelTimer {
+public:
+    void Record(const std::string& kernel, const cl::Event& event);
+    const std::map<std::string, double>& Seconds() const { return seconds_; }
+
+private:
+    std::map<std::string, double> seconds_;
+};
+
+// Scene data every kernel reads, uploaded once.
+struct SceneBuffers {
+    cl::Buffer triangles, triangleShading, spheres, quadrics, materials, lights, params;
+    RcRenderParams hostParams{};
+
+    SceneBuffers(clrt::Context& ctx, const DeviceScene& scene, const RcRenderParams& params);
+};
+
+// How the rays of a batch find their nearest hit and their occluders.
+class RayQuery {
+public:
+    virtual ~RayQuery() = default;
+    virtual std::string Name() const = 0;
+    // Nearest hit of rays[0, n) (RcRay) into hits (RcHit); returns the primitive tests done.
+    virtual uint64_t Intersect(const cl::Buffer& rays, uint32_t n, const cl::Buffer& hits,
+                               KernelTimer& timer) = 0;
+    // blocked[i] = 1 when shadow ray i (RcShadowRay, live ones only) hits anything before its
+    // light; returns the primitive tests done.
+    virtual uint64_t Occluded(const cl::Buffer& shadowRays, uint32_t n, const cl::Buffer& blocked,
+                              KernelTimer& timer) = 0;
+};
+
+// Every ray against every primitive.
+std::unique_ptr<RayQuery> MakeBruteForceQuery(clrt::Context& ctx, const cl::Program& program,
+                                              const SceneBuffers& scene);
+
+// The program holding every kernel the renderer uses, with the options they need.
+cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions = {});
+
+class ClRenderer {
+public:
+    ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options);
+    image::Image Render(RenderStats& stats);
+
+private:
+    clrt::Context& ctx_;
+    const scene::Scene& scene_;
+    RenderOptions options_;
+};
+
+}  // namespace rayclass::render

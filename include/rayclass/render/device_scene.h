@@ -1,0 +1,34 @@
+// The scene in the flat layouts of cl/shared/rc_types.h, ready to copy into device buffers.
+#pragma once
+
+#include <vector>
+
+#include "rayclass/scene/scene.h"
+#include "rc_types.h"
+
+namespace rayclass::render {
+
+// Camera basis in double; every eye-ray path derives its rays from this one basis.
+struct CameraBasis {
+    glm::dvec3 position, forward, right, up;
+    double tanHalfFovX = 1, tanHalfFovY = 1;
+    uint32_t width = 1, height = 1;
+
+    explicit CameraBasis(const scene::Camera& camera);
+    // The eye ray of pixel (x, y) in double: see RcCamera.
+    glm::dvec3 Direction(uint32_t x, uint32_t y) const;
+    RcCamera ToDevice() const;
+};
+
+struct DeviceScene {
+    std::vector<RcTriangle> triangles;
+    std::vector<RcTriangleShading> triangleShading;
+    std::vector<RcSphere> spheres;
+    std::vector<RcQuadric> quadrics;
+    std::vector<RcMaterial> materials;
+    std::vector<RcLight> lights;
+
+    explicit DeviceScene(const scene::Scene& scene);
+};
+
+}  // namespace rayclass::render

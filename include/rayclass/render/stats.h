@@ -1,0 +1,36 @@
+// Counters and timings of one render, written by --stats as JSON.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace rayclass::render {
+
+struct GenerationStats {
+    uint64_t rays = 0;        // rays queried for their nearest hit (eye, reflection, refraction)
+    uint64_t shadowRays = 0;  // shadow rays queried
+    uint64_t spawned = 0;     // secondary rays this generation spawned for the next
+};
+
+struct RenderStats {
+    uint32_t width = 0, height = 0;
+    std::string device;
+    std::string accel = "brute";
+    uint64_t nPrimitives = 0;
+    std::map<std::string, uint64_t> raysByKind{
+        {"eye", 0}, {"shadow", 0}, {"reflection", 0}, {"refraction", 0}};
+    std::vector<GenerationStats> generations;
+    uint64_t intersectionTests = 0;
+    double queryTimeS = 0;  // time of the ray-query kernels (nearest hit and shadow)
+    // Named stages in seconds: "scene_load", "program_build", "kernel_<name>", "host", "total".
+    std::map<std::string, double> timeS;
+
+    uint64_t RaysTotal() const;
+    nlohmann::json ToJson() const;
+};
+
+}  // namespace rayclass::render

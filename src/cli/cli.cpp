@@ -1,0 +1,57 @@
+#include "rayclass/cli/cli.h"
+
+#include <iostream>
+
+#include "rayclass/cli/compare_command.h"
+#include "rayclass/core/error.h"
+
+namespace rayclass::cli {
+
+namespace {
+
+constexpr const char* kUsage = R"(usage: rayclass <command> [options]
+
+commands:
+  render SCENE -o OUT.{exr,png} [options]   render a JSON scene or a bare OBJ
+  compare A.exr B.exr [options]             error statistics between two images
+  devices                                   list OpenCL platforms and devices
+
+'rayclass <command> --help' describes a command's options.
+  --help       this text
+  --version    the version
+)";
+
+}  // namespace
+
+int Main(int argc, char** argv) {
+    std::vector<std::string> args(argv + 1, argv + argc);
+    if (args.empty()) {
+        std::cerr << kUsage;
+        return 2;
+    }
+    const std::string command = args.front();
+    const std::vector<std::string> rest(args.begin() + 1, args.end());
+    try {
+        if (command == "--help" || command == "-h" || command == "help") {
+            std::cout << kUsage;
+            return 0;
+        }
+        if (command == "--version") {
+            std::cout << "rayclass " << RAYCLASS_VERSION << "\n";
+            return 0;
+        }
+        if (command == "render") return RenderCommand(rest, std::cout, std::cerr);
+        if (command == "compare") return CompareCommand(rest, std::cout, std::cerr);
+        if (command == "devices") return DevicesCommand(rest, std::cout, std::cerr);
+        std::cerr << "rayclass: unknown command '" << command << "'\n\n" << kUsage;
+        return 2;
+    } catch (const UsageError& e) {
+        std::cerr << "rayclass " << command << ": " << e.what() << "\n";
+        return 2;
+    } catch (const std::exception& e) {
+        std::cerr << "rayclass " << command << ": error: " << e.what() << "\n";
+        return 1;
+    }
+}
+
+}  // namespace rayclass::cli

@@ -1,0 +1,163 @@
+#include "rayclass/clrt/context.h"
+
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+namespace rayclass::clrt {
+
+const std::map<std::string, std::string>& EmbeddedKernelSources();
+
+namespace {
+
+std::string TypeName(cl_device_type type) {
+    if (type & CL_DEVICE_TYPE_GPU) return "gpu";
+    if (type & CL_DEVICE_TYPE_CPU) return "cpu";
+    if (type & CL_DEVICE_TYPE_ACCELERATOR) return "accelerator";
+    return "other";
+}
+
+struct Found {
+    cl::Device device;
+    DeviceInfo info;
+};
+
+std::vector<Found> AllDevices() {
+    std::vector<cl::Platform> platforms;
+    // An ICD loader with no platform reports CL_PLATFORM_NOT_FOUND_KHR: that is "no devices".
+    try {
+        cl::Platform::get(&platforms);
+    } catch (const cl::Error&) {
+        return {};
+    }
+    std::vector<Found> found;
+    for (const auto& platform : platforms) {
+        std::vector<cl::Device> devices;
+        try {
+            platform.getDevices(CL_DEVICE_TYPE_ALL, &devices);
+        } catch (const cl::Error&) {
+            continue;
+        }
+        for (const auto& d : devices) {
+            DeviceInfo info;
+            info.index = int(found.size());
+            info.platform = platform.getInfo<CL_PLATFORM_NAME>();
+            info.name = d.getInfo<CL_DEVICE_NAME>();
+            info.type = TypeName(d.getInfo<CL_DEVICE_TYPE>());
+            info.version = d.getInfo<CL_DEVICE_VERSION>();
+            info.computeUnits = d.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
+            info.globalMemBytes = d.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
+            info.maxAllocBytes = d.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
+            found.push_back({d, info});
+        }
+    }
+    return found;
+}
+
+void AppendFile(const std::string& name, const std::string& sharedPrefix,
+                std::set<std::string>& included, std::ostringstream& out) {
+    const auto& sources = EmbeddedKernelSources();
+    auto it = sources.find(name);
+    if (it == sources.end()) throw Error("kernel source '" + name + "' is not embedded");
+    if (!included.insert(name).second) return;
+    static const std::regex kInclude(R"(^\s*#\s*include\s*"([^"]+)\"\s*$)");
+    std::istringstream in(it->second);
+    std::string line;
+    int lineNo = 0;
+    out << "#line 1 \"" << name << "\"\n";
+    while (std::getline(in, line)) {
+        ++lineNo;
+        std::smatch m;
+        if (std::regex_match(line, m, kInclude)) {
+            std::string target = m[1];
+            if (!sources.count(target)) target = sharedPrefix + target;
+            AppendFile(target, sharedPrefix, included, out);
+            out << "#line " << lineNo + 1 << " \"" << name << "\"\n";
+        } else {
+            out << line << '\n';
+        }
+    }
+}
+
+}  // namespace
+
+std::vector<DeviceInfo> ListDevices() {
+    std::vector<DeviceInfo> infos;
+    for (auto& f : AllDevices()) infos.push_back(f.info);
+    return infos;
+}
+
+Context::Context(const std::string& spec) {
+    auto all = AllDevices();
+    if (all.empty()) {
+        throw Error(
+            "no OpenCL device found (is an ICD such as pocl-opencl-icd installed? run "
+            "scripts/setup)");
+    }
+    const Found* chosen = nullptr;
+    auto firstOf = [&](const std::string& type) -> const Found* {
+        for (const auto& f : all)
+            if (f.info.type == type) return &f;
+        return nullptr;
+    };
+    if (spec.empty() || spec == "auto") {
+        chosen = firstOf("gpu");
+        if (!chosen) chosen = firstOf("cpu");
+        if (!chosen) chosen = &all.front();
+    } else if (spec == "gpu" || spec == "cpu") {
+        chosen = firstOf(spec);
+        if (!chosen) throw Error("no OpenCL " + spec + " device found (see 'rayclass devices')");
+    } else {
+        size_t pos = 0;
+        int index = -1;
+        try {
+            index = std::stoi(spec, &pos);
+        } catch (const std::exception&) {
+            pos = 0;
+        }
+        if (pos != spec.size() || index < 0) {
+            throw Error("--device must be cpu, gpu, auto or a device index, not '" + spec + "'");
+        }
+        if (index >= int(all.size())) {
+            throw Error("device index " + spec + " out of range (" + std::to_string(all.size()) +
+                        " devices; see 'rayclass devices')");
+        }
+        chosen = &all[size_t(index)];
+    }
+    device_ = chosen->device;
+    info_ = chosen->info;
+    Check("clCreateContext", [&] { context_ = cl::Context(device_); });
+    Check("clCreateCommandQueue", [&] {
+        queue_ = cl::CommandQueue(context_, device_, cl::QueueProperties::Profiling);
+    });
+}
+
+std::string AssembleProgramSource(const std::vector<std::string>& files) {
+    std::ostringstream out;
+    std::set<std::string> included;
+    for (const auto& f : files) AppendFile(f, "shared/", included, out);
+    return out.str();
+}
+
+cl::Program Context::BuildProgram(const std::vector<std::string>& files,
+                                  const std::string& options) const {
+    const std::string source = AssembleProgramSource(files);
+    cl::Program program = Check("clCreateProgramWithSource",
+                                [&] { return cl::Program(context_, source); });
+    try {
+        program.build(std::vector<cl::Device>{device_}, options.c_str());
+    } catch (const cl::BuildError& e) {
+        std::string log;
+        for (const auto& [dev, text] : e.getBuildLog()) log += text;
+        std::string names;
+        for (const auto& f : files) names += (names.empty() ? "" : ", ") + f;
+        throw ClError("building OpenCL program (" + names + ") with options '" + options + "'",
+                      e.err(), ErrorName(e.err()), "build log:\n" + log);
+    } catch (const cl::Error& e) {
+        throw ClError("clBuildProgram", e.err(), ErrorName(e.err()));
+    }
+    return program;
+}
+
+}  // namespace rayclass::clrt

@@ -1,0 +1,90 @@
+#include "rayclass/render/device_scene.h"
+
+#include <cmath>
+
+namespace rayclass::render {
+
+namespace {
+
+rc_float4 F4(const glm::vec3& v, float w = 0.0f) { return {v.x, v.y, v.z, w}; }
+
+}  // namespace
+
+CameraBasis::CameraBasis(const scene::Camera& camera)
+    : position(camera.position), width(camera.width), height(camera.height) {
+    forward = glm::normalize(glm::dvec3(camera.lookAt) - position);
+    right = glm::normalize(glm::cross(forward, glm::dvec3(camera.up)));
+    up = glm::cross(right, forward);
+    tanHalfFovY = std::tan(glm::radians(double(camera.fovYDegrees)) * 0.5);
+    tanHalfFovX = tanHalfFovY * double(width) / double(height);
+}
+
+glm::dvec3 CameraBasis::Direction(uint32_t x, uint32_t y) const {
+    const double sx = (2.0 * (x + 0.5) / width - 1.0) * tanHalfFovX;
+    const double sy = (1.0 - 2.0 * (y + 0.5) / height) * tanHalfFovY;
+    return glm::normalize(forward + sx * right + sy * up);
+}
+
+RcCamera CameraBasis::ToDevice() const {
+    RcCamera c{};
+    c.position = F4(glm::vec3(position));
+    c.forward = F4(glm::vec3(forward));
+    c.right = F4(glm::vec3(right));
+    c.up = F4(glm::vec3(up));
+    c.tanHalfFovX = float(tanHalfFovX);
+    c.tanHalfFovY = float(tanHalfFovY);
+    c.width = width;
+    c.height = height;
+    return c;
+}
+
+DeviceScene::DeviceScene(const scene::Scene& scene) {
+    triangles.reserve(scene.triangles.size());
+    triangleShading.reserve(scene.triangles.size());
+    for (const auto& t : scene.triangles) {
+        triangles.push_back({F4(t.p[0]), F4(t.p[1]), F4(t.p[2])});
+        RcTriangleShading s{};
+        if (t.hasNormals) {
+            s.n0 = F4(t.n[0]);
+            s.n1 = F4(t.n[1]);
+            s.n2 = F4(t.n[2]);
+        }
+        s.material = t.material;
+        s.object = t.object;
+        s.hasNormals = t.hasNormals ? 1u : 0u;
+        triangleShading.push_back(s);
+    }
+    for (const auto& s : scene.spheres) {
+        RcSphere d{};
+        d.centerRadius = F4(s.center, s.radius);
+        d.material = s.material;
+        d.object = s.object;
+        spheres.push_back(d);
+    }
+    for (const auto& q : scene.quadrics) {
+        RcQuadric d{};
+        d.c0 = {q.c[0], q.c[1], q.c[2], q.c[3]};
+        d.c1 = {q.c[4], q.c[5], q.c[6], q.c[7]};
+        d.c2 = {q.c[8], q.c[9], 0.0f, 0.0f};
+        d.boxMin = F4(q.boxMin);
+        d.boxMax = F4(q.boxMax);
+        d.material = q.material;
+        d.object = q.object;
+        quadrics.push_back(d);
+    }
+    for (const auto& m : scene.materials) {
+        RcMaterial d{};
+        d.kd = F4(m.kd);
+        d.ks = F4(m.ks);
+        d.kr = F4(m.kr);
+        d.kt = F4(m.kt);
+        d.emission = F4(m.emission);
+        d.shininess = m.shininess;
+        d.ior = m.ior;
+        d.fresnel = m.fresnel ? 1u : 0u;
+        materials.push_back(d);
+    }
+    for (const auto& l : scene.lights) lights.push_back({F4(l.position), F4(l.intensity)});
+}
+
+}  // namespace rayclass::render

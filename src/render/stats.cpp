@@ -1,0 +1,31 @@
+#include "rayclass/render/stats.h"
+
+namespace rayclass::render {
+
+uint64_t RenderStats::RaysTotal() const {
+    uint64_t total = 0;
+    for (const auto& [kind, n] : raysByKind) total += n;
+    return total;
+}
+
+nlohmann::json RenderStats::ToJson() const {
+    nlohmann::json j;
+    j["width"] = width;
+    j["height"] = height;
+    j["device"] = device;
+    j["accel"] = accel;
+    j["primitives"] = nPrimitives;
+    j["rays_total"] = RaysTotal();
+    j["rays_by_kind"] = raysByKind;
+    nlohmann::json gens = nlohmann::json::array();
+    for (const auto& g : generations) {
+        gens.push_back({{"rays", g.rays}, {"shadow_rays", g.shadowRays}, {"spawned", g.spawned}});
+    }
+    j["rays_by_generation"] = gens;
+    j["intersection_tests"] = intersectionTests;
+    j["mrays_per_s"] = queryTimeS > 0 ? double(RaysTotal()) / queryTimeS * 1e-6 : 0.0;
+    j["time_s"] = timeS;
+    return j;
+}
+
+}  // namespace rayclass::render
