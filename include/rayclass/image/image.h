@@ -40,8 +40,8 @@ struct WriteOptions {
 // Writes `image` to `out` as OpenEXR (".exr") or 8-bit sRGB PNG (".png"), chosen by the extension
 // (case-insensitive). The data goes to a temporary file beside `out` that is then renamed over
 // it, so a failed write leaves neither a partial file nor a damaged previous one. Throws
-// rayclass::Error naming `out` and the reason (unsupported extension, OS error, layer sizes that
-// do not match width x height).
+// rayclass::Error naming `out` and the reason (unsupported extension, OS error, an empty image,
+// layer sizes that do not match width x height).
 void WriteImage(const Image& image, const std::filesystem::path& out,
                 const WriteOptions& options = {});
 
