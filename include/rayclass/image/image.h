@@ -1,12 +1,17 @@
 // Rendered images: linear float RGB plus optional AOV layers, written as OpenEXR or PNG, read back
-// from OpenEXR, and compared.
+// from OpenEXR (or PNG), and compared (see compare.h).
+//
+// OpenEXR channels, all full resolution, ZIP compressed:
+//   R, G, B                       FLOAT  linear radiance
+//   depth.Z                       FLOAT  depth layer, when present
+//   id.ID                         UINT   id layer, when present
+//   normal.X, normal.Y, normal.Z  FLOAT  normal layer, when present
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 namespace rayclass::image {
 
@@ -25,5 +30,25 @@ struct Image {
     Image(uint32_t w, uint32_t h) : width(w), height(h), rgb(size_t(w) * h, glm::vec3(0.0f)) {}
     size_t PixelCount() const { return size_t(width) * height; }
 };
+
+struct WriteOptions {
+    // PNG only: radiance is scaled by 2^exposure before it is clamped to [0, 1] and encoded with
+    // the sRGB transfer function (rounded to the nearest 8-bit value). OpenEXR keeps raw radiance.
+    float exposure = 0.0f;
+};
+
+// Writes `image` to `out` as OpenEXR (".exr") or 8-bit sRGB PNG (".png"), chosen by the extension
+// (case-insensitive). The data goes to a temporary file beside `out` that is then renamed over
+// it, so a failed write leaves neither a partial file nor a damaged previous one. Throws
+// rayclass::Error naming `out` and the reason (unsupported extension, OS error, an empty image,
+// layer sizes that do not match width x height).
+void WriteImage(const Image& image, const std::filesystem::path& out,
+                const WriteOptions& options = {});
+
+// Reads an OpenEXR file (recognised by content, not extension): R, G, B are required (half or
+// float, alpha ignored), the depth/id/normal layers above are read when present. Also reads PNG,
+// converting sRGB to linear radiance (no exposure is undone). Throws rayclass::Error naming `file`
+// when it is missing, unreadable or not such an image.
+Image ReadImage(const std::filesystem::path& file);
 
 }  // namespace rayclass::image

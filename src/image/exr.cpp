@@ -1,0 +1,123 @@
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+
+#include <climits>
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+
+#include "formats.h"
+
+namespace rayclass::image::detail {
+
+namespace {
+
+constexpr size_t kVec3Stride = sizeof(glm::vec3);
+static_assert(kVec3Stride == 3 * sizeof(float), "glm::vec3 must be three packed floats");
+
+// Routes OpenEXR's output through OutFile so the OS error of a failed write is kept.
+class ExrStream : public Imf::OStream {
+  public:
+    ExrStream(OutFile& file, const std::string& name) : Imf::OStream(name.c_str()), file_(file) {}
+
+    void write(const char c[], int n) override {
+        if (!file_.Write(c, size_t(n))) throw std::runtime_error(file_.Reason());
+    }
+    uint64_t tellp() override { return file_.Tell(); }
+    void seekp(uint64_t position) override {
+        if (!file_.Seek(position)) throw std::runtime_error(file_.Reason());
+    }
+
+  private:
+    OutFile& file_;
+};
+
+void AddChannel(Imf::Header& header, Imf::FrameBuffer& frame, const char* name, Imf::PixelType type,
+                const void* base, size_t xStride, const Imath::Box2i& window) {
+    header.channels().insert(name, Imf::Channel(type));
+    frame.insert(name, Imf::Slice::Make(type, base, window, xStride));
+}
+
+// True when `name` is a full-resolution channel of the file.
+bool HasChannel(const Imf::ChannelList& channels, const char* name) {
+    const Imf::Channel* channel = channels.findChannel(name);
+    return channel && channel->xSampling == 1 && channel->ySampling == 1;
+}
+
+}  // namespace
+
+void WriteExr(const Image& image, OutFile& file, const std::string& name) {
+    if (image.width > INT_MAX || image.height > INT_MAX)
+        throw std::runtime_error("image too large");
+    Imf::Header header(int(image.width), int(image.height));
+    header.compression() = Imf::ZIP_COMPRESSION;
+    const Imath::Box2i& window = header.dataWindow();
+    Imf::FrameBuffer frame;
+    const glm::vec3* rgb = image.rgb.data();
+    AddChannel(header, frame, "R", Imf::FLOAT, &rgb->x, kVec3Stride, window);
+    AddChannel(header, frame, "G", Imf::FLOAT, &rgb->y, kVec3Stride, window);
+    AddChannel(header, frame, "B", Imf::FLOAT, &rgb->z, kVec3Stride, window);
+    if (!image.depth.empty()) {
+        AddChannel(header, frame, "depth.Z", Imf::FLOAT, image.depth.data(), sizeof(float), window);
+    }
+    if (!image.id.empty()) {
+        AddChannel(header, frame, "id.ID", Imf::UINT, image.id.data(), sizeof(uint32_t), window);
+    }
+    if (!image.normal.empty()) {
+        const glm::vec3* normal = image.normal.data();
+        AddChannel(header, frame, "normal.X", Imf::FLOAT, &normal->x, kVec3Stride, window);
+        AddChannel(header, frame, "normal.Y", Imf::FLOAT, &normal->y, kVec3Stride, window);
+        AddChannel(header, frame, "normal.Z", Imf::FLOAT, &normal->z, kVec3Stride, window);
+    }
+    ExrStream stream(file, name);
+    // The line offset table is written by the destructor, which swallows errors; OutFile keeps
+    // them for the caller.
+    Imf::OutputFile output(stream, header);
+    output.setFrameBuffer(frame);
+    output.writePixels(int(image.height));
+}
+
+Image ReadExr(const std::filesystem::path& path) {
+    Imf::InputFile input(path.c_str());
+    const Imf::Header& header = input.header();
+    const Imath::Box2i& window = header.dataWindow();
+    const Imf::ChannelList& channels = header.channels();
+    if (!HasChannel(channels, "R") || !HasChannel(channels, "G") || !HasChannel(channels, "B")) {
+        throw std::runtime_error("no full-resolution R, G and B channels");
+    }
+    Image image(uint32_t(window.max.x - window.min.x + 1),
+                uint32_t(window.max.y - window.min.y + 1));
+    Imf::FrameBuffer frame;
+    auto insert = [&](const char* name, Imf::PixelType type, void* base, size_t xStride) {
+        frame.insert(name, Imf::Slice::Make(type, base, window, xStride));
+    };
+    glm::vec3* rgb = image.rgb.data();
+    insert("R", Imf::FLOAT, &rgb->x, kVec3Stride);
+    insert("G", Imf::FLOAT, &rgb->y, kVec3Stride);
+    insert("B", Imf::FLOAT, &rgb->z, kVec3Stride);
+    if (HasChannel(channels, "depth.Z")) {
+        image.depth.resize(image.PixelCount());
+        insert("depth.Z", Imf::FLOAT, image.depth.data(), sizeof(float));
+    }
+    if (HasChannel(channels, "id.ID")) {
+        image.id.resize(image.PixelCount());
+        insert("id.ID", Imf::UINT, image.id.data(), sizeof(uint32_t));
+    }
+    if (HasChannel(channels, "normal.X") && HasChannel(channels, "normal.Y") &&
+        HasChannel(channels, "normal.Z")) {
+        image.normal.resize(image.PixelCount());
+        glm::vec3* normal = image.normal.data();
+        insert("normal.X", Imf::FLOAT, &normal->x, kVec3Stride);
+        insert("normal.Y", Imf::FLOAT, &normal->y, kVec3Stride);
+        insert("normal.Z", Imf::FLOAT, &normal->z, kVec3Stride);
+    }
+    input.setFrameBuffer(frame);
+    input.readPixels(window.min.y, window.max.y);
+    return image;
+}
+
+}  // namespace rayclass::image::detail

@@ -1,0 +1,282 @@
+#include <ImfChannelList.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfRgbaFile.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <png.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+
+#include "image/test_dir.h"
+#include "rayclass/core/error.h"
+#include "rayclass/image/image.h"
+
+namespace rayclass::image {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+class ImageIoTest : public testing::TestDir {};
+
+template <typename T>
+bool SameBits(const std::vector<T>& a, const std::vector<T>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+Image AllLayers() {
+    Image image(3, 2);
+    image.depth.resize(6);
+    image.id.resize(6);
+    image.normal.resize(6);
+    for (size_t i = 0; i < 6; ++i) {
+        image.rgb[i] = glm::vec3(0.1f * float(i), 1e-7f * float(i), 1000.0f + float(i) / 3.0f);
+        image.depth[i] = float(i) * 1.25f + 0.001f;
+        image.id[i] = uint32_t(i) * 123457u;
+        image.normal[i] = glm::normalize(glm::vec3(float(i) - 2.5f, 1.0f, 0.3f));
+    }
+    image.rgb[5] = glm::vec3(kInf, 0.0f, -0.0f);  // unusual values must survive too
+    image.depth[5] = kInf;
+    image.id[5] = 0xFFFFFFFFu;
+    image.normal[5] = glm::vec3(0.0f);
+    return image;
+}
+
+// Reads a PNG with libpng's simplified API as 8-bit RGB, as any other tool would see it.
+std::vector<uint8_t> ReadPngBytes(const fs::path& file, uint32_t& width, uint32_t& height) {
+    png_image png{};
+    png.version = PNG_IMAGE_VERSION;
+    EXPECT_TRUE(png_image_begin_read_from_file(&png, file.c_str())) << png.message;
+    EXPECT_EQ(png.format, PNG_FORMAT_RGB);  // 8-bit RGB without alpha, as written
+    png.format = PNG_FORMAT_RGB;
+    std::vector<uint8_t> pixels(PNG_IMAGE_SIZE(png));
+    EXPECT_TRUE(png_image_finish_read(&png, nullptr, pixels.data(), 0, nullptr)) << png.message;
+    width = png.width;
+    height = png.height;
+    return pixels;
+}
+
+TEST_F(ImageIoTest, ExrRoundTripIsBitExact) {
+    Image image = AllLayers();
+    WriteImage(image, Path("all.exr"));
+    Image back = ReadImage(Path("all.exr"));
+    EXPECT_EQ(back.width, 3u);
+    EXPECT_EQ(back.height, 2u);
+    EXPECT_TRUE(SameBits(back.rgb, image.rgb));
+    EXPECT_TRUE(SameBits(back.depth, image.depth));
+    EXPECT_TRUE(SameBits(back.id, image.id));
+    EXPECT_TRUE(SameBits(back.normal, image.normal));
+}
+
+TEST_F(ImageIoTest, ExrUsesDocumentedChannelsAndZip) {
+    WriteImage(AllLayers(), Path("all.exr"));
+    Imf::InputFile file(Path("all.exr").c_str());
+    std::vector<std::string> names;
+    for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it) {
+        names.push_back(it.name());
+        EXPECT_EQ(it.channel().type, names.back() == "id.ID" ? Imf::UINT : Imf::FLOAT);
+    }
+    EXPECT_THAT(names,
+                ElementsAre("B", "G", "R", "depth.Z", "id.ID", "normal.X", "normal.Y", "normal.Z"));
+    EXPECT_EQ(file.header().compression(), Imf::ZIP_COMPRESSION);
+}
+
+TEST_F(ImageIoTest, ExrWithoutAovsReadsBackWithoutThem) {
+    Image image(2, 2);
+    image.rgb = {glm::vec3(1, 2, 3), glm::vec3(4, 5, 6), glm::vec3(7, 8, 9), glm::vec3(0.5f)};
+    WriteImage(image, Path("rgb.EXR"));  // the extension is matched case-insensitively
+    Image back = ReadImage(Path("rgb.EXR"));
+    EXPECT_TRUE(SameBits(back.rgb, image.rgb));
+    EXPECT_TRUE(back.depth.empty());
+    EXPECT_TRUE(back.id.empty());
+    EXPECT_TRUE(back.normal.empty());
+}
+
+TEST_F(ImageIoTest, ReadsHalfRgbaExrFromOtherTools) {
+    // A data window away from the origin, as cropped renders from other tools have.
+    Imath::Box2i window(Imath::V2i(10, 20), Imath::V2i(11, 20));
+    Imf::Header header(window, window);
+    std::vector<Imf::Rgba> pixels = {Imf::Rgba(0.5f, 0.25f, 2.0f, 1.0f),
+                                     Imf::Rgba(0.0f, 1.0f, 0.125f, 0.5f)};
+    {
+        Imf::RgbaOutputFile out(Path("other.exr").c_str(), header, Imf::WRITE_RGBA);
+        out.setFrameBuffer(pixels.data() - 10 - 20 * 2, 1, 2);
+        out.writePixels(1);
+    }
+    Image back = ReadImage(Path("other.exr"));
+    ASSERT_EQ(back.width, 2u);
+    ASSERT_EQ(back.height, 1u);
+    EXPECT_EQ(back.rgb[0], glm::vec3(0.5f, 0.25f, 2.0f));
+    EXPECT_EQ(back.rgb[1], glm::vec3(0.0f, 1.0f, 0.125f));
+    EXPECT_TRUE(back.id.empty());
+}
+
+TEST_F(ImageIoTest, ReadRejectsExrWithoutRgb) {
+    Imf::Header header(1, 1);
+    header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+    float y = 0.5f;
+    Imf::FrameBuffer frame;
+    frame.insert("Y", Imf::Slice::Make(Imf::FLOAT, &y, header.dataWindow()));
+    {
+        Imf::OutputFile out(Path("y.exr").c_str(), header);
+        out.setFrameBuffer(frame);
+        out.writePixels(1);
+    }
+    try {
+        ReadImage(Path("y.exr"));
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  Path("y.exr").string() + ": cannot read: no full-resolution R, G and B channels");
+    }
+}
+
+TEST_F(ImageIoTest, PngFollowsTheToneCurve) {
+    Image image(4, 2);
+    image.rgb = {glm::vec3(0.0f, 1.0f, 0.5f),
+                 glm::vec3(2.0f, -1.0f, NAN),
+                 glm::vec3(kInf, 0.0031308f, 0.2f),
+                 glm::vec3(0.001f, 0.9f, 0.04f),
+                 glm::vec3(0.25f),
+                 glm::vec3(0.5f),
+                 glm::vec3(1.0f),
+                 glm::vec3(0.0f)};
+    WriteImage(image, Path("tone.png"));
+    uint32_t width = 0;
+    uint32_t height = 0;
+    std::vector<uint8_t> bytes = ReadPngBytes(Path("tone.png"), width, height);
+    EXPECT_EQ(width, 4u);
+    EXPECT_EQ(height, 2u);
+    // sRGB OETF by hand: 0.5 -> 1.055 * 0.5^(1/2.4) - 0.055 = 0.7354 -> 187.5 -> 188.
+    EXPECT_THAT(std::vector<uint8_t>(bytes.begin(), bytes.begin() + 12),
+                ElementsAre(0, 255, 188, 255, 0, 0, 255, 10, 124, 3, 243, 56));
+    EXPECT_THAT(std::vector<uint8_t>(bytes.begin() + 12, bytes.end()),
+                ElementsAre(137, 137, 137, 188, 188, 188, 255, 255, 255, 0, 0, 0));
+}
+
+TEST_F(ImageIoTest, PngAppliesExposure) {
+    Image image(1, 1);
+    image.rgb = {glm::vec3(0.25f, 0.5f, 1.0f)};
+    WriteImage(image, Path("exposed.Png"), {.exposure = 1.0f});
+    uint32_t width = 0;
+    uint32_t height = 0;
+    EXPECT_THAT(ReadPngBytes(Path("exposed.Png"), width, height), ElementsAre(188, 255, 255));
+}
+
+TEST_F(ImageIoTest, PngReadsBackAsLinear) {
+    Image image(1, 1);
+    image.rgb = {glm::vec3(0.0f, 0.5f, 1.0f)};
+    WriteImage(image, Path("linear.png"));
+    Image back = ReadImage(Path("linear.png"));
+    EXPECT_EQ(back.rgb[0].x, 0.0f);
+    EXPECT_NEAR(back.rgb[0].y, 0.5f, 0.005f);  // one 8-bit step near 0.5 is ~0.004 linear
+    EXPECT_EQ(back.rgb[0].z, 1.0f);
+}
+
+TEST_F(ImageIoTest, UnsupportedExtensionIsRejected) {
+    try {
+        WriteImage(Image(1, 1), Path("out.xyz"));
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(
+            std::string(e.what()),
+            Path("out.xyz").string() + ": unsupported output format '.xyz' (use .exr or .png)");
+    }
+    EXPECT_TRUE(Entries().empty());
+}
+
+TEST_F(ImageIoTest, MissingDirectoryFailsAndLeavesNothing) {
+    for (const char* name : {"dir_that_does_not_exist/x.exr", "dir_that_does_not_exist/x.png"}) {
+        try {
+            WriteImage(Image(2, 2), Path(name));
+            FAIL() << "no error";
+        } catch (const Error& e) {
+            EXPECT_EQ(std::string(e.what()),
+                      Path(name).string() + ": cannot write: No such file or directory");
+        }
+    }
+    EXPECT_TRUE(Entries().empty());
+}
+
+TEST_F(ImageIoTest, OverwriteReplacesTheFileAndLeavesNoTemporary) {
+    Image first(2, 1);
+    first.rgb = {glm::vec3(1.0f), glm::vec3(2.0f)};
+    Image second(1, 3);
+    second.rgb = {glm::vec3(3.0f), glm::vec3(4.0f), glm::vec3(5.0f)};
+    WriteImage(first, Path("x.exr"));
+    WriteImage(second, Path("x.exr"));
+    Image back = ReadImage(Path("x.exr"));
+    EXPECT_EQ(back.width, 1u);
+    EXPECT_TRUE(SameBits(back.rgb, second.rgb));
+    EXPECT_THAT(Entries(), ElementsAre("x.exr"));
+}
+
+TEST_F(ImageIoTest, FailedRenameKeepsTheTargetAndRemovesTheTemporary) {
+    // The target is a non-empty directory: the data is written, the final rename fails.
+    fs::create_directory(Path("x.png"));
+    std::ofstream(Path("x.png") / "keep") << "keep";
+    try {
+        WriteImage(Image(2, 2), Path("x.png"));
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_THAT(e.what(), StartsWith(Path("x.png").string() + ": cannot write: "));
+    }
+    EXPECT_TRUE(fs::is_regular_file(Path("x.png") / "keep"));
+    EXPECT_THAT(Entries(), ElementsAre("x.png"));
+}
+
+TEST_F(ImageIoTest, LayerSizeMismatchIsRejectedBeforeWriting) {
+    Image image(2, 2);
+    image.id = {1, 2, 3};
+    try {
+        WriteImage(image, Path("bad.exr"));
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  Path("bad.exr").string() + ": id layer has 3 values for 2x2 pixels");
+    }
+    EXPECT_TRUE(Entries().empty());
+}
+
+TEST_F(ImageIoTest, ReadErrorsNameTheFile) {
+    try {
+        ReadImage(Path("missing.exr"));
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  Path("missing.exr").string() + ": cannot read: No such file or directory");
+    }
+    std::ofstream(Path("text.exr")) << "not an image at all";
+    try {
+        ReadImage(Path("text.exr"));
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  Path("text.exr").string() + ": not an OpenEXR or PNG image");
+    }
+}
+
+TEST_F(ImageIoTest, TruncatedExrIsAnError) {
+    Image image(64, 64);
+    for (size_t i = 0; i < image.PixelCount(); ++i) image.rgb[i] = glm::vec3(float(i));
+    WriteImage(image, Path("cut.exr"));
+    fs::resize_file(Path("cut.exr"), fs::file_size(Path("cut.exr")) / 2);
+    try {
+        ReadImage(Path("cut.exr"));
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_THAT(e.what(), StartsWith(Path("cut.exr").string() + ": cannot read: "));
+    }
+}
+
+}  // namespace
+}  // namespace rayclass::image
