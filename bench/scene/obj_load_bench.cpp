@@ -11,10 +11,9 @@ namespace {
 
 std::filesystem::path SharedScene(const char* name) {
     const char* shared = std::getenv("RAYCLASS_SHARED_SCENES");
-    const std::filesystem::path dir =
-        shared ? std::filesystem::path(shared)
-               : std::filesystem::path(__FILE__).parent_path() / ".." / ".." / ".." / "shared" /
-                     "scenes";
+    const std::filesystem::path dir = shared ? std::filesystem::path(shared)
+                                             : std::filesystem::path(__FILE__).parent_path() /
+                                                   ".." / ".." / ".." / "shared" / "scenes";
     return dir / name;
 }
 

@@ -26,32 +26,27 @@ std::string Quoted(std::string_view s) {
     return quoted;
 }
 
+[[noreturn]] void FailNumber(NumberStatus status, std::string_view token, std::string_view keyword,
+                             const fs::path& file, int line) {
+    const std::string where = " in " + Quoted(keyword) + " statement";
+    switch (status) {
+        case NumberStatus::kNonFinite:
+            Fail(file, line, "non-finite number " + Quoted(token) + where);
+        case NumberStatus::kOutOfRange:
+            Fail(file, line, "number " + Quoted(token) + " out of range" + where);
+        default:
+            Fail(file, line, "malformed number " + Quoted(token) + where);
+    }
+}
+
 // Reads the numbers of a `keyword` statement into `out`: between minCount and maxCount of them.
 int ReadNumbers(std::string_view rest, std::string_view keyword, int minCount, int maxCount,
                 float* out, const fs::path& file, int line) {
     int count = 0;
     for (std::string_view token = NextToken(rest); !token.empty(); token = NextToken(rest)) {
         if (count < maxCount) {
-            std::string problem;
-            switch (ParseFloat(token, out[count])) {
-                case NumberStatus::kOk:
-                    break;
-                case NumberStatus::kMalformed:
-                    problem = "malformed number ";
-                    break;
-                case NumberStatus::kNonFinite:
-                    problem = "non-finite number ";
-                    break;
-                case NumberStatus::kOutOfRange:
-                    problem = "number ";
-                    break;
-            }
-            if (!problem.empty()) {
-                const bool range = problem == "number ";
-                Fail(file, line,
-                     problem + Quoted(token) + (range ? " out of range" : "") + " in " +
-                         Quoted(keyword) + " statement");
-            }
+            const NumberStatus status = ParseFloat(token, out[count]);
+            if (status != NumberStatus::kOk) FailNumber(status, token, keyword, file, line);
         }
         ++count;
     }
