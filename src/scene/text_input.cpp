@@ -1,0 +1,145 @@
+#include "text_input.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cfloat>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+
+namespace rayclass::scene {
+
+namespace {
+
+// Closes the descriptor on every path out of ReadFile.
+struct FileDescriptor {
+    int fd;
+    ~FileDescriptor() {
+        if (fd >= 0) ::close(fd);
+    }
+};
+
+std::string SystemProblem(int error) {
+    return std::string("cannot read file (") + std::strerror(error) + ")";
+}
+
+}  // namespace
+
+FileText ReadFile(const std::filesystem::path& file) {
+    FileText result;
+    const FileDescriptor in{::open(file.c_str(), O_RDONLY | O_CLOEXEC)};
+    if (in.fd < 0) {
+        result.problem =
+            errno == ENOENT || errno == ENOTDIR ? "missing file" : SystemProblem(errno);
+        return result;
+    }
+    struct stat info {};
+    if (::fstat(in.fd, &info) != 0) {
+        result.problem = SystemProblem(errno);
+        return result;
+    }
+    if (S_ISDIR(info.st_mode)) {
+        result.problem = "is a directory";
+        return result;
+    }
+    // st_size is a hint only (0 for some special files): read until EOF, growing as needed.
+    result.text.resize(S_ISREG(info.st_mode) ? size_t(info.st_size) : 0);
+    size_t used = 0;
+    for (;;) {
+        if (used == result.text.size()) result.text.resize(used + 65536);
+        const ssize_t n = ::read(in.fd, result.text.data() + used, result.text.size() - used);
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            result.text.clear();
+            result.problem = SystemProblem(errno);
+            return result;
+        }
+        if (n == 0) break;
+        used += size_t(n);
+    }
+    result.text.resize(used);
+    return result;
+}
+
+std::string_view Trim(std::string_view s) {
+    while (!s.empty() && IsBlank(s.front())) s.remove_prefix(1);
+    while (!s.empty() && IsBlank(s.back())) s.remove_suffix(1);
+    return s;
+}
+
+bool LineReader::Next(std::string_view& line, int& lineNumber) {
+    // One physical line with its comment cut off; a '\' inside a comment continues nothing.
+    const auto readPhysical = [this]() {
+        const char* start = text_.data() + pos_;
+        const size_t left = text_.size() - pos_;
+        const void* newline = std::memchr(start, '\n', left);
+        const size_t length = newline ? size_t(static_cast<const char*>(newline) - start) : left;
+        pos_ += newline ? length + 1 : length;
+        ++physicalLine_;
+        std::string_view physical(start, length);
+        if (const void* hash = std::memchr(start, '#', length)) {
+            physical = physical.substr(0, size_t(static_cast<const char*>(hash) - start));
+        }
+        return Trim(physical);
+    };
+    const auto continues = [](std::string_view s) { return !s.empty() && s.back() == '\\'; };
+
+    while (pos_ < text_.size()) {
+        lineNumber = physicalLine_ + 1;
+        std::string_view logical = readPhysical();
+        if (continues(logical)) {
+            joined_.assign(logical.substr(0, logical.size() - 1));
+            std::string_view next = logical;
+            while (continues(next) && pos_ < text_.size()) {
+                next = readPhysical();
+                joined_ += ' ';
+                joined_ += continues(next) ? next.substr(0, next.size() - 1) : next;
+            }
+            logical = Trim(joined_);
+        }
+        if (!logical.empty()) {
+            line = logical;
+            return true;
+        }
+    }
+    return false;
+}
+
+NumberStatus ParseFloat(std::string_view token, float& value) {
+    const char* first = token.data();
+    const char* last = first + token.size();
+    // from_chars rejects a leading '+', which some exporters write.
+    if (first != last && *first == '+') {
+        ++first;
+        if (first != last && *first == '-') return NumberStatus::kMalformed;
+    }
+    if (first == last) return NumberStatus::kMalformed;
+    const auto [end, error] = std::from_chars(first, last, value);
+    if (error == std::errc::result_out_of_range) {
+        // Out of float range: tiny values flush towards zero, huge ones are errors.
+        double wide = 0.0;
+        const auto [wideEnd, wideError] = std::from_chars(first, last, wide);
+        if (wideEnd != last) return NumberStatus::kMalformed;
+        if (wideError == std::errc()) {
+            if (std::fabs(wide) > double(FLT_MAX)) return NumberStatus::kOutOfRange;
+            value = float(wide);
+            return NumberStatus::kOk;
+        }
+        const std::string_view digits(first, size_t(last - first));
+        const size_t exponent = digits.find_first_of("eE");
+        if (exponent != std::string_view::npos && exponent + 1 < digits.size() &&
+            digits[exponent + 1] == '-') {
+            value = 0.0f;
+            return NumberStatus::kOk;
+        }
+        return NumberStatus::kOutOfRange;
+    }
+    if (error != std::errc() || end != last) return NumberStatus::kMalformed;
+    if (!std::isfinite(value)) return NumberStatus::kNonFinite;
+    return NumberStatus::kOk;
+}
+
+}  // namespace rayclass::scene

@@ -1,0 +1,55 @@
+// Helpers shared by the OBJ/MTL and JSON readers (private to the scene module).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace rayclass::scene {
+
+struct FileText {
+    std::string text;
+    std::string problem;  // empty on success, else "missing file", "is a directory", ...
+};
+
+// Reads a whole file; never throws for I/O problems, so each caller can place the error.
+FileText ReadFile(const std::filesystem::path& file);
+
+// Splits text into logical lines: a trailing '\' joins the next physical line, '#' starts a
+// comment, CR before LF is dropped. Lines come back with surrounding blanks trimmed.
+class LineReader {
+  public:
+    explicit LineReader(std::string_view text) : text_(text) {}
+
+    // Next non-empty logical line and the 1-based physical line it starts on; false at the end.
+    bool Next(std::string_view& line, int& lineNumber);
+
+  private:
+    std::string_view text_;
+    size_t pos_ = 0;
+    int physicalLine_ = 0;
+    std::string joined_;  // holds a line built from continuations
+};
+
+inline bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+// Removes and returns the first blank-separated token of `rest` (empty when none is left).
+inline std::string_view NextToken(std::string_view& rest) {
+    size_t i = 0;
+    while (i < rest.size() && IsBlank(rest[i])) ++i;
+    size_t j = i;
+    while (j < rest.size() && !IsBlank(rest[j])) ++j;
+    const std::string_view token = rest.substr(i, j - i);
+    rest.remove_prefix(j);
+    return token;
+}
+
+std::string_view Trim(std::string_view s);
+
+enum class NumberStatus { kOk, kMalformed, kNonFinite, kOutOfRange };
+
+// Parses a whole token as a float (a leading '+' is accepted; values too small for a float
+// become 0 or a subnormal, too large ones are kOutOfRange).
+NumberStatus ParseFloat(std::string_view token, float& value);
+
+}  // namespace rayclass::scene
