@@ -44,7 +44,12 @@ inline RcSurface rc_surface(float3 o, float3 d, RcHit hit, __global const RcTria
         s.material = spheres[id - nTriangles].material;
     } else {
         __global const RcQuadric* q = quadrics + (id - nTriangles - nSpheres);
+        /* o + t d is off the surface by the root's error, which grows with t and can exceed the
+         * spawn offset; one Newton step along the gradient puts the point back on the surface. */
         s.p = o + hit.t * d;
+        const float3 g0 = rc_quadric_gradient(q->c0, q->c1, q->c2, s.p);
+        const float gg = dot(g0, g0);
+        if (gg > 0.0f) s.p -= rc_quadric_value(q->c0, q->c1, q->c2, s.p) / gg * g0;
         const float3 g = rc_quadric_gradient(q->c0, q->c1, q->c2, s.p);
         const float len = length(g);
         s.ng = len > 0.0f ? g / len : -d;

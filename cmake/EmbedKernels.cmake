@@ -2,7 +2,9 @@
 # without the source tree and build logs still name the real file.
 function(rayclass_embed_kernels out)
   set(script ${CMAKE_BINARY_DIR}/generated/embed_kernels.cmake)
-  file(WRITE ${script} [=[
+  # The file list goes into the script itself: a list on the command line would be split.
+  file(WRITE ${script} "set(FILES \"${ARGN}\")\nset(OUT \"${out}\")\nset(ROOT \"${CMAKE_SOURCE_DIR}\")\n")
+  file(APPEND ${script} [=[
 set(body "// Generated from cl/ by cmake/EmbedKernels.cmake; do not edit.\n#include <map>\n#include <string>\nnamespace rayclass::clrt {\nconst std::map<std::string, std::string>& EmbeddedKernelSources() {\n    static const std::map<std::string, std::string> sources = {\n")
 foreach(f ${FILES})
   file(READ ${f} text)
@@ -15,7 +17,7 @@ file(COPY_FILE ${OUT}.tmp ${OUT} ONLY_IF_DIFFERENT)
 ]=])
   add_custom_command(
     OUTPUT ${out}
-    COMMAND ${CMAKE_COMMAND} -DOUT=${out} -DROOT=${CMAKE_SOURCE_DIR} "-DFILES=${ARGN}" -P ${script}
+    COMMAND ${CMAKE_COMMAND} -P ${script}
     DEPENDS ${ARGN} ${script}
     COMMENT "Embedding OpenCL kernels")
 endfunction()

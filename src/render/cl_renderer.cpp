@@ -126,8 +126,8 @@ void KernelTimer::Record(const std::string& kernel, const cl::Event& event) {
 }
 
 SceneBuffers::SceneBuffers(clrt::Context& ctx, const DeviceScene& scene,
-                           const RcRenderParams& params)
-    : hostParams(params) {
+                           const RcRenderParams& renderParams)
+    : hostParams(renderParams) {
     triangles = UploadVector(ctx, scene.triangles);
     triangleShading = UploadVector(ctx, scene.triangleShading);
     spheres = UploadVector(ctx, scene.spheres);

@@ -143,8 +143,13 @@ private:
             s.material = sp.material;
         } else {
             const auto& q = scene_.quadrics[id - scene_.QuadricBase()];
+            // Newton step back onto the surface, as in cl/shade.cl.
+            const auto c = geometry::QuadricCoefficients<double>(q);
             s.p = ray.o + hit.t * ray.d;
-            const V g = geometry::QuadricGradient(geometry::QuadricCoefficients<double>(q), s.p);
+            const V g0 = geometry::QuadricGradient(c, s.p);
+            const double gg = glm::dot(g0, g0);
+            if (gg > 0.0) s.p -= geometry::QuadricValue(c, s.p) / gg * g0;
+            const V g = geometry::QuadricGradient(c, s.p);
             const double len = glm::length(g);
             s.ng = len > 0.0 ? g / len : -ray.d;
             s.ns = s.ng;

@@ -32,7 +32,7 @@ struct SceneBuffers {
     cl::Buffer triangles, triangleShading, spheres, quadrics, materials, lights, params;
     RcRenderParams hostParams{};
 
-    SceneBuffers(clrt::Context& ctx, const DeviceScene& scene, const RcRenderParams& params);
+    SceneBuffers(clrt::Context& ctx, const DeviceScene& scene, const RcRenderParams& renderParams);
 };
 
 // How the rays of a batch find their nearest hit and their occluders.

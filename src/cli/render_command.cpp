@@ -1,0 +1,203 @@
+#include <charconv>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <ostream>
+#include <set>
+#include <sstream>
+#include <unistd.h>
+
+#include "rayclass/cli/cli.h"
+#include "rayclass/clrt/context.h"
+#include "rayclass/core/error.h"
+#include "rayclass/image/image.h"
+#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/reference.h"
+#include "rayclass/scene/loader.h"
+
+namespace rayclass::cli {
+
+namespace {
+
+constexpr const char* kRenderUsage = R"(usage: rayclass render SCENE -o OUT.{exr,png} [options]
+
+SCENE is a JSON scene file or a bare OBJ mesh (framed by a default camera and lit from it).
+
+options:
+  -o, --output FILE       output image; .exr (float RGB + AOV layers) or .png (8-bit sRGB)
+  --width W, --height H   override the scene camera's resolution (1..16384)
+  --aov LIST              extra EXR layers of the first hit: any of depth,id,normal
+  --max-depth N           deepest secondary ray (eye rays are depth 0; default 6)
+  --min-weight W          secondary rays weaker than W are not spawned (default 0.001)
+  --device D              OpenCL device: auto (first GPU, else CPU), gpu, cpu or an index
+                          from 'rayclass devices' (default auto)
+  --reference             render with the double-precision host reference renderer
+  --stats FILE.json       write ray counts and timings as JSON
+  --exposure E            PNG only: scale by 2^E before tone mapping (default 0)
+  --batch-rays N          rays per kernel launch (default 1048576)
+  --cl-options STRING     extra OpenCL build options (e.g. -cl-fast-relaxed-math)
+  -q, --quiet             no progress line
+)";
+
+struct RenderArgs {
+    std::string scene;
+    std::string output;
+    uint32_t width = 0, height = 0;
+    std::set<std::string> aovs;
+    bool reference = false;
+    std::string statsFile;
+    float exposure = 0.0f;
+    render::RenderOptions options;
+};
+
+template <typename T>
+T ParseNumber(const std::string& option, const std::string& text, T lo, T hi) {
+    T value{};
+    const char* end = text.data() + text.size();
+    auto [ptr, ec] = std::from_chars(text.data(), end, value);
+    if (ec != std::errc() || ptr != end || !(value >= lo && value <= hi)) {
+        std::ostringstream msg;
+        msg << option << " expects a number in [" << lo << ", " << hi << "], not '" << text
+            << "'";
+        throw UsageError(msg.str());
+    }
+    return value;
+}
+
+std::string Extension(const std::string& path) {
+    const auto dot = path.find_last_of('.');
+    const auto slash = path.find_last_of('/');
+    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+    std::string ext = path.substr(dot);
+    for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
+
+RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
+    RenderArgs r;
+    for (size_t i = 0; i < args.size(); ++i) {
+        const std::string& a = args[i];
+        auto value = [&]() -> const std::string& {
+            if (i + 1 >= args.size()) throw UsageError(a + " needs a value");
+            return args[++i];
+        };
+        if (a == "-o" || a == "--output") {
+            r.output = value();
+        } else if (a == "--width") {
+            r.width = ParseNumber<uint32_t>(a, value(), 1, 16384);
+        } else if (a == "--height") {
+            r.height = ParseNumber<uint32_t>(a, value(), 1, 16384);
+        } else if (a == "--aov") {
+            std::stringstream list(value());
+            std::string name;
+            while (std::getline(list, name, ',')) {
+                if (name != "depth" && name != "id" && name != "normal") {
+                    throw UsageError("unknown AOV '" + name + "' (use depth, id, normal)");
+                }
+                r.aovs.insert(name);
+            }
+        } else if (a == "--max-depth") {
+            r.options.maxDepth = ParseNumber<uint32_t>(a, value(), 0, 64);
+        } else if (a == "--min-weight") {
+            r.options.minWeight = ParseNumber<float>(a, value(), 0.0f, 1.0f);
+        } else if (a == "--device") {
+            r.options.device = value();
+        } else if (a == "--reference") {
+            r.reference = true;
+        } else if (a == "--stats") {
+            r.statsFile = value();
+        } else if (a == "--exposure") {
+            r.exposure = ParseNumber<float>(a, value(), -64.0f, 64.0f);
+        } else if (a == "--batch-rays") {
+            r.options.batchRays = ParseNumber<uint32_t>(a, value(), 64, 1u << 24);
+        } else if (a == "--cl-options") {
+            r.options.buildOptions = value();
+        } else if (a == "-q" || a == "--quiet") {
+            r.options.progress = false;
+        } else if (!a.empty() && a[0] == '-') {
+            throw UsageError("unknown option '" + a + "' (see 'rayclass render --help')");
+        } else if (r.scene.empty()) {
+            r.scene = a;
+        } else {
+            throw UsageError("unexpected argument '" + a + "' (one scene per render)");
+        }
+    }
+    if (r.scene.empty()) throw UsageError("no scene given (see 'rayclass render --help')");
+    if (r.output.empty()) throw UsageError("no output given: -o OUT.exr or -o OUT.png");
+    const std::string ext = Extension(r.output);
+    if (ext != ".exr" && ext != ".png") {
+        throw UsageError(r.output + ": unsupported output format '" + ext +
+                         "' (use .exr or .png)");
+    }
+    if (!r.aovs.empty() && ext != ".exr") throw UsageError("--aov needs an .exr output");
+    if (!r.statsFile.empty() && Extension(r.statsFile) != ".json") {
+        throw UsageError("--stats expects a .json file, not '" + r.statsFile + "'");
+    }
+    r.options.aovs = !r.aovs.empty();
+    return r;
+}
+
+// Writes text to `path` through a temporary file and a rename, like the images.
+void WriteTextAtomically(const std::string& path, const std::string& text) {
+    const std::string tmp = path + ".tmp-" + std::to_string(getpid());
+    {
+        std::ofstream out(tmp, std::ios::binary);
+        out << text;
+        out.close();
+        if (!out) {
+            std::remove(tmp.c_str());
+            throw Error(path + ": cannot write");
+        }
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+        std::remove(tmp.c_str());
+        throw Error(path + ": cannot write");
+    }
+}
+
+}  // namespace
+
+int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+    for (const auto& a : args) {
+        if (a == "--help" || a == "-h") {
+            out << kRenderUsage;
+            return 0;
+        }
+    }
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    const RenderArgs r = ParseRenderArgs(args);
+
+    scene::Scene scene = scene::LoadScene(r.scene);
+    if (r.width) scene.camera.width = r.width;
+    if (r.height) scene.camera.height = r.height;
+    const double loadSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
+
+    render::RenderStats stats;
+    image::Image img;
+    if (r.reference) {
+        img = render::RenderReference(scene, r.options, stats);
+    } else {
+        clrt::Context ctx(r.options.device);
+        render::ClRenderer renderer(ctx, scene, r.options);
+        img = renderer.Render(stats);
+    }
+    if (!r.aovs.count("depth")) img.depth.clear();
+    if (!r.aovs.count("id")) img.id.clear();
+    if (!r.aovs.count("normal")) img.normal.clear();
+
+    image::WriteOptions writeOptions;
+    writeOptions.exposure = r.exposure;
+    image::WriteImage(img, r.output, writeOptions);
+
+    stats.timeS["scene_load"] = loadSeconds;
+    stats.timeS["total"] = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (!r.statsFile.empty()) WriteTextAtomically(r.statsFile, stats.ToJson().dump(2) + "\n");
+    if (r.options.progress) {
+        err << "rayclass: " << r.output << " (" << img.width << "x" << img.height << ", "
+            << stats.RaysTotal() << " rays, " << stats.timeS["total"] << " s)\n";
+    }
+    return 0;
+}
+
+}  // namespace rayclass::cli
