@@ -5,22 +5,29 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
+/* dot and cross spelled out in glm's order of operations: the builtins may fuse or reassociate,
+ * and the host twins, the vector kernels and this file must round identically. */
+#define RC_DOT3(a, b) ((a).x * (b).x + (a).y * (b).y + (a).z * (b).z)
+#define RC_CROSS3(a, b)                                                   \
+    ((float3)((a).y * (b).z - (b).y * (a).z, (a).z * (b).x - (b).z * (a).x, \
+              (a).x * (b).y - (b).x * (a).y))
+
 /* Moeller & Trumbore 1997. u, v: barycentrics of vertices 1 and 2. */
 inline int rc_intersect_triangle(float3 o, float3 d, float tmin, float tmax, float3 p0, float3 p1,
                                  float3 p2, float* t, float* u, float* v) {
     const float3 e1 = p1 - p0;
     const float3 e2 = p2 - p0;
-    const float3 pv = cross(d, e2);
-    const float det = dot(e1, pv);
+    const float3 pv = RC_CROSS3(d, e2);
+    const float det = RC_DOT3(e1, pv);
     if (det == 0.0f) return 0;
     const float invDet = 1.0f / det;
     const float3 tv = o - p0;
-    *u = dot(tv, pv) * invDet;
+    *u = RC_DOT3(tv, pv) * invDet;
     if (*u < 0.0f || *u > 1.0f) return 0;
-    const float3 qv = cross(tv, e1);
-    *v = dot(d, qv) * invDet;
+    const float3 qv = RC_CROSS3(tv, e1);
+    *v = RC_DOT3(d, qv) * invDet;
     if (*v < 0.0f || *u + *v > 1.0f) return 0;
-    *t = dot(e2, qv) * invDet;
+    *t = RC_DOT3(e2, qv) * invDet;
     return *t > tmin && *t < tmax;
 }
 
@@ -29,12 +36,12 @@ inline int rc_intersect_sphere(float3 o, float3 d, float tmin, float tmax, float
                                float* t) {
     const float3 f = o - centerRadius.xyz;
     const float r = centerRadius.w;
-    const float a = dot(d, d);
-    const float b = -dot(f, d);
+    const float a = RC_DOT3(d, d);
+    const float b = -RC_DOT3(f, d);
     const float3 l = f + (b / a) * d;
-    const float disc = a * (r * r - dot(l, l));
+    const float disc = a * (r * r - RC_DOT3(l, l));
     if (disc < 0.0f) return 0;
-    const float c = dot(f, f) - r * r;
+    const float c = RC_DOT3(f, f) - r * r;
     const float q = b + copysign(sqrt(disc), b);
     float t0 = q == 0.0f ? 0.0f : c / q;
     float t1 = q / a;

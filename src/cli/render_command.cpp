@@ -12,6 +12,7 @@
 #include "rayclass/core/error.h"
 #include "rayclass/image/image.h"
 #include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/classified_query.h"
 #include "rayclass/render/reference.h"
 #include "rayclass/scene/loader.h"
 
@@ -31,6 +32,8 @@ options:
   --min-weight W          secondary rays weaker than W are not spawned (default 0.001)
   --device D              OpenCL device: auto (first GPU, else CPU), gpu, cpu or an index
                           from 'rayclass devices' (default auto)
+  --accel A               ray query: classify (5D ray classification, default) or brute
+  --kernel K              classified query kernels: auto (default), vertex, fragment, scalar
   --reference             render with the double-precision host reference renderer
   --stats FILE.json       write ray counts and timings as JSON
   --exposure E            PNG only: scale by 2^E before tone mapping (default 0)
@@ -102,6 +105,15 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
             r.options.minWeight = ParseNumber<float>(a, value(), 0.0f, 1.0f);
         } else if (a == "--device") {
             r.options.device = value();
+        } else if (a == "--accel") {
+            r.options.accel = value();
+            if (r.options.accel != "classify" && r.options.accel != "brute") {
+                throw UsageError("--accel must be classify or brute, not '" + r.options.accel +
+                                 "'");
+            }
+        } else if (a == "--kernel") {
+            r.options.kernel = value();
+            render::ParseKernelStyle(r.options.kernel);
         } else if (a == "--reference") {
             r.reference = true;
         } else if (a == "--stats") {

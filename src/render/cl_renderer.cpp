@@ -1,5 +1,8 @@
 #include "rayclass/render/cl_renderer.h"
 
+#include "rayclass/classify/params.h"
+#include "rayclass/render/classified_query.h"
+
 #include <chrono>
 #include <cstdio>
 
@@ -42,6 +45,14 @@ void Launch(clrt::Context& ctx, cl::Kernel& kernel, size_t n, KernelTimer& timer
     timer.Record(kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(), event);
 }
 
+template <typename... Args>
+void SetArgs(cl::Kernel& kernel, const Args&... args) {
+    clrt::Check("clSetKernelArg", [&] {
+        cl_uint i = 0;
+        (kernel.setArg(i++, args), ...);
+    });
+}
+
 class BruteForceQuery final : public RayQuery {
 public:
     BruteForceQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene)
@@ -52,8 +63,9 @@ public:
 
     std::string Name() const override { return "brute"; }
 
-    uint64_t Intersect(const cl::Buffer& rays, uint32_t n, const cl::Buffer& hits,
-                       KernelTimer& timer) override {
+    uint64_t Intersect(const cl::Buffer& rays, std::span<const RcRay> hostRays,
+                       const cl::Buffer& hits, KernelTimer& timer) override {
+        const uint32_t n = uint32_t(hostRays.size());
         clrt::Check("clSetKernelArg(rc_intersect_brute)", [&] {
             intersect_.setArg(0, rays);
             intersect_.setArg(1, n);
@@ -68,8 +80,9 @@ public:
         return uint64_t(n) * (p.nTriangles + p.nSpheres + p.nQuadrics);
     }
 
-    uint64_t Occluded(const cl::Buffer& shadowRays, uint32_t n, const cl::Buffer& blocked,
-                      KernelTimer& timer) override {
+    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
+                      const cl::Buffer& blocked, KernelTimer& timer) override {
+        const uint32_t n = uint32_t(hostRays.size());
         if (tests_.size() < n) {
             tests_.resize(n);
             testsBuffer_ = DeviceBuffer(ctx_, n * sizeof(uint32_t));
@@ -146,7 +159,8 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
     const std::string options =
         "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
         (extraOptions.empty() ? "" : " " + extraOptions);
-    return ctx.BuildProgram({"camera.cl", "intersect.cl", "shade.cl", "brute.cl"}, options);
+    return ctx.BuildProgram({"camera.cl", "intersect.cl", "shade.cl", "brute.cl", "classified.cl"},
+                            options);
 }
 
 ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene,
@@ -183,7 +197,16 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     params.background = {scene_.background.x, scene_.background.y, scene_.background.z, 0.0f};
     const DeviceScene deviceScene(scene_);
     const SceneBuffers sceneBuffers(ctx_, deviceScene, params);
-    auto query = MakeBruteForceQuery(ctx_, program, sceneBuffers);
+    std::unique_ptr<RayQuery> query;
+    if (options_.accel == "brute") {
+        query = MakeBruteForceQuery(ctx_, program, sceneBuffers);
+    } else {
+        t0 = Clock::now();
+        query = MakeClassifiedQuery(ctx_, program, sceneBuffers, scene_,
+                                    classify::Params::ForScene(scene_),
+                                    ParseKernelStyle(options_.kernel));
+        stats.timeS["classify_setup"] = SecondsSince(t0);
+    }
     stats.accel = query->Name();
 
     const RcCamera cam = basis.ToDevice();
@@ -230,48 +253,45 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                     eyeKernel.setArg(3, rays);
                 });
                 Launch(ctx_, eyeKernel, n, timer);
+                // Eye rays are read back anyway (their pixels); earlier when the query wants them.
+                clrt::Check("clEnqueueReadBuffer", [&] {
+                    ctx_.queue().enqueueReadBuffer(rays, CL_TRUE, 0, n * sizeof(RcRay),
+                                                   eyeBatch.data());
+                });
             } else {
                 clrt::Check("clEnqueueWriteBuffer", [&] {
                     ctx_.queue().enqueueWriteBuffer(rays, CL_FALSE, 0, n * sizeof(RcRay),
                                                     current.data() + first);
                 });
             }
-            stats.intersectionTests += query->Intersect(rays, n, hits, timer);
-            clrt::Check("clSetKernelArg(rc_shade)", [&] {
-                int a = 0;
-                shadeKernel.setArg(a++, rays);
-                shadeKernel.setArg(a++, hits);
-                shadeKernel.setArg(a++, n);
-                shadeKernel.setArg(a++, sceneBuffers.triangles);
-                shadeKernel.setArg(a++, sceneBuffers.triangleShading);
-                shadeKernel.setArg(a++, sceneBuffers.spheres);
-                shadeKernel.setArg(a++, sceneBuffers.quadrics);
-                shadeKernel.setArg(a++, sceneBuffers.materials);
-                shadeKernel.setArg(a++, sceneBuffers.lights);
-                shadeKernel.setArg(a++, sceneBuffers.params);
-                shadeKernel.setArg(a++, radiance);
-                shadeKernel.setArg(a++, normals);
-                shadeKernel.setArg(a++, shadow);
-                shadeKernel.setArg(a++, secondary);
-            });
+            const RcRay* batchRays = generation == 0 ? eyeBatch.data() : current.data() + first;
+            stats.intersectionTests +=
+                query->Intersect(rays, std::span<const RcRay>(batchRays, n), hits, timer);
+            SetArgs(shadeKernel, rays, hits, n, sceneBuffers.triangles,
+                    sceneBuffers.triangleShading, sceneBuffers.spheres, sceneBuffers.quadrics,
+                    sceneBuffers.materials, sceneBuffers.lights, sceneBuffers.params, radiance,
+                    normals, shadow, secondary);
             Launch(ctx_, shadeKernel, n, timer);
             const uint32_t nShadow = n * nLights;
-            stats.intersectionTests += query->Occluded(shadow, nShadow, blocked, timer);
-
             auto& q = ctx_.queue();
+            clrt::Check("clEnqueueReadBuffer", [&] {
+                if (nShadow > 0) {
+                    q.enqueueReadBuffer(shadow, CL_TRUE, 0, nShadow * sizeof(RcShadowRay),
+                                        hostShadow.data());
+                }
+            });
+            stats.intersectionTests += query->Occluded(
+                shadow, std::span<const RcShadowRay>(hostShadow.data(), nShadow), blocked, timer);
             clrt::Check("clEnqueueReadBuffer", [&] {
                 q.enqueueReadBuffer(radiance, CL_FALSE, 0, n * sizeof(rc_float4),
                                     hostRadiance.data());
                 if (nShadow > 0) {
-                    q.enqueueReadBuffer(shadow, CL_FALSE, 0, nShadow * sizeof(RcShadowRay),
-                                        hostShadow.data());
                     q.enqueueReadBuffer(blocked, CL_FALSE, 0, nShadow, hostBlocked.data());
                 }
                 q.enqueueReadBuffer(secondary, CL_FALSE, 0, 2 * size_t(n) * sizeof(RcRay),
                                     hostSecondary.data());
                 if (generation == 0) {
                     q.enqueueReadBuffer(hits, CL_FALSE, 0, n * sizeof(RcHit), hostHits.data());
-                    q.enqueueReadBuffer(rays, CL_FALSE, 0, n * sizeof(RcRay), eyeBatch.data());
                     if (options_.aovs) {
                         q.enqueueReadBuffer(normals, CL_FALSE, 0, n * sizeof(rc_float4),
                                             hostNormals.data());
@@ -281,7 +301,6 @@ image::Image ClRenderer::Render(RenderStats& stats) {
             });
 
             const auto tHost = Clock::now();
-            const RcRay* batchRays = generation == 0 ? eyeBatch.data() : current.data() + first;
             for (uint32_t i = 0; i < n; ++i) {
                 const RcRay& ray = batchRays[i];
                 glm::vec3& px = img.rgb[ray.pixel];
@@ -326,12 +345,12 @@ image::Image ClRenderer::Render(RenderStats& stats) {
 
     for (const auto& [name, s] : timer.Seconds()) stats.timeS["kernel_" + name] = s;
     const auto& ks = timer.Seconds();
-    auto kernelTime = [&](const char* name) {
-        auto it = ks.find(name);
-        return it == ks.end() ? 0.0 : it->second;
-    };
-    stats.queryTimeS = kernelTime("rc_intersect_brute") + kernelTime("rc_occluded_brute");
+    stats.queryTimeS = query->HostSeconds();
+    for (const auto& [name, seconds] : ks) {
+        if (name != "rc_shade" && name != "rc_generate_eye_rays") stats.queryTimeS += seconds;
+    }
     stats.timeS["host"] = hostSeconds;
+    if (options_.accel != "brute") stats.timeS["host_classify"] = query->HostSeconds();
     stats.timeS["render"] = SecondsSince(tStart);
     return img;
 }

@@ -6,6 +6,7 @@
 
 #include <map>
 #include <memory>
+#include <span>
 #include <string>
 
 #include "rayclass/clrt/context.h"
@@ -35,18 +36,23 @@ struct SceneBuffers {
     SceneBuffers(clrt::Context& ctx, const DeviceScene& scene, const RcRenderParams& renderParams);
 };
 
-// How the rays of a batch find their nearest hit and their occluders.
+// How the rays of a batch find their nearest hit and their occluders. The rays are on the
+// device already; hostRays is the same batch on the host, for queries that classify rays there.
 class RayQuery {
 public:
     virtual ~RayQuery() = default;
     virtual std::string Name() const = 0;
+    // Whether Intersect needs hostRays filled (else an empty span may be passed with size n).
+    virtual bool NeedsHostRays() const { return false; }
+    // Host time spent so far (classification, building the batch arrays).
+    virtual double HostSeconds() const { return 0.0; }
     // Nearest hit of rays[0, n) (RcRay) into hits (RcHit); returns the primitive tests done.
-    virtual uint64_t Intersect(const cl::Buffer& rays, uint32_t n, const cl::Buffer& hits,
-                               KernelTimer& timer) = 0;
+    virtual uint64_t Intersect(const cl::Buffer& rays, std::span<const RcRay> hostRays,
+                               const cl::Buffer& hits, KernelTimer& timer) = 0;
     // blocked[i] = 1 when shadow ray i (RcShadowRay, live ones only) hits anything before its
     // light; returns the primitive tests done.
-    virtual uint64_t Occluded(const cl::Buffer& shadowRays, uint32_t n, const cl::Buffer& blocked,
-                              KernelTimer& timer) = 0;
+    virtual uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
+                              const cl::Buffer& blocked, KernelTimer& timer) = 0;
 };
 
 // Every ray against every primitive.

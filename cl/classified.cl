@@ -1,0 +1,380 @@
+/* Ray queries over the leaves of the ray classification (classify/hierarchy.h). A leaf batch is
+ * flat: leaves (ray and candidate ranges), rayIndex (the leaves' rays as indices into the
+ * generation's ray buffer, which stays on the device), candidates (sorted by nearX per leaf).
+ *
+ * Three styles answer the same question and return the same hit (lower id wins ties):
+ * - scalar: one work-item per ray, one candidate at a time: the baseline;
+ * - vertex (the thesis's MIMD vertex unit): one work-item per ray with its own control flow, the
+ *   SIMD lanes over 16 candidates of its leaf (RcTriangleBlock16), stopping at the first block
+ *   whose nearX lies beyond its current hit;
+ * - fragment (the thesis's SIMD fragment unit): one work-item per packet of 16 rays of one leaf,
+ *   the lanes over the rays, all testing the same candidate in lockstep with select instead of
+ *   branches; the packet stops when every lane's hit is nearer than the next candidate.
+ * Distance optimisation: a candidate whose box starts (nearX, along the face's main axis) beyond
+ * the ray's current hit X cannot be nearer, and neither can any later one. */
+#include "rc_types.h"
+#include "intersect.cl"
+
+#pragma OPENCL FP_CONTRACT OFF
+
+inline float rc_face_component(float3 v, uint face) {
+    const uint axis = face >> 1;
+    const float c = axis == 0 ? v.x : (axis == 1 ? v.y : v.z);
+    return (face & 1) ? -c : c;
+}
+
+/* --- scalar ------------------------------------------------------------------------------- */
+
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_scalar(
+    __global const RcRay* rays, __global const uint* rayIndex, __global const uint* rayLeaf,
+    uint nSlots, __global const RcLeaf* leaves, __global const RcCandidate* candidates,
+    __global const RcTriangle* triangles, __global const RcSphere* spheres,
+    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
+    __global RcHit* hits, __global uint* tests) {
+    const uint slot = get_global_id(0);
+    if (slot >= nSlots) return;
+    const uint id = rayIndex[slot];
+    const RcLeaf leaf = leaves[rayLeaf[slot]];
+    const float3 o = rays[id].origin.xyz, d = rays[id].direction.xyz;
+    const float tmin = rays[id].origin.w, tmax = rays[id].direction.w;
+    const float originX = rc_face_component(o, leaf.face);
+    const float speed = fabs(rc_face_component(d, leaf.face));
+    RcHit best;
+    best.t = tmax;
+    best.prim = RC_NO_HIT;
+    best.u = best.v = 0.0f;
+    uint c = 0;
+    for (; c < leaf.candCount; ++c) {
+        const RcCandidate cand = candidates[leaf.candBegin + c];
+        if (best.prim != RC_NO_HIT && originX + best.t * speed < cand.nearX) break;
+        rc_intersect_primitive(cand.prim, o, d, tmin, tmax, triangles, spheres, quadrics,
+                               params->nTriangles, params->nSpheres, &best);
+    }
+    if (best.prim == RC_NO_HIT) best.t = INFINITY;
+    hits[id] = best;
+    tests[slot] = c;
+}
+
+/* Any hit before tmax (the light): one work-item per shadow ray, scalar. */
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_scalar(
+    __global const RcShadowRay* rays, __global const uint* rayIndex, __global const uint* rayLeaf,
+    uint nSlots, __global const RcLeaf* leaves, __global const RcCandidate* candidates,
+    __global const RcTriangle* triangles, __global const RcSphere* spheres,
+    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
+    __global uchar* blocked, __global uint* tests) {
+    const uint slot = get_global_id(0);
+    if (slot >= nSlots) return;
+    const uint id = rayIndex[slot];
+    const RcLeaf leaf = leaves[rayLeaf[slot]];
+    const float3 o = rays[id].origin.xyz, d = rays[id].direction.xyz;
+    const float tmin = rays[id].origin.w, tmax = rays[id].direction.w;
+    const float endX = rc_face_component(o, leaf.face) + tmax * fabs(rc_face_component(d, leaf.face));
+    RcHit best;
+    best.t = tmax;
+    best.prim = RC_NO_HIT;
+    uchar hit = 0;
+    uint c = 0;
+    for (; c < leaf.candCount && !hit; ++c) {
+        const RcCandidate cand = candidates[leaf.candBegin + c];
+        if (cand.nearX > endX) break;
+        hit = rc_intersect_primitive(cand.prim, o, d, tmin, tmax, triangles, spheres, quadrics,
+                                     params->nTriangles, params->nSpheres, &best);
+    }
+    blocked[id] = hit;
+    tests[slot] = c;
+}
+
+/* --- vertex style ------------------------------------------------------------------------- */
+
+/* One work-item per block: the leaf's candidates [16 b, 16 b + 16) in SoA form. blockLeaf[b]
+ * names the leaf, blockFirst[b] the block's first candidate within it. */
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_gather_blocks(
+    __global const uint* blockLeaf, __global const uint* blockFirst, uint nBlocks,
+    __global const RcLeaf* leaves, __global const RcCandidate* candidates,
+    __global const RcTriangle* triangles, __constant const RcRenderParams* params,
+    __global RcTriangleBlock16* blocks) {
+    const uint b = get_global_id(0);
+    if (b >= nBlocks) return;
+    const RcLeaf leaf = leaves[blockLeaf[b]];
+    const uint first = blockFirst[b];
+    const uint count = min(16u, leaf.candCount - first);
+    __global RcTriangleBlock16* out = blocks + b;
+    uint other = 0;
+    for (uint k = 0; k < 16; ++k) {
+        float3 v0 = (float3)(0.0f), e1 = (float3)(0.0f), e2 = (float3)(0.0f);
+        uint prim = RC_NO_HIT;
+        if (k < count) {
+            prim = candidates[leaf.candBegin + first + k].prim;
+            if (prim < params->nTriangles) {
+                v0 = triangles[prim].v0.xyz;
+                e1 = triangles[prim].v1.xyz - v0;
+                e2 = triangles[prim].v2.xyz - v0;
+            } else {
+                other |= 1u << k;
+            }
+        }
+        out->v0x[k] = v0.x;
+        out->v0y[k] = v0.y;
+        out->v0z[k] = v0.z;
+        out->e1x[k] = e1.x;
+        out->e1y[k] = e1.y;
+        out->e1z[k] = e1.z;
+        out->e2x[k] = e2.x;
+        out->e2y[k] = e2.y;
+        out->e2z[k] = e2.z;
+        out->prim[k] = prim;
+    }
+    out->otherMask = other;
+    out->count = count;
+    out->nearX = candidates[leaf.candBegin + first].nearX;
+}
+
+/* Moeller-Trumbore of one ray against the 16 triangle lanes of a block, the same operations as
+ * rc_intersect_triangle lane by lane. Returns t per lane, +inf where a lane misses. */
+inline float16 rc_triangles16(float3 o, float3 d, float tmin, float tmax,
+                              __global const RcTriangleBlock16* blk, float16* uOut,
+                              float16* vOut) {
+    const float16 e1x = vload16(0, blk->e1x), e1y = vload16(0, blk->e1y),
+                  e1z = vload16(0, blk->e1z);
+    const float16 e2x = vload16(0, blk->e2x), e2y = vload16(0, blk->e2y),
+                  e2z = vload16(0, blk->e2z);
+    /* pv = cross(d, e2) */
+    const float16 pvx = d.y * e2z - e2y * d.z;
+    const float16 pvy = d.z * e2x - e2z * d.x;
+    const float16 pvz = d.x * e2y - e2x * d.y;
+    const float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
+    const float16 invDet = 1.0f / det;
+    const float16 tvx = o.x - vload16(0, blk->v0x);
+    const float16 tvy = o.y - vload16(0, blk->v0y);
+    const float16 tvz = o.z - vload16(0, blk->v0z);
+    const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
+    /* qv = cross(tv, e1) */
+    const float16 qvx = tvy * e1z - e1y * tvz;
+    const float16 qvy = tvz * e1x - e1z * tvx;
+    const float16 qvz = tvx * e1y - e1x * tvy;
+    const float16 v = (d.x * qvx + d.y * qvy + d.z * qvz) * invDet;
+    const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
+    const int16 ok = det != 0.0f & u >= 0.0f & u <= 1.0f & v >= 0.0f & u + v <= 1.0f &
+                     t > tmin & t < tmax;
+    *uOut = u;
+    *vOut = v;
+    return select((float16)(INFINITY), t, ok);
+}
+
+inline void rc_vertex_update(float16 t, float16 u, float16 v, __global const RcTriangleBlock16* blk,
+                             RcHit* best) {
+    const float tMin16 = min(min(min(t.s0, t.s1), min(t.s2, t.s3)),
+                             min(min(t.s4, t.s5), min(t.s6, t.s7)));
+    const float tMin16b = min(min(min(t.s8, t.s9), min(t.sa, t.sb)),
+                              min(min(t.sc, t.sd), min(t.se, t.sf)));
+    if (!(min(tMin16, tMin16b) <= best->t)) return;
+    float ts[16], us[16], vs[16];
+    vstore16(t, 0, ts);
+    vstore16(u, 0, us);
+    vstore16(v, 0, vs);
+    for (uint k = 0; k < 16; ++k) {
+        const uint prim = blk->prim[k];
+        if (ts[k] < best->t || (ts[k] == best->t && ts[k] != INFINITY && prim < best->prim)) {
+            best->t = ts[k];
+            best->prim = prim;
+            best->u = us[k];
+            best->v = vs[k];
+        }
+    }
+}
+
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_vertex(
+    __global const RcRay* rays, __global const uint* rayIndex, __global const uint* rayLeaf,
+    uint nSlots, __global const RcLeaf* leaves, __global const uint* leafFirstBlock,
+    __global const RcTriangleBlock16* blocks, __global const RcTriangle* triangles,
+    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+    __constant const RcRenderParams* params, __global RcHit* hits, __global uint* tests) {
+    const uint slot = get_global_id(0);
+    if (slot >= nSlots) return;
+    const uint id = rayIndex[slot];
+    const uint leafId = rayLeaf[slot];
+    const RcLeaf leaf = leaves[leafId];
+    const float3 o = rays[id].origin.xyz, d = rays[id].direction.xyz;
+    const float tmin = rays[id].origin.w, tmax = rays[id].direction.w;
+    const float originX = rc_face_component(o, leaf.face);
+    const float speed = fabs(rc_face_component(d, leaf.face));
+    RcHit best;
+    best.t = tmax;
+    best.prim = RC_NO_HIT;
+    best.u = best.v = 0.0f;
+    const uint first = leafFirstBlock[leafId];
+    const uint nBlocks = (leaf.candCount + 15) / 16;
+    uint b = 0;
+    for (; b < nBlocks; ++b) {
+        __global const RcTriangleBlock16* blk = blocks + first + b;
+        if (best.prim != RC_NO_HIT && originX + best.t * speed < blk->nearX) break;
+        /* A hit at exactly best.t may still win on its lower id. */
+        const float bound = fmin(tmax, nextafter(best.t, INFINITY));
+        float16 u, v;
+        const float16 t = rc_triangles16(o, d, tmin, bound, blk, &u, &v);
+        rc_vertex_update(t, u, v, blk, &best);
+        for (uint other = blk->otherMask; other != 0; other &= other - 1) {
+            const uint k = 31 - clz(other & -other);
+            rc_intersect_primitive(blk->prim[k], o, d, tmin, tmax, triangles, spheres, quadrics,
+                                   params->nTriangles, params->nSpheres, &best);
+        }
+    }
+    if (best.prim == RC_NO_HIT) best.t = INFINITY;
+    hits[id] = best;
+    tests[slot] = min(b * 16, leaf.candCount);
+}
+
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_vertex(
+    __global const RcShadowRay* rays, __global const uint* rayIndex, __global const uint* rayLeaf,
+    uint nSlots, __global const RcLeaf* leaves, __global const uint* leafFirstBlock,
+    __global const RcTriangleBlock16* blocks, __global const RcTriangle* triangles,
+    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+    __constant const RcRenderParams* params, __global uchar* blocked, __global uint* tests) {
+    const uint slot = get_global_id(0);
+    if (slot >= nSlots) return;
+    const uint id = rayIndex[slot];
+    const uint leafId = rayLeaf[slot];
+    const RcLeaf leaf = leaves[leafId];
+    const float3 o = rays[id].origin.xyz, d = rays[id].direction.xyz;
+    const float tmin = rays[id].origin.w, tmax = rays[id].direction.w;
+    const float endX =
+        rc_face_component(o, leaf.face) + tmax * fabs(rc_face_component(d, leaf.face));
+    const uint first = leafFirstBlock[leafId];
+    const uint nBlocks = (leaf.candCount + 15) / 16;
+    uchar hit = 0;
+    uint b = 0;
+    for (; b < nBlocks && !hit; ++b) {
+        __global const RcTriangleBlock16* blk = blocks + first + b;
+        if (blk->nearX > endX) break;
+        float16 u, v;
+        const float16 t = rc_triangles16(o, d, tmin, tmax, blk, &u, &v);
+        hit = any(t < INFINITY);
+        for (uint other = blk->otherMask; other != 0 && !hit; other &= other - 1) {
+            const uint k = 31 - clz(other & -other);
+            RcHit h;
+            h.t = tmax;
+            h.prim = RC_NO_HIT;
+            hit = rc_intersect_primitive(blk->prim[k], o, d, tmin, tmax, triangles, spheres,
+                                         quadrics, params->nTriangles, params->nSpheres, &h);
+        }
+    }
+    blocked[id] = hit;
+    tests[slot] = min(b * 16, leaf.candCount);
+}
+
+/* --- fragment style ----------------------------------------------------------------------- */
+
+/* One work-item per packet: packetLeaf[p] and packetFirst[p] (the packet's first ray within its
+ * leaf); the packet holds min(16, rayCount - first) rays. */
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_fragment(
+    __global const RcRay* rays, __global const uint* rayIndex, __global const uint* packetLeaf,
+    __global const uint* packetFirst, uint nPackets, __global const RcLeaf* leaves,
+    __global const RcCandidate* candidates, __global const RcTriangle* triangles,
+    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+    __constant const RcRenderParams* params, __global RcHit* hits, __global uint* tests) {
+    const uint p = get_global_id(0);
+    if (p >= nPackets) return;
+    const RcLeaf leaf = leaves[packetLeaf[p]];
+    const uint first = packetFirst[p];
+    const uint count = min(16u, leaf.rayCount - first);
+    float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], tmins[16], tmaxs[16];
+    uint ids[16];
+    for (uint k = 0; k < 16; ++k) {
+        /* Unused lanes repeat the packet's first ray; their results are not written. */
+        const uint id = rayIndex[leaf.rayBegin + first + (k < count ? k : 0)];
+        ids[k] = id;
+        const float4 o4 = rays[id].origin, d4 = rays[id].direction;
+        ox[k] = o4.x;
+        oy[k] = o4.y;
+        oz[k] = o4.z;
+        tmins[k] = o4.w;
+        dx[k] = d4.x;
+        dy[k] = d4.y;
+        dz[k] = d4.z;
+        tmaxs[k] = d4.w;
+    }
+    const float16 Ox = vload16(0, ox), Oy = vload16(0, oy), Oz = vload16(0, oz);
+    const float16 Dx = vload16(0, dx), Dy = vload16(0, dy), Dz = vload16(0, dz);
+    const float16 Tmin = vload16(0, tmins), Tmax = vload16(0, tmaxs);
+    const uint axis = leaf.face >> 1;
+    const float sign = (leaf.face & 1) ? -1.0f : 1.0f;
+    const float16 originX = sign * (axis == 0 ? Ox : (axis == 1 ? Oy : Oz));
+    const float16 speed = fabs(axis == 0 ? Dx : (axis == 1 ? Dy : Dz));
+    float16 bestT = Tmax, bestU = 0.0f, bestV = 0.0f;
+    uint16 bestPrim = (uint16)(RC_NO_HIT);
+    const uint nT = params->nTriangles, nS = params->nSpheres;
+    uint c = 0;
+    for (; c < leaf.candCount; ++c) {
+        const RcCandidate cand = candidates[leaf.candBegin + c];
+        /* Every lane done: its hit is strictly nearer than this candidate's box. */
+        const int16 done = bestPrim != (uint16)(RC_NO_HIT) & originX + bestT * speed < cand.nearX;
+        if (all(done)) break;
+        const uint prim = cand.prim;
+        if (prim < nT) {
+            const float3 p0 = triangles[prim].v0.xyz;
+            const float3 e1 = triangles[prim].v1.xyz - p0;
+            const float3 e2 = triangles[prim].v2.xyz - p0;
+            const float16 pvx = Dy * e2.z - e2.y * Dz;
+            const float16 pvy = Dz * e2.x - e2.z * Dx;
+            const float16 pvz = Dx * e2.y - e2.x * Dy;
+            const float16 det = e1.x * pvx + e1.y * pvy + e1.z * pvz;
+            const float16 invDet = 1.0f / det;
+            const float16 tvx = Ox - p0.x, tvy = Oy - p0.y, tvz = Oz - p0.z;
+            const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
+            const float16 qvx = tvy * e1.z - e1.y * tvz;
+            const float16 qvy = tvz * e1.x - e1.z * tvx;
+            const float16 qvz = tvx * e1.y - e1.x * tvy;
+            const float16 v = (Dx * qvx + Dy * qvy + Dz * qvz) * invDet;
+            const float16 t = (e2.x * qvx + e2.y * qvy + e2.z * qvz) * invDet;
+            /* Nearer, or equally near with a lower id: the depth test with the id tie-break. */
+            const int16 better = det != 0.0f & u >= 0.0f & u <= 1.0f & v >= 0.0f &
+                                 u + v <= 1.0f & t > Tmin & t < Tmax &
+                                 (t < bestT | (t == bestT & (uint16)(prim) < bestPrim));
+            bestT = select(bestT, t, better);
+            bestU = select(bestU, u, better);
+            bestV = select(bestV, v, better);
+            bestPrim = select(bestPrim, (uint16)(prim), as_uint16(better));
+        } else {
+            /* Spheres and quadrics are rare in triangle scenes: lane by lane. */
+            float bt[16], bu[16], bv[16];
+            uint bp[16];
+            vstore16(bestT, 0, bt);
+            vstore16(bestU, 0, bu);
+            vstore16(bestV, 0, bv);
+            vstore16(bestPrim, 0, bp);
+            for (uint k = 0; k < 16; ++k) {
+                RcHit h;
+                h.t = bt[k];
+                h.prim = bp[k];
+                h.u = bu[k];
+                h.v = bv[k];
+                rc_intersect_primitive(prim, (float3)(ox[k], oy[k], oz[k]),
+                                       (float3)(dx[k], dy[k], dz[k]), tmins[k], tmaxs[k],
+                                       triangles, spheres, quadrics, nT, nS, &h);
+                bt[k] = h.t;
+                bp[k] = h.prim;
+                bu[k] = h.u;
+                bv[k] = h.v;
+            }
+            bestT = vload16(0, bt);
+            bestU = vload16(0, bu);
+            bestV = vload16(0, bv);
+            bestPrim = vload16(0, bp);
+        }
+    }
+    float bt[16], bu[16], bv[16];
+    uint bp[16];
+    vstore16(bestT, 0, bt);
+    vstore16(bestU, 0, bu);
+    vstore16(bestV, 0, bv);
+    vstore16(bestPrim, 0, bp);
+    for (uint k = 0; k < count; ++k) {
+        RcHit h;
+        h.prim = bp[k];
+        h.t = bp[k] == RC_NO_HIT ? INFINITY : bt[k];
+        h.u = bu[k];
+        h.v = bv[k];
+        hits[ids[k]] = h;
+    }
+    tests[p] = c * count;
+}

@@ -1,0 +1,314 @@
+#include "rayclass/render/classified_query.h"
+
+#include <chrono>
+
+#include "rayclass/classify/hierarchy.h"
+#include "rayclass/core/error.h"
+
+namespace rayclass::render {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// A device buffer that grows to the largest size asked for and is reused after that.
+class GrowingBuffer {
+public:
+    template <typename T>
+    const cl::Buffer& Upload(clrt::Context& ctx, const std::vector<T>& data) {
+        Reserve(ctx, data.size() * sizeof(T));
+        if (!data.empty()) {
+            clrt::Check("clEnqueueWriteBuffer", [&] {
+                ctx.queue().enqueueWriteBuffer(buffer_, CL_FALSE, 0, data.size() * sizeof(T),
+                                               data.data());
+            });
+        }
+        return buffer_;
+    }
+    const cl::Buffer& Reserve(clrt::Context& ctx, size_t bytes) {
+        if (bytes > capacity_ || capacity_ == 0) {
+            capacity_ = std::max<size_t>(bytes + bytes / 4, 64);
+            buffer_ = clrt::Check("clCreateBuffer", [&] {
+                return cl::Buffer(ctx.context(), CL_MEM_READ_WRITE, capacity_);
+            });
+        }
+        return buffer_;
+    }
+
+private:
+    cl::Buffer buffer_;
+    size_t capacity_ = 0;
+};
+
+constexpr size_t kLocalSize = 64;
+
+void Launch(clrt::Context& ctx, cl::Kernel& kernel, size_t n, KernelTimer& timer) {
+    if (n == 0) return;
+    cl::Event event;
+    clrt::Check("clEnqueueNDRangeKernel", [&] {
+        ctx.queue().enqueueNDRangeKernel(kernel, cl::NullRange,
+                                         cl::NDRange(clrt::RoundUp(n, kLocalSize)),
+                                         cl::NDRange(kLocalSize), nullptr, &event);
+    });
+    timer.Record(kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(), event);
+}
+
+template <typename... Args>
+void SetArgs(cl::Kernel& kernel, const Args&... args) {
+    clrt::Check("clSetKernelArg", [&] {
+        cl_uint i = 0;
+        (kernel.setArg(i++, args), ...);
+    });
+}
+
+// Directions of a leaf's rays vary little: packets of its rays stay in lockstep.
+constexpr float kCoherentDirExtent = 0.125f;
+
+class ClassifiedQuery final : public RayQuery {
+public:
+    ClassifiedQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& buffers,
+                    const scene::Scene& scene, const classify::Params& params, KernelStyle style)
+        : ctx_(ctx),
+          scene_(buffers),
+          hierarchy_(scene, params),
+          style_(style),
+          queryScalar_(program, "rc_query_scalar"),
+          occludedScalar_(program, "rc_occluded_scalar"),
+          gather_(program, "rc_gather_blocks"),
+          queryVertex_(program, "rc_query_vertex"),
+          occludedVertex_(program, "rc_occluded_vertex"),
+          queryFragment_(program, "rc_query_fragment") {}
+
+    std::string Name() const override {
+        return std::string("classify/") + KernelStyleName(style_);
+    }
+    bool NeedsHostRays() const override { return true; }
+    double HostSeconds() const override { return hostSeconds_; }
+
+    uint64_t Intersect(const cl::Buffer& rays, std::span<const RcRay> hostRays,
+                       const cl::Buffer& hits, KernelTimer& timer) override {
+        const uint32_t n = uint32_t(hostRays.size());
+        if (n == 0) return 0;
+        const RcHit miss{std::numeric_limits<float>::infinity(), RC_NO_HIT, 0.0f, 0.0f};
+        clrt::Check("clEnqueueFillBuffer", [&] {
+            ctx_.queue().enqueueFillBuffer(hits, miss, 0, n * sizeof(RcHit));
+        });
+        Classify(hostRays.size(), [&](size_t i) { return ToClassifyRay(hostRays[i]); });
+        return Query(rays, hits, /*shadow=*/false, timer);
+    }
+
+    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
+                      const cl::Buffer& blocked, KernelTimer& timer) override {
+        const uint32_t n = uint32_t(hostRays.size());
+        if (n == 0) return 0;
+        clrt::Check("clEnqueueFillBuffer", [&] {
+            ctx_.queue().enqueueFillBuffer(blocked, uint8_t(0), 0, n);
+        });
+        // Only live slots are classified; their batch indices map back to slots.
+        live_.clear();
+        for (uint32_t i = 0; i < n; ++i) {
+            if (hostRays[i].contribution.w != 0.0f) live_.push_back(i);
+        }
+        Classify(live_.size(), [&](size_t i) {
+            const RcShadowRay& s = hostRays[live_[i]];
+            classify::Ray r;
+            r.origin = glm::vec3(s.origin.x, s.origin.y, s.origin.z);
+            r.tMin = s.origin.w;
+            r.direction = glm::vec3(s.direction.x, s.direction.y, s.direction.z);
+            r.tMax = s.direction.w;
+            return r;
+        });
+        for (auto& id : batch_.rayIndex) id = live_[id];
+        return Query(shadowRays, blocked, /*shadow=*/true, timer);
+    }
+
+private:
+    static classify::Ray ToClassifyRay(const RcRay& ray) {
+        classify::Ray r;
+        r.origin = glm::vec3(ray.origin.x, ray.origin.y, ray.origin.z);
+        r.tMin = ray.origin.w;
+        r.direction = glm::vec3(ray.direction.x, ray.direction.y, ray.direction.z);
+        r.tMax = ray.direction.w;
+        return r;
+    }
+
+    template <typename F>
+    void Classify(size_t n, F&& ray) {
+        const auto t0 = Clock::now();
+        classifyRays_.resize(n);
+        for (size_t i = 0; i < n; ++i) classifyRays_[i] = ray(i);
+        hierarchy_.Classify(classifyRays_, batch_);
+        // Per-slot leaf ids and, per style, the block and packet lists of the leaves.
+        rayLeaf_.resize(batch_.rayIndex.size());
+        vertexLeaves_.clear();
+        fragmentLeaves_.clear();
+        const auto& nodes = hierarchy_.Nodes();
+        for (uint32_t l = 0; l < batch_.leaves.size(); ++l) {
+            const RcLeaf& leaf = batch_.leaves[l];
+            std::fill_n(rayLeaf_.begin() + leaf.rayBegin, leaf.rayCount, l);
+            bool fragment = style_ == KernelStyle::kFragment;
+            if (style_ == KernelStyle::kAuto) {
+                const auto& box = nodes[leaf.node].box;
+                const float dirExtent = std::max(box.hi[3] - box.lo[3], box.hi[4] - box.lo[4]);
+                fragment = leaf.rayCount >= 16 && dirExtent <= kCoherentDirExtent;
+            }
+            (fragment ? fragmentLeaves_ : vertexLeaves_).push_back(l);
+        }
+        hostSeconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
+    }
+
+    uint64_t Query(const cl::Buffer& rays, const cl::Buffer& out, bool shadow,
+                   KernelTimer& timer) {
+        const auto t0 = Clock::now();
+        const cl::Buffer& leaves = leavesBuf_.Upload(ctx_, batch_.leaves);
+        const cl::Buffer& rayIndex = rayIndexBuf_.Upload(ctx_, batch_.rayIndex);
+        const cl::Buffer& candidates = candidatesBuf_.Upload(ctx_, batch_.candidates);
+        uint64_t tests = 0;
+        if (style_ == KernelStyle::kScalar) {
+            const cl::Buffer& rayLeaf = rayLeafBuf_.Upload(ctx_, rayLeaf_);
+            const uint32_t nSlots = uint32_t(batch_.rayIndex.size());
+            const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
+            cl::Kernel& k = shadow ? occludedScalar_ : queryScalar_;
+            SetArgs(k, rays, rayIndex, rayLeaf, nSlots, leaves, candidates, scene_.triangles,
+                    scene_.spheres, scene_.quadrics, scene_.params, out, testsBuf);
+            hostSeconds_ += Seconds(t0);
+            Launch(ctx_, k, nSlots, timer);
+            tests += SumTests(testsBuf, nSlots);
+            return tests;
+        }
+        // Vertex-style leaves: their rays as slots, their candidates as blocks of 16.
+        if (!vertexLeaves_.empty() || shadow) {
+            vertexSlots_.clear();
+            vertexRayLeaf_.clear();
+            blockLeaf_.clear();
+            blockFirst_.clear();
+            leafFirstBlock_.assign(batch_.leaves.size(), 0);
+            auto addVertexLeaf = [&](uint32_t l) {
+                const RcLeaf& leaf = batch_.leaves[l];
+                leafFirstBlock_[l] = uint32_t(blockLeaf_.size());
+                for (uint32_t c = 0; c < leaf.candCount; c += 16) {
+                    blockLeaf_.push_back(l);
+                    blockFirst_.push_back(c);
+                }
+                for (uint32_t r = 0; r < leaf.rayCount; ++r) {
+                    vertexSlots_.push_back(batch_.rayIndex[leaf.rayBegin + r]);
+                    vertexRayLeaf_.push_back(l);
+                }
+            };
+            // Shadow rays take the vertex style whatever the setting: any-hit queries end at
+            // the first hit, which lockstep packets cannot exploit.
+            if (shadow) {
+                for (uint32_t l = 0; l < batch_.leaves.size(); ++l) addVertexLeaf(l);
+            } else {
+                for (uint32_t l : vertexLeaves_) addVertexLeaf(l);
+            }
+            const uint32_t nBlocks = uint32_t(blockLeaf_.size());
+            const uint32_t nSlots = uint32_t(vertexSlots_.size());
+            const cl::Buffer& blockLeaf = blockLeafBuf_.Upload(ctx_, blockLeaf_);
+            const cl::Buffer& blockFirst = blockFirstBuf_.Upload(ctx_, blockFirst_);
+            const cl::Buffer& leafFirstBlock = leafFirstBlockBuf_.Upload(ctx_, leafFirstBlock_);
+            const cl::Buffer& slots = slotsBuf_.Upload(ctx_, vertexSlots_);
+            const cl::Buffer& slotLeaf = rayLeafBuf_.Upload(ctx_, vertexRayLeaf_);
+            const cl::Buffer& blocks =
+                blocksBuf_.Reserve(ctx_, size_t(nBlocks) * sizeof(RcTriangleBlock16));
+            const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
+            SetArgs(gather_, blockLeaf, blockFirst, nBlocks, leaves, candidates,
+                    scene_.triangles, scene_.params, blocks);
+            cl::Kernel& k = shadow ? occludedVertex_ : queryVertex_;
+            SetArgs(k, rays, slots, slotLeaf, nSlots, leaves, leafFirstBlock, blocks,
+                    scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
+                    testsBuf);
+            hostSeconds_ += Seconds(t0);
+            Launch(ctx_, gather_, nBlocks, timer);
+            Launch(ctx_, k, nSlots, timer);
+            tests += SumTests(testsBuf, nSlots);
+        }
+        if (!shadow && !fragmentLeaves_.empty()) {
+            const auto t1 = Clock::now();
+            packetLeaf_.clear();
+            packetFirst_.clear();
+            for (uint32_t l : fragmentLeaves_) {
+                for (uint32_t r = 0; r < batch_.leaves[l].rayCount; r += 16) {
+                    packetLeaf_.push_back(l);
+                    packetFirst_.push_back(r);
+                }
+            }
+            const uint32_t nPackets = uint32_t(packetLeaf_.size());
+            const cl::Buffer& packetLeaf = packetLeafBuf_.Upload(ctx_, packetLeaf_);
+            const cl::Buffer& packetFirst = packetFirstBuf_.Upload(ctx_, packetFirst_);
+            const cl::Buffer& testsBuf =
+                fragmentTestsBuf_.Reserve(ctx_, nPackets * sizeof(uint32_t));
+            SetArgs(queryFragment_, rays, rayIndex, packetLeaf, packetFirst, nPackets, leaves,
+                    candidates, scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params,
+                    out, testsBuf);
+            hostSeconds_ += Seconds(t1);
+            Launch(ctx_, queryFragment_, nPackets, timer);
+            tests += SumTests(testsBuf, nPackets);
+        }
+        return tests;
+    }
+
+    static double Seconds(Clock::time_point t0) {
+        return std::chrono::duration<double>(Clock::now() - t0).count();
+    }
+
+    uint64_t SumTests(const cl::Buffer& buffer, uint32_t n) {
+        testsHost_.resize(n);
+        if (n == 0) return 0;
+        clrt::Check("clEnqueueReadBuffer", [&] {
+            ctx_.queue().enqueueReadBuffer(buffer, CL_TRUE, 0, n * sizeof(uint32_t),
+                                           testsHost_.data());
+        });
+        uint64_t total = 0;
+        for (uint32_t t : testsHost_) total += t;
+        return total;
+    }
+
+    clrt::Context& ctx_;
+    const SceneBuffers& scene_;
+    classify::Hierarchy hierarchy_;
+    KernelStyle style_;
+    cl::Kernel queryScalar_, occludedScalar_, gather_, queryVertex_, occludedVertex_,
+        queryFragment_;
+    classify::LeafBatch batch_;
+    std::vector<classify::Ray> classifyRays_;
+    std::vector<uint32_t> live_, rayLeaf_, vertexLeaves_, fragmentLeaves_, vertexSlots_,
+        vertexRayLeaf_, blockLeaf_, blockFirst_, leafFirstBlock_, packetLeaf_, packetFirst_,
+        testsHost_;
+    GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,
+        blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_,
+        packetFirstBuf_, fragmentTestsBuf_;
+    double hostSeconds_ = 0;
+};
+
+}  // namespace
+
+KernelStyle ParseKernelStyle(const std::string& name) {
+    if (name == "scalar") return KernelStyle::kScalar;
+    if (name == "vertex") return KernelStyle::kVertex;
+    if (name == "fragment") return KernelStyle::kFragment;
+    if (name == "auto") return KernelStyle::kAuto;
+    throw UsageError("--kernel must be scalar, vertex, fragment or auto, not '" + name + "'");
+}
+
+const char* KernelStyleName(KernelStyle style) {
+    switch (style) {
+        case KernelStyle::kScalar:
+            return "scalar";
+        case KernelStyle::kVertex:
+            return "vertex";
+        case KernelStyle::kFragment:
+            return "fragment";
+        default:
+            return "auto";
+    }
+}
+
+std::unique_ptr<RayQuery> MakeClassifiedQuery(clrt::Context& ctx, const cl::Program& program,
+                                              const SceneBuffers& buffers,
+                                              const scene::Scene& scene,
+                                              const classify::Params& params, KernelStyle style) {
+    return std::make_unique<ClassifiedQuery>(ctx, program, buffers, scene, params, style);
+}
+
+}  // namespace rayclass::render
