@@ -135,4 +135,28 @@ typedef struct RcRenderParams {
     rc_float4 background; /* rgb radiance of rays that leave the scene */
 } RcRenderParams;
 
+/* One leaf of the ray classification (classify/hierarchy.h): its rays are
+ * rayIndex[rayBegin, rayBegin + rayCount) (indices into the generation's ray buffer), its
+ * candidates are candidates[candBegin, candBegin + candCount), sorted by nearX. face = 2 * axis +
+ * (direction negative) is the direction-cube face of all its rays; node is the hierarchy node it
+ * came from (for statistics and debugging). 32 bytes. */
+typedef struct RcLeaf {
+    rc_uint rayBegin;
+    rc_uint rayCount;
+    rc_uint candBegin;
+    rc_uint candCount;
+    rc_uint face;
+    rc_uint node;
+    rc_uint pad0, pad1;
+} RcLeaf;
+
+/* A candidate of a leaf: the primitive's global id and the near side of its (padded) bounding
+ * box along the leaf face's main axis, in the face frame (X = +p_axis or -p_axis). A query may stop
+ * before a candidate once its nearest hit's X is below nearX: no later candidate can be nearer.
+ * 8 bytes. */
+typedef struct RcCandidate {
+    rc_uint prim;
+    float nearX;
+} RcCandidate;
+
 #endif
