@@ -32,12 +32,8 @@ void MinMax(const float* x, size_t n, float& lo, float& hi) {
         vlo = _mm512_mask_min_ps(vlo, live, vlo, _mm512_maskz_loadu_ps(live, x + i));
         vhi = _mm512_mask_max_ps(vhi, live, vhi, _mm512_maskz_loadu_ps(live, x + i));
     }
-    // Through memory: GCC 12's _mm512_reduce_* trip -Wmaybe-uninitialized.
-    alignas(64) float l[16], h[16];
-    _mm512_store_ps(l, vlo);
-    _mm512_store_ps(h, vhi);
-    lo = *std::min_element(l, l + 16);
-    hi = *std::max_element(h, h + 16);
+    lo = ReduceMin(vlo);
+    hi = ReduceMax(vhi);
 #else
     float l = kInf, h = -kInf;
     for (size_t i = 0; i < n; ++i) {
@@ -98,6 +94,13 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
     levelLists_.resize(size_t(params_.maxDepth) + 2);
 }
 
+void Hierarchy::Reset() {
+    nodes_.resize(kFaceCount);
+    for (Node& n : nodes_) {
+        n.child[0] = n.child[1] = n.remainder = kNoNode;
+    }
+}
+
 uint32_t Hierarchy::NewNode(const Box5& box, int face, int depth, bool isRemainder) {
     Node n;
     n.box = box;
@@ -109,65 +112,63 @@ uint32_t Hierarchy::NewNode(const Box5& box, int face, int depth, bool isRemaind
 }
 
 void Hierarchy::Insert(std::span<const Ray> rays) {
-    const bool empty = sceneBox_.Empty();
-    for (size_t i = 0; i < rays.size(); ++i) {
-        const uint32_t id = nInserted_ + uint32_t(i);
-        Ray5 r;
-        if (!empty && ToRay5(rays[i], sceneBox_, r)) {
-            pending_.push_back(r);
-            pendingId_.push_back(id);
-            reach_.push_back(r.reach);
-        } else {
-            missed_.push_back(id);
-            reach_.push_back(0.0f);
-        }
-    }
+    inserted_.push_back(rays);
     nInserted_ += uint32_t(rays.size());
 }
 
-LeafBatch Hierarchy::Subdivide() {
+void Hierarchy::Subdivide(LeafBatch& out) {
     counters_ = {};
-    LeafBatch out;
+    out.leaves.clear();
+    out.rayIndex.clear();
+    out.candidates.clear();
+    out.missed.clear();
     out.nRays = nInserted_;
-    out.missed = std::move(missed_);
-    const size_t n = pending_.size();
+    ray5_.resize(nInserted_);
+    uint32_t count[kFaceCount + 1] = {};
+    float reach[kFaceCount] = {};
+    const bool empty = sceneBox_.Empty();
+    uint32_t id = 0;
+    for (const auto& rays : inserted_) {
+        for (const Ray& ray : rays) {
+            Ray5& r = ray5_[id++];
+            if (empty || !ToRay5(ray, sceneBox_, r)) r.face = kFaceCount;
+            ++count[r.face];
+        }
+    }
+    const uint32_t n = nInserted_ - count[kFaceCount];
     for (int b = 0; b < 2; ++b) {
         for (auto& c : coord_[b]) c.resize(n);
         id_[b].resize(n);
     }
     dest_.resize(n);
-    uint32_t count[kFaceCount] = {};
-    float reach[kFaceCount] = {};
-    for (const Ray5& r : pending_) {
-        ++count[r.face];
-        reach[r.face] = std::max(reach[r.face], r.reach);
-    }
     uint32_t begin[kFaceCount + 1] = {};
     for (int f = 0; f < kFaceCount; ++f) begin[f + 1] = begin[f] + count[f];
     uint32_t next[kFaceCount];
     std::copy(begin, begin + kFaceCount, next);
-    for (size_t i = 0; i < n; ++i) {
-        const Ray5& r = pending_[i];
+    out.missed.reserve(count[kFaceCount]);
+    for (uint32_t i = 0; i < nInserted_; ++i) {
+        const Ray5& r = ray5_[i];
+        if (r.face == kFaceCount) {
+            out.missed.push_back(i);
+            continue;
+        }
         const uint32_t at = next[r.face]++;
         for (int k = 0; k < kDims; ++k) coord_[0][k][at] = r.p[k];
-        id_[0][at] = pendingId_[i];
+        id_[0][at] = i;
+        reach[r.face] = std::max(reach[r.face], r.reach);
     }
-    out.rayIndex.reserve(n);
+    out.rayIndex.resize(n);
     for (int f = 0; f < kFaceCount; ++f) {
         if (count[f] == 0) continue;
         faceReach_ = reach[f];
         BuildFace(f, begin[f], begin[f + 1], out);
     }
-    size_t scratch = (dest_.capacity() + keys_.capacity()) * 4;
+    size_t scratch = (dest_.capacity() + keys_.capacity()) * 4 + ray5_.capacity() * sizeof(Ray5);
     for (int b = 0; b < 2; ++b) scratch += (id_[b].capacity() + coord_[b][0].capacity() * kDims) * 4;
     for (const auto& l : levelLists_) scratch += l.Bytes();
     counters_.scratchBytes = std::max(counters_.scratchBytes, scratch);
-    pending_.clear();
-    pendingId_.clear();
-    reach_.clear();
-    missed_.clear();
+    inserted_.clear();
     nInserted_ = 0;
-    return out;
 }
 
 void Hierarchy::BuildFace(int face, uint32_t begin, uint32_t end, LeafBatch& out) {
@@ -250,16 +251,16 @@ void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, co
     ListView own = reuseList ? list : Filter(tight, list, depth);
     int dim = 0;
     uint32_t mid = begin;
+    Box5 leftBox, rightBox;
     if (ChooseSplit(nodes_[node], tight, end - begin, own, dim)) {
-        mid = Partition(dim, SplitValue(dim, buf, begin, end, tight), buf, begin, end);
+        const float value = SplitValue(dim, buf, begin, end, tight);
+        mid = Partition(dim, value, buf, begin, end, leftBox, rightBox);
     }
     if (mid == begin || mid == end) {
         if (reuseList) own = Filter(tight, list, depth);
         EmitLeaf(node, begin, end, buf, tight, own, out);
         return;
     }
-    const Box5 leftBox = Bounds(other, begin, mid);
-    const Box5 rightBox = Bounds(other, mid, end);
     const uint32_t left = NewNode(leftBox, face, depth + 1, false);
     const uint32_t right = NewNode(rightBox, face, depth + 1, false);
     nodes_[node].child[0] = left;
@@ -318,13 +319,20 @@ float Hierarchy::SplitValue(int dim, int buf, uint32_t begin, uint32_t end, cons
     return m > lo ? m : hi;
 }
 
-uint32_t Hierarchy::Partition(int dim, float value, int buf, uint32_t begin, uint32_t end) {
+uint32_t Hierarchy::Partition(int dim, float value, int buf, uint32_t begin, uint32_t end,
+                              Box5& leftBox, Box5& rightBox) {
     const int other = buf ^ 1;
     const float* key = coord_[buf][dim].data();
     counters_.rayMoves += end - begin;
     uint32_t l = begin, r = end;
 #if defined(__AVX512F__)
     const __m512 m = _mm512_set1_ps(value);
+    // The children's bounds are gathered on the way, saving a second pass over their rays.
+    __m512 lLo[kDims], lHi[kDims], rLo[kDims], rHi[kDims];
+    for (int k = 0; k < kDims; ++k) {
+        lLo[k] = rLo[k] = _mm512_set1_ps(kInf);
+        lHi[k] = rHi[k] = _mm512_set1_ps(-kInf);
+    }
     for (uint32_t i = begin; i < end; i += 16) {
         const uint32_t rest = end - i;
         const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
@@ -340,12 +348,26 @@ uint32_t Hierarchy::Partition(int dim, float value, int buf, uint32_t begin, uin
             float* dst = coord_[other][k].data();
             _mm512_mask_storeu_ps(dst + l, ml, _mm512_maskz_compress_ps(left, v));
             _mm512_mask_storeu_ps(dst + r - nr, mr, _mm512_maskz_compress_ps(right, v));
+            lLo[k] = _mm512_mask_min_ps(lLo[k], left, lLo[k], v);
+            lHi[k] = _mm512_mask_max_ps(lHi[k], left, lHi[k], v);
+            rLo[k] = _mm512_mask_min_ps(rLo[k], right, rLo[k], v);
+            rHi[k] = _mm512_mask_max_ps(rHi[k], right, rHi[k], v);
         }
         const __m512i v = _mm512_maskz_loadu_epi32(live, id_[buf].data() + i);
         _mm512_mask_storeu_epi32(id_[other].data() + l, ml, _mm512_maskz_compress_epi32(left, v));
         _mm512_mask_storeu_epi32(id_[other].data() + r - nr, mr, _mm512_maskz_compress_epi32(right, v));
         l += nl;
         r -= nr;
+    }
+    for (int k = 0; k < kDims; ++k) {
+        if (active_[k]) {
+            leftBox.lo[k] = ReduceMin(lLo[k]);
+            leftBox.hi[k] = ReduceMax(lHi[k]);
+            rightBox.lo[k] = ReduceMin(rLo[k]);
+            rightBox.hi[k] = ReduceMax(rHi[k]);
+        } else {
+            leftBox.lo[k] = leftBox.hi[k] = rightBox.lo[k] = rightBox.hi[k] = constant_[k];
+        }
     }
 #else
     for (uint32_t i = begin; i < end; ++i) {
@@ -358,6 +380,8 @@ uint32_t Hierarchy::Partition(int dim, float value, int buf, uint32_t begin, uin
         l += isLeft ? 1 : 0;
         r -= isLeft ? 0 : 1;
     }
+    leftBox = Bounds(other, begin, l);
+    rightBox = Bounds(other, l, end);
 #endif
     return l;
 }
@@ -365,13 +389,14 @@ uint32_t Hierarchy::Partition(int dim, float value, int buf, uint32_t begin, uin
 void Hierarchy::EmitLeaf(uint32_t node, uint32_t begin, uint32_t end, int buf, const Box5& tight,
                          const ListView& list, LeafBatch& out) {
     RcLeaf leaf{};
-    leaf.rayBegin = uint32_t(out.rayIndex.size());
+    // Faces and leaves fill the range in order, so a leaf's rays keep their buffer positions.
+    leaf.rayBegin = begin;
     leaf.rayCount = end - begin;
     float reach = 0.0f;
     for (uint32_t i = begin; i < end; ++i) {
         const uint32_t id = id_[buf][i];
-        out.rayIndex.push_back(id);
-        reach = std::max(reach, reach_[id]);
+        out.rayIndex[i] = id;
+        reach = std::max(reach, ray5_[id].reach);
     }
     // The current nearest-hit bound: no ray of the leaf gets farther along X than tight.hi[0] +
     // reach, and the list is sorted by near X, so everything after that is cut at once.
@@ -379,7 +404,9 @@ void Hierarchy::EmitLeaf(uint32_t node, uint32_t begin, uint32_t end, int buf, c
     const size_t n = size_t(std::upper_bound(list.x0, list.x0 + list.n, farthest) - list.x0);
     leaf.candBegin = uint32_t(out.candidates.size());
     leaf.candCount = uint32_t(n);
-    for (size_t i = 0; i < n; ++i) out.candidates.push_back({list.prim[i], list.x0[i]});
+    out.candidates.resize(leaf.candBegin + n);
+    RcCandidate* cand = out.candidates.data() + leaf.candBegin;
+    for (size_t i = 0; i < n; ++i) cand[i] = {list.prim[i], list.x0[i]};
     leaf.face = nodes_[node].face;
     leaf.node = node;
     out.leaves.push_back(leaf);

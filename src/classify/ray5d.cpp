@@ -26,10 +26,12 @@ Box5 BoxInFace(int face, const Bounds3f& box) {
     return r;
 }
 
-bool ToRay5(const Ray& ray, const Bounds3f& sceneBox, Ray5& out) {
+bool ToRay5Clipped(const Ray& ray, const Bounds3f& sceneBox, Ray5& out) {
     const glm::vec3& o = ray.origin;
     const glm::vec3& d = ray.direction;
-    if (!std::isfinite(d.x) || !std::isfinite(d.y) || !std::isfinite(d.z)) return false;
+    for (int k = 0; k < 3; ++k) {
+        if (!std::isfinite(d[k]) || !std::isfinite(o[k])) return false;
+    }
     const int a = DominantAxis(d);
     const float da = std::abs(d[a]);
     if (!(da > 0.0f)) return false;
@@ -49,20 +51,19 @@ bool ToRay5(const Ray& ray, const Bounds3f& sceneBox, Ray5& out) {
         tEnter = std::max(tEnter, t0);
         tExit = std::min(tExit, t1);
     }
-    if (!(tEnter <= tExit)) return false;
-    // Origins inside the box stay exact (tEnter = tMin = 0 for spawned and eye rays); others move
-    // to the entry point, clamped so rounding cannot put them outside.
-    glm::vec3 p = tEnter == 0.0f ? o : o + tEnter * d;
-    p = glm::clamp(p, sceneBox.lo, sceneBox.hi);
+    if (!(tEnter <= tExit) || !(tEnter < ray.tMax)) return false;
+    // The start moves to the entry point, clamped so rounding cannot put it outside.
+    const glm::vec3 p = glm::clamp(o + tEnter * d, sceneBox.lo, sceneBox.hi);
     const int face = 2 * a + (d[a] < 0.0f ? 1 : 0);
     const int b = (a + 1) % 3;
     const int c = (a + 2) % 3;
+    const float inv = 1.0f / da;
     out.face = face;
     out.p[0] = FaceSign(face) * p[a];
     out.p[1] = p[b];
     out.p[2] = p[c];
-    out.p[3] = std::clamp(d[b] / da, -1.0f, 1.0f);
-    out.p[4] = std::clamp(d[c] / da, -1.0f, 1.0f);
+    out.p[3] = d[b] * inv;
+    out.p[4] = d[c] * inv;
     out.reach = (tExit - tEnter) * da;
     if (!std::isfinite(out.reach)) out.reach = 3.402823466e38f;
     return true;

@@ -69,18 +69,33 @@ public:
     Hierarchy(const scene::Scene& scene, const Params& params);
 
     // Adds rays to the current generation. Several calls append; the generation's ray indices are
-    // positions in the concatenation of all rays inserted since the last Subdivide().
+    // positions in the concatenation of all rays inserted since the last Subdivide(). The rays
+    // are read by Subdivide(), so they must stay alive until it returns.
     void Insert(std::span<const Ray> rays);
 
     // Routes the generation's rays through the hierarchy, splits where the cost function says so
-    // and returns the generation's leaves. Clears the generation; the nodes stay.
-    LeafBatch Subdivide();
+    // and writes the generation's leaves into `out` (its arrays are reused, so a caller that keeps
+    // one LeafBatch per generation slot allocates nothing in steady state). Clears the
+    // generation; the nodes stay.
+    void Subdivide(LeafBatch& out);
+    LeafBatch Subdivide() {
+        LeafBatch out;
+        Subdivide(out);
+        return out;
+    }
 
     // Insert then Subdivide.
+    void Classify(std::span<const Ray> rays, LeafBatch& out) {
+        Insert(rays);
+        Subdivide(out);
+    }
     LeafBatch Classify(std::span<const Ray> rays) {
         Insert(rays);
         return Subdivide();
     }
+
+    // Forgets every split: back to the six face roots (the presorted face lists stay).
+    void Reset();
 
     const std::vector<Node>& Nodes() const { return nodes_; }
     uint32_t FaceRoot(int face) const { return uint32_t(face); }
@@ -113,7 +128,8 @@ private:
                      int& dim) const;
     Box5 Bounds(int buf, uint32_t begin, uint32_t end) const;
     float SplitValue(int dim, int buf, uint32_t begin, uint32_t end, const Box5& tight);
-    uint32_t Partition(int dim, float value, int buf, uint32_t begin, uint32_t end);
+    uint32_t Partition(int dim, float value, int buf, uint32_t begin, uint32_t end, Box5& left,
+                       Box5& right);
     uint32_t NewNode(const Box5& box, int face, int depth, bool isRemainder);
 
     const scene::Scene& scene_;
@@ -124,17 +140,15 @@ private:
     FaceList faceLists_[kFaceCount];
     std::vector<FaceList> levelLists_;    // scratch list per filter level
 
-    // The current generation: 5D rays in two ping-pong buffers (per-face ranges), and per input
-    // ray its reach, face and whether it hits the box.
+    // The current generation: the inserted rays, each mapped to 5D (face kFaceCount: a miss),
+    // and the 5D rays by face in two ping-pong buffers.
+    std::vector<std::span<const Ray>> inserted_;
+    uint32_t nInserted_ = 0;
+    std::vector<Ray5> ray5_;
     std::vector<float> coord_[2][kDims];
     std::vector<uint32_t> id_[2];
     std::vector<uint32_t> dest_;
     std::vector<float> keys_;
-    std::vector<float> reach_;
-    std::vector<Ray5> pending_;
-    std::vector<uint32_t> pendingId_;
-    std::vector<uint32_t> missed_;
-    uint32_t nInserted_ = 0;
     bool active_[kDims] = {};  // dimensions that vary in the face being built
     float constant_[kDims] = {};
     float faceReach_ = 0.0f;

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 #include <glm/glm.hpp>
@@ -80,8 +81,38 @@ inline float FaceX(int face, const glm::vec3& p) { return FaceSign(face) * p[Fac
 // `box` in the frame of `face`: X, Y, Z intervals (the last two of the array pair are unused).
 Box5 BoxInFace(int face, const Bounds3f& box);
 
+// Maps a ray whose start o + tMin d lies outside `sceneBox`: see ToRay5.
+bool ToRay5Clipped(const Ray& ray, const Bounds3f& sceneBox, Ray5& out);
+
 // Maps `ray` into 5D, clipped to `sceneBox`. Returns false when the ray cannot hit anything
 // inside the box (it misses it, its segment is empty, or its direction is zero or not finite).
-bool ToRay5(const Ray& ray, const Bounds3f& sceneBox, Ray5& out);
+// Inline: the classifier converts every ray of a generation with it, and most start inside.
+inline bool ToRay5(const Ray& ray, const Bounds3f& sceneBox, Ray5& out) {
+    const glm::vec3& d = ray.direction;
+    const int a = DominantAxis(d);
+    const float da = d[a] < 0.0f ? -d[a] : d[a];
+    const glm::vec3 start = ray.tMin == 0.0f ? ray.origin : ray.origin + ray.tMin * d;
+    const bool inside = start.x >= sceneBox.lo.x && start.x <= sceneBox.hi.x &&
+                        start.y >= sceneBox.lo.y && start.y <= sceneBox.hi.y &&
+                        start.z >= sceneBox.lo.z && start.z <= sceneBox.hi.z;
+    // The sum is not finite when a component is NaN or infinite; the slow path sorts those out.
+    if (!inside || !(da > 0.0f) || !std::isfinite(d.x + d.y + d.z) || !(ray.tMin < ray.tMax)) {
+        return ToRay5Clipped(ray, sceneBox, out);
+    }
+    const int face = 2 * a + (d[a] < 0.0f ? 1 : 0);
+    const int b = a == 2 ? 0 : a + 1;
+    const int c = a == 0 ? 2 : a - 1;
+    const float inv = 1.0f / da;
+    out.face = face;
+    out.p[0] = (face & 1) ? -start[a] : start[a];
+    out.p[1] = start[b];
+    out.p[2] = start[c];
+    out.p[3] = d[b] * inv;
+    out.p[4] = d[c] * inv;
+    // Beyond the box there is nothing to hit, so tMax alone bounds the reach well enough here.
+    const float reach = (ray.tMax - ray.tMin) * da;
+    out.reach = reach < 3.402823466e38f ? reach : 3.402823466e38f;
+    return true;
+}
 
 }  // namespace rayclass::classify
