@@ -45,6 +45,95 @@ void MinMax(const float* x, size_t n, float& lo, float& hi) {
 #endif
 }
 
+// Where a partition reads and writes the rays of a node: one array per dimension, and the ids.
+struct PartitionIo {
+    const float* src[kDims];
+    float* dst[kDims];
+    const uint32_t* srcId;
+    uint32_t* dstId;
+    const float* key;
+};
+
+// Moves the rays with key < value to the front of [begin, end) of the destination (in order) and
+// the others to the back (reversed), for the dimensions in kActive only, and gathers both sides'
+// bounds on the way (the other dimensions' bounds are left to the caller). Returns the first
+// right-side position. kActive is a template argument so that the per-dimension registers stay
+// registers.
+template <int kActive>
+uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint32_t end,
+                       Box5& leftBox, Box5& rightBox) {
+    uint32_t l = begin, r = end;
+#if defined(__AVX512F__)
+    const __m512 m = _mm512_set1_ps(value);
+    __m512 lLo[kDims], lHi[kDims], rLo[kDims], rHi[kDims];
+    for (int k = 0; k < kDims; ++k) {
+        lLo[k] = rLo[k] = _mm512_set1_ps(kInf);
+        lHi[k] = rHi[k] = _mm512_set1_ps(-kInf);
+    }
+    for (uint32_t i = begin; i < end; i += 16) {
+        const uint32_t rest = end - i;
+        const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
+        const __m512 key = _mm512_maskz_loadu_ps(live, io.key + i);
+        const __mmask16 left = _mm512_mask_cmp_ps_mask(live, key, m, _CMP_LT_OQ);
+        const __mmask16 right = __mmask16(live & ~left);
+        const uint32_t nl = uint32_t(std::popcount(unsigned(left)));
+        const uint32_t nr = uint32_t(std::popcount(unsigned(right)));
+        const __mmask16 ml = __mmask16((1u << nl) - 1u), mr = __mmask16((1u << nr) - 1u);
+#pragma GCC unroll 5
+        for (int k = 0; k < kDims; ++k) {
+            if (!((kActive >> k) & 1)) continue;
+            const __m512 v = _mm512_maskz_loadu_ps(live, io.src[k] + i);
+            _mm512_mask_storeu_ps(io.dst[k] + l, ml, _mm512_maskz_compress_ps(left, v));
+            _mm512_mask_storeu_ps(io.dst[k] + r - nr, mr, _mm512_maskz_compress_ps(right, v));
+            lLo[k] = _mm512_mask_min_ps(lLo[k], left, lLo[k], v);
+            lHi[k] = _mm512_mask_max_ps(lHi[k], left, lHi[k], v);
+            rLo[k] = _mm512_mask_min_ps(rLo[k], right, rLo[k], v);
+            rHi[k] = _mm512_mask_max_ps(rHi[k], right, rHi[k], v);
+        }
+        const __m512i id = _mm512_maskz_loadu_epi32(live, io.srcId + i);
+        _mm512_mask_storeu_epi32(io.dstId + l, ml, _mm512_maskz_compress_epi32(left, id));
+        _mm512_mask_storeu_epi32(io.dstId + r - nr, mr, _mm512_maskz_compress_epi32(right, id));
+        l += nl;
+        r -= nr;
+    }
+    for (int k = 0; k < kDims; ++k) {
+        if (!((kActive >> k) & 1)) continue;
+        leftBox.lo[k] = ReduceMin(lLo[k]);
+        leftBox.hi[k] = ReduceMax(lHi[k]);
+        rightBox.lo[k] = ReduceMin(rLo[k]);
+        rightBox.hi[k] = ReduceMax(rHi[k]);
+    }
+#else
+    for (uint32_t i = begin; i < end; ++i) {
+        const bool isLeft = io.key[i] < value;
+        const uint32_t at = isLeft ? l : r - 1;
+        for (int k = 0; k < kDims; ++k) {
+            if ((kActive >> k) & 1) io.dst[k][at] = io.src[k][i];
+        }
+        io.dstId[at] = io.srcId[i];
+        l += isLeft ? 1 : 0;
+        r -= isLeft ? 0 : 1;
+    }
+    for (int k = 0; k < kDims; ++k) {
+        if (!((kActive >> k) & 1)) continue;
+        MinMax(io.dst[k] + begin, l - begin, leftBox.lo[k], leftBox.hi[k]);
+        MinMax(io.dst[k] + l, end - l, rightBox.lo[k], rightBox.hi[k]);
+    }
+#endif
+    return l;
+}
+
+template <int kActive = 0>
+uint32_t DispatchPartition(int active, const PartitionIo& io, float value, uint32_t begin,
+                           uint32_t end, Box5& leftBox, Box5& rightBox) {
+    if constexpr (kActive == 1 << kDims) {
+        return begin;
+    } else {
+        if (active == kActive) return PartitionRays<kActive>(io, value, begin, end, leftBox, rightBox);
+        return DispatchPartition<kActive + 1>(active, io, value, begin, end, leftBox, rightBox);
+    }
+}
+
 }  // namespace
 
 void Hierarchy::FaceList::Resize(size_t n) {
@@ -322,68 +411,22 @@ float Hierarchy::SplitValue(int dim, int buf, uint32_t begin, uint32_t end, cons
 uint32_t Hierarchy::Partition(int dim, float value, int buf, uint32_t begin, uint32_t end,
                               Box5& leftBox, Box5& rightBox) {
     const int other = buf ^ 1;
-    const float* key = coord_[buf][dim].data();
     counters_.rayMoves += end - begin;
-    uint32_t l = begin, r = end;
-#if defined(__AVX512F__)
-    const __m512 m = _mm512_set1_ps(value);
-    // The children's bounds are gathered on the way, saving a second pass over their rays.
-    __m512 lLo[kDims], lHi[kDims], rLo[kDims], rHi[kDims];
+    PartitionIo io;
+    int mask = 0;
     for (int k = 0; k < kDims; ++k) {
-        lLo[k] = rLo[k] = _mm512_set1_ps(kInf);
-        lHi[k] = rHi[k] = _mm512_set1_ps(-kInf);
+        io.src[k] = coord_[buf][k].data();
+        io.dst[k] = coord_[other][k].data();
+        mask |= active_[k] ? 1 << k : 0;
     }
-    for (uint32_t i = begin; i < end; i += 16) {
-        const uint32_t rest = end - i;
-        const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
-        const __mmask16 left = _mm512_mask_cmp_ps_mask(live, _mm512_maskz_loadu_ps(live, key + i), m, _CMP_LT_OQ);
-        const __mmask16 right = __mmask16(live & ~left);
-        const uint32_t nl = uint32_t(std::popcount(unsigned(left)));
-        const uint32_t nr = uint32_t(std::popcount(unsigned(right)));
-        const __mmask16 ml = __mmask16((1u << nl) - 1u), mr = __mmask16((1u << nr) - 1u);
-        // Left rays fill the range forwards, right rays backwards.
-        for (int k = 0; k < kDims; ++k) {
-            if (!active_[k]) continue;
-            const __m512 v = _mm512_maskz_loadu_ps(live, coord_[buf][k].data() + i);
-            float* dst = coord_[other][k].data();
-            _mm512_mask_storeu_ps(dst + l, ml, _mm512_maskz_compress_ps(left, v));
-            _mm512_mask_storeu_ps(dst + r - nr, mr, _mm512_maskz_compress_ps(right, v));
-            lLo[k] = _mm512_mask_min_ps(lLo[k], left, lLo[k], v);
-            lHi[k] = _mm512_mask_max_ps(lHi[k], left, lHi[k], v);
-            rLo[k] = _mm512_mask_min_ps(rLo[k], right, rLo[k], v);
-            rHi[k] = _mm512_mask_max_ps(rHi[k], right, rHi[k], v);
-        }
-        const __m512i v = _mm512_maskz_loadu_epi32(live, id_[buf].data() + i);
-        _mm512_mask_storeu_epi32(id_[other].data() + l, ml, _mm512_maskz_compress_epi32(left, v));
-        _mm512_mask_storeu_epi32(id_[other].data() + r - nr, mr, _mm512_maskz_compress_epi32(right, v));
-        l += nl;
-        r -= nr;
-    }
+    io.srcId = id_[buf].data();
+    io.dstId = id_[other].data();
+    io.key = coord_[buf][dim].data();
+    const uint32_t mid = DispatchPartition(mask, io, value, begin, end, leftBox, rightBox);
     for (int k = 0; k < kDims; ++k) {
-        if (active_[k]) {
-            leftBox.lo[k] = ReduceMin(lLo[k]);
-            leftBox.hi[k] = ReduceMax(lHi[k]);
-            rightBox.lo[k] = ReduceMin(rLo[k]);
-            rightBox.hi[k] = ReduceMax(rHi[k]);
-        } else {
-            leftBox.lo[k] = leftBox.hi[k] = rightBox.lo[k] = rightBox.hi[k] = constant_[k];
-        }
+        if (!active_[k]) leftBox.lo[k] = leftBox.hi[k] = rightBox.lo[k] = rightBox.hi[k] = constant_[k];
     }
-#else
-    for (uint32_t i = begin; i < end; ++i) {
-        const bool isLeft = key[i] < value;
-        const uint32_t at = isLeft ? l : r - 1;
-        for (int k = 0; k < kDims; ++k) {
-            if (active_[k]) coord_[other][k][at] = coord_[buf][k][i];
-        }
-        id_[other][at] = id_[buf][i];
-        l += isLeft ? 1 : 0;
-        r -= isLeft ? 0 : 1;
-    }
-    leftBox = Bounds(other, begin, l);
-    rightBox = Bounds(other, l, end);
-#endif
-    return l;
+    return mid;
 }
 
 void Hierarchy::EmitLeaf(uint32_t node, uint32_t begin, uint32_t end, int buf, const Box5& tight,
