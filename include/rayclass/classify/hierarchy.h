@@ -1,0 +1,158 @@
+// The lazy 5D ray-classification hierarchy (Arvo & Kirk 1987, with the refinements of the
+// founding thesis: Haines & Wallace beam tests, distance-sorted candidate lists, shrinking,
+// remainder sets and a cost function; see design/lessig-2004-system.md section 2).
+//
+// Six face roots span the padded scene box and u, v in [-1, 1]. Only nodes that receive rays are
+// split, when Subdivide() runs. A split cuts one dimension of a node's rays and shrinks each child
+// to the tight 5D bounds of its rays, so children need not cover their parent. Every split node
+// therefore owns a remainder: a leaf for the rest of its interval. A later generation routes each
+// ray to the child whose interval contains it, else to the remainder, which the cost function may
+// split in turn; rays of several generations thus share one hierarchy.
+//
+// Candidate lists hold every primitive whose padded box the node's beam may reach (conservative,
+// never drops a primitive a ray of the node hits), in the order of the box's near X, which the
+// face's presorted array fixes once and filtering keeps. Lists live only while a generation is
+// being subdivided: inner lists are scratch per depth, leaf lists go into the returned LeafBatch.
+//
+// Invariants (checked by tests/classify): every ray that can hit the scene lies in exactly one
+// leaf; a node's interval contains the 5D points of the rays that were routed to it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "rayclass/classify/params.h"
+#include "rayclass/classify/ray5d.h"
+#include "rayclass/scene/scene.h"
+#include "rc_types.h"
+
+namespace rayclass::classify {
+
+static_assert(sizeof(RcLeaf) == 32);
+static_assert(sizeof(RcCandidate) == 8);
+
+constexpr uint32_t kNoNode = 0xFFFFFFFFu;
+
+struct ListView;
+
+struct Node {
+    Box5 box;                  // the node's interval: its rays' bounds when it was made
+    uint32_t child[2] = {kNoNode, kNoNode};
+    uint32_t remainder = kNoNode;  // made when a ray first falls outside both children
+    uint8_t face = 0;
+    uint8_t depth = 0;
+    uint8_t isRemainder = 0;   // a remainder's interval is its parent's minus the children
+    bool IsLeaf() const { return child[0] == kNoNode; }
+};
+
+// The leaves of one generation in flat arrays, ready to copy into OpenCL buffers.
+struct LeafBatch {
+    std::vector<RcLeaf> leaves;
+    std::vector<rc_uint> rayIndex;         // leaves' rays, contiguous per leaf
+    std::vector<RcCandidate> candidates;   // leaves' lists, contiguous per leaf, sorted by nearX
+    std::vector<rc_uint> missed;           // rays that miss the scene box: answered "no hit"
+    uint32_t nRays = 0;                    // rays of the generation (leaf rays + missed)
+};
+
+// Counters of the last Subdivide().
+struct BuildCounters {
+    uint64_t boxTests = 0;      // candidate tests made while filtering lists
+    uint64_t rayMoves = 0;      // rays moved by partitions (sum over levels)
+    uint32_t maxDepth = 0;      // deepest leaf
+    size_t scratchBytes = 0;    // peak bytes of the per-depth list and ray buffers
+};
+
+class Hierarchy {
+public:
+    Hierarchy(const scene::Scene& scene, const Params& params);
+
+    // Adds rays to the current generation. Several calls append; the generation's ray indices are
+    // positions in the concatenation of all rays inserted since the last Subdivide(). The rays
+    // are read by Subdivide(), so they must stay alive until it returns.
+    void Insert(std::span<const Ray> rays);
+
+    // Routes the generation's rays through the hierarchy, splits where the cost function says so
+    // and writes the generation's leaves into `out` (its arrays are reused, so a caller that keeps
+    // one LeafBatch per generation slot allocates nothing in steady state). Clears the
+    // generation; the nodes stay.
+    void Subdivide(LeafBatch& out);
+    LeafBatch Subdivide() {
+        LeafBatch out;
+        Subdivide(out);
+        return out;
+    }
+
+    // Insert then Subdivide.
+    void Classify(std::span<const Ray> rays, LeafBatch& out) {
+        Insert(rays);
+        Subdivide(out);
+    }
+    LeafBatch Classify(std::span<const Ray> rays) {
+        Insert(rays);
+        return Subdivide();
+    }
+
+    // Forgets every split: back to the six face roots (the presorted face lists stay).
+    void Reset();
+
+    const std::vector<Node>& Nodes() const { return nodes_; }
+    uint32_t FaceRoot(int face) const { return uint32_t(face); }
+    // The leaf that routing `r` ends in: the child containing it at every inner node, else the
+    // remainder (kNoNode when that remainder does not exist yet).
+    uint32_t Route(const Ray5& r) const;
+    const BuildCounters& Counters() const { return counters_; }
+    const Params& GetParams() const { return params_; }
+    const Bounds3f& SceneBox() const { return sceneBox_; }
+    // Bytes held now: nodes, presorted face arrays and reusable scratch.
+    size_t MemoryBytes() const;
+
+    // Presorted per-face boxes (structure of arrays, padded, in the face frame, sorted by x0).
+    struct FaceList {
+        std::vector<float> x0, x1, y0, y1, z0, z1;
+        std::vector<uint32_t> prim;
+        size_t Size() const { return prim.size(); }
+        size_t Bytes() const { return prim.capacity() * 4 + x0.capacity() * 24; }
+        void Resize(size_t n);
+    };
+
+private:
+    void BuildFace(int face, uint32_t begin, uint32_t end, LeafBatch& out);
+    void Process(uint32_t node, uint32_t begin, uint32_t end, int buf, const Box5& tight,
+                 const ListView& list, bool reuseList, LeafBatch& out);
+    void EmitLeaf(uint32_t node, uint32_t begin, uint32_t end, int buf, const Box5& tight,
+                  const ListView& list, LeafBatch& out);
+    ListView Filter(const Box5& tight, const ListView& list, int level);
+    bool ChooseSplit(const Node& node, const Box5& tight, uint32_t nRays, const ListView& list,
+                     int& dim) const;
+    Box5 Bounds(int buf, uint32_t begin, uint32_t end) const;
+    float SplitValue(int dim, int buf, uint32_t begin, uint32_t end, const Box5& tight);
+    uint32_t Partition(int dim, float value, int buf, uint32_t begin, uint32_t end, Box5& left,
+                       Box5& right);
+    uint32_t NewNode(const Box5& box, int face, int depth, bool isRemainder);
+
+    const scene::Scene& scene_;
+    Params params_;
+    Bounds3f sceneBox_;
+    std::array<float, kDims> rootExtent_[kFaceCount];
+    std::vector<Node> nodes_;
+    FaceList faceLists_[kFaceCount];
+    std::vector<FaceList> levelLists_;    // scratch list per filter level
+
+    // The current generation: the inserted rays, each mapped to 5D (face kFaceCount: a miss),
+    // and the 5D rays by face in two ping-pong buffers.
+    std::vector<std::span<const Ray>> inserted_;
+    uint32_t nInserted_ = 0;
+    std::vector<Ray5> ray5_;
+    std::vector<float> coord_[2][kDims];
+    std::vector<uint32_t> id_[2];
+    std::vector<uint32_t> dest_;
+    std::vector<float> keys_;
+    bool active_[kDims] = {};  // dimensions that vary in the face being built
+    float constant_[kDims] = {};
+    float faceReach_ = 0.0f;
+    BuildCounters counters_;
+};
+
+}  // namespace rayclass::classify

@@ -1,0 +1,67 @@
+// Parameters of the ray classification: the split strategy, the cost function that decides when a
+// hypercube stops splitting, and the padding that keeps the candidate test conservative in float.
+#pragma once
+
+#include <cstdint>
+
+#include "rayclass/scene/scene.h"
+
+namespace rayclass::classify {
+
+enum class SplitRule : uint8_t {
+    // Middle of the node's shrunk interval: one partition pass (default; see Params::splitRule).
+    kMidpoint,
+    // Median of the rays' coordinates: balanced children, but an nth_element per split.
+    kMedian,
+};
+
+struct Params {
+    // Split dimension: the largest extent relative to the face root's extent, the direction
+    // extents (u, v) weighted by dirWeight. Split value: splitRule. Midpoint is the default
+    // because on sibenik it gave mirror-ray lists 2-3x shorter than the median and classifies
+    // 2x faster (design/notes/classification-feasibility.md, "Median vs midpoint split").
+    SplitRule splitRule = SplitRule::kMidpoint;
+    float dirWeight = 1.0f;
+
+    // A node filters a new candidate list every splitsPerList levels (and always as a leaf);
+    // between them children share their parent's list, as Arvo & Kirk suggest for children of
+    // one-dimension splits, which overlap heavily.
+    int splitsPerList = 1;
+
+    // Cost function. A leaf with R rays and candidates of summed intersection cost C (ns per
+    // ray) is split when R > minRays, its list holds more than minCandidates entries, one of its
+    // extents exceeds the minimum hypercube size, and the query time a split is expected to save,
+    // R * C * splitGain, exceeds the split's own cost, 2 * nCandidates * boxTestCost (two child
+    // lists) + R * rayMoveCost.
+    //
+    // Per-test costs in ns, measured by bench/intersect_bench.cpp (Google Benchmark, one core of
+    // the 2-vCPU Xeon (Sapphire Rapids) these machines have, Release build, scalar float routines
+    // of geometry/intersect.h over 4096 random primitives, 2026-11-22):
+    //   triangle 3.1 ns, sphere 3.3 ns, quadric 6.8 ns; candidate box test 0.45 ns per box
+    //   (filter), ray partition 0.9 ns per ray and level.
+    uint32_t minRays = 64;        // a work-group's worth of rays is the device's unit of work
+    uint32_t minCandidates = 16;  // the device tests 16 candidates at once: fewer gain nothing
+    float triangleCost = 3.1f;
+    float sphereCost = 3.3f;
+    float quadricCost = 6.8f;
+    float boxTestCost = 0.45f;
+    float rayMoveCost = 0.9f;
+    float splitGain = 0.25f;  // fraction of a list a split is expected to drop per child
+    int maxDepth = 60;
+
+    // Minimum hypercube size: a dimension is split only while its extent exceeds this fraction of
+    // the face root's extent (scene box side for X, Y, Z; 2 for u, v). Below it the nearest
+    // objects usually cover the whole beam and the distance optimisation ends queries anyway.
+    float minOriginFraction = 1.0f / 4096.0f;
+    float minDirFraction = 1.0f / 4096.0f;
+
+    // Primitive and scene boxes grow by this much on every side (world units) so that rounding in
+    // the float candidate test never drops a primitive a ray hits. Scene-scaled: 2e-6 * diagonal
+    // is about 16 ulps of the largest coordinate, far above the test's rounding error.
+    float padding = 0.0f;
+
+    // Defaults for `scene`: the padding from its diagonal.
+    static Params ForScene(const scene::Scene& scene);
+};
+
+}  // namespace rayclass::classify

@@ -1,0 +1,118 @@
+// Rays as points of 5D ray space, after Arvo & Kirk, "Fast Ray Tracing by Ray Classification"
+// (SIGGRAPH 1987): the dominant axis of the direction picks one of the 6 faces of the direction
+// cube, and in that face's frame a ray is its origin (X, Y, Z) plus the slopes (u, v) of its
+// direction (1, u, v), with u, v in [-1, 1].
+//
+// Face frame of face f = 2a + (d_a < 0): a is the dominant axis (ties go to the lower axis),
+// b = (a + 1) mod 3, c = (a + 2) mod 3, s = +1 or -1 the sign of d_a. Then X = s p_a, Y = p_b,
+// Z = p_c, u = d_b / |d_a|, v = d_c / |d_a|: every ray of the face runs along +X, and a ray
+// parameter t advances X by t |d_a|.
+//
+// A ray whose origin lies outside the (padded) scene box starts at its entry point instead; a ray
+// that misses the box, or has no direction, misses everything.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include <glm/glm.hpp>
+
+#include "rayclass/core/bounds.h"
+
+namespace rayclass::classify {
+
+constexpr int kFaceCount = 6;
+constexpr int kDims = 5;  // X, Y, Z, u, v in that order
+
+// A ray of a generation, as the host hands it in. Hits count for tMin < t < tMax; t is in units
+// of |direction|. 32 bytes, the layout of RcRay's first two float4.
+struct Ray {
+    glm::vec3 origin{0.0f};
+    float tMin = 0.0f;
+    glm::vec3 direction{0.0f, 0.0f, 1.0f};
+    float tMax = 3.402823466e38f;
+};
+
+// An axis-aligned interval in the 5 coordinates of one face's frame.
+struct Box5 {
+    std::array<float, kDims> lo;
+    std::array<float, kDims> hi;
+
+    bool Contains(const std::array<float, kDims>& p) const {
+        for (int k = 0; k < kDims; ++k) {
+            if (!(p[k] >= lo[k] && p[k] <= hi[k])) return false;
+        }
+        return true;
+    }
+    bool Contains(const Box5& b) const {
+        for (int k = 0; k < kDims; ++k) {
+            if (b.lo[k] < lo[k] || b.hi[k] > hi[k]) return false;
+        }
+        return true;
+    }
+};
+
+// A ray mapped into 5D. `reach` is how far along X (in the face frame) the ray may travel from
+// `p` before it leaves the scene box or passes tMax: the classification cuts beams there.
+struct Ray5 {
+    std::array<float, kDims> p;
+    float reach = 0.0f;
+    int face = 0;
+};
+
+inline int DominantAxis(const glm::vec3& d) {
+    const glm::vec3 a = glm::abs(d);
+    if (a.x >= a.y && a.x >= a.z) return 0;
+    return a.y >= a.z ? 1 : 2;
+}
+
+inline int FaceOf(const glm::vec3& d) {
+    const int a = DominantAxis(d);
+    return 2 * a + (d[a] < 0.0f ? 1 : 0);
+}
+
+inline int FaceAxis(int face) { return face >> 1; }
+inline float FaceSign(int face) { return (face & 1) ? -1.0f : 1.0f; }
+
+// Coordinate of world point `p` along face `face`'s main axis (the frame's X).
+inline float FaceX(int face, const glm::vec3& p) { return FaceSign(face) * p[FaceAxis(face)]; }
+
+// `box` in the frame of `face`: X, Y, Z intervals (the last two of the array pair are unused).
+Box5 BoxInFace(int face, const Bounds3f& box);
+
+// Maps a ray whose start o + tMin d lies outside `sceneBox`: see ToRay5.
+bool ToRay5Clipped(const Ray& ray, const Bounds3f& sceneBox, Ray5& out);
+
+// Maps `ray` into 5D, clipped to `sceneBox`. Returns false when the ray cannot hit anything
+// inside the box (it misses it, its segment is empty, or its direction is zero or not finite).
+// Inline: the classifier converts every ray of a generation with it, and most start inside.
+inline bool ToRay5(const Ray& ray, const Bounds3f& sceneBox, Ray5& out) {
+    const glm::vec3& d = ray.direction;
+    const int a = DominantAxis(d);
+    const float da = d[a] < 0.0f ? -d[a] : d[a];
+    const glm::vec3 start = ray.tMin == 0.0f ? ray.origin : ray.origin + ray.tMin * d;
+    const bool inside = start.x >= sceneBox.lo.x && start.x <= sceneBox.hi.x &&
+                        start.y >= sceneBox.lo.y && start.y <= sceneBox.hi.y &&
+                        start.z >= sceneBox.lo.z && start.z <= sceneBox.hi.z;
+    // The sum is not finite when a component is NaN or infinite; the slow path sorts those out.
+    if (!inside || !(da > 0.0f) || !std::isfinite(d.x + d.y + d.z) || !(ray.tMin < ray.tMax)) {
+        return ToRay5Clipped(ray, sceneBox, out);
+    }
+    const int face = 2 * a + (d[a] < 0.0f ? 1 : 0);
+    const int b = a == 2 ? 0 : a + 1;
+    const int c = a == 0 ? 2 : a - 1;
+    const float inv = 1.0f / da;
+    out.face = face;
+    out.p[0] = (face & 1) ? -start[a] : start[a];
+    out.p[1] = start[b];
+    out.p[2] = start[c];
+    out.p[3] = d[b] * inv;
+    out.p[4] = d[c] * inv;
+    // Beyond the box there is nothing to hit, so tMax alone bounds the reach well enough here.
+    const float reach = (ray.tMax - ray.tMin) * da;
+    out.reach = reach < 3.402823466e38f ? reach : 3.402823466e38f;
+    return true;
+}
+
+}  // namespace rayclass::classify

@@ -1,0 +1,56 @@
+// The conservative candidate test of a hypercube's beam against padded primitive boxes, and the
+// list filter built on it. Private to the classify module.
+//
+// Haines & Wallace ("Shaft Culling for Efficient Ray-Traced Radiosity", 1994, after the beam
+// tests of their ray classification) test a box against each side of the beam polyhedron at the
+// corner the side's slope picks. With origins O = [x0,x1]x[y0,y1]x[z0,z1] and slopes
+// U = [u0,u1], V = [v0,v1], a point of box B is reachable iff B - O (a box [a0,a1]x[c0,c1]x[e0,e1]
+// with a0 = X0 - x1, a1 = X1 - x0, c0 = Y0 - y1, ...) meets s (1, u, v) for some s >= 0. The four
+// sides give u1 s >= c0, u0 s <= c1, v1 s >= e0, v0 s <= e1: each is the side's corner test, and
+// the sign of the side's slope decides whether it bounds s from below or above. Coupling them
+// through one s (intersecting the four half-lines with [max(a0, 0), min(a1, reach)]) is exact for
+// "box meets beam" in real arithmetic and rejects more than testing the two projections apart.
+// Zero slope bounds are widened to +-1e-30, which keeps the test conservative and finite.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "rayclass/classify/hierarchy.h"
+
+namespace rayclass::classify {
+
+struct ListView {
+    const float* x0;
+    const float* x1;
+    const float* y0;
+    const float* y1;
+    const float* z0;
+    const float* z1;
+    const uint32_t* prim;
+    size_t n;
+};
+
+inline ListView View(const Hierarchy::FaceList& l, size_t n) {
+    return {l.x0.data(), l.x1.data(), l.y0.data(), l.y1.data(),
+            l.z0.data(), l.z1.data(), l.prim.data(), n};
+}
+
+struct BeamTest {
+    float x0, x1, y0, y1, z0, z1;
+    float ru1, ru0, rv1, rv0;  // reciprocals of the (widened) slope bounds
+    float reach;               // how far along X any ray of the beam travels
+    int signs;                 // bit 0: u1 > 0, 1: u0 > 0, 2: v1 > 0, 3: v0 > 0
+};
+
+BeamTest MakeBeamTest(const Box5& box, float reach);
+
+// Scalar form of the test, for tests and as the reference of the vector filter.
+bool BeamMayReach(const BeamTest& t, float bx0, float bx1, float by0, float by1, float bz0,
+                  float bz1);
+
+// Keeps the boxes of `in` that `t` may reach, in order, in out[0, result). `out` must hold at
+// least in.n entries.
+size_t FilterList(const BeamTest& t, const ListView& in, Hierarchy::FaceList& out);
+
+}  // namespace rayclass::classify

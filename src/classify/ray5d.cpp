@@ -1,0 +1,72 @@
+#include "rayclass/classify/ray5d.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rayclass::classify {
+
+Box5 BoxInFace(int face, const Bounds3f& box) {
+    const int a = FaceAxis(face);
+    const int b = (a + 1) % 3;
+    const int c = (a + 2) % 3;
+    Box5 r;
+    if (face & 1) {
+        r.lo[0] = -box.hi[a];
+        r.hi[0] = -box.lo[a];
+    } else {
+        r.lo[0] = box.lo[a];
+        r.hi[0] = box.hi[a];
+    }
+    r.lo[1] = box.lo[b];
+    r.hi[1] = box.hi[b];
+    r.lo[2] = box.lo[c];
+    r.hi[2] = box.hi[c];
+    r.lo[3] = r.lo[4] = -1.0f;
+    r.hi[3] = r.hi[4] = 1.0f;
+    return r;
+}
+
+bool ToRay5Clipped(const Ray& ray, const Bounds3f& sceneBox, Ray5& out) {
+    const glm::vec3& o = ray.origin;
+    const glm::vec3& d = ray.direction;
+    for (int k = 0; k < 3; ++k) {
+        if (!std::isfinite(d[k]) || !std::isfinite(o[k])) return false;
+    }
+    const int a = DominantAxis(d);
+    const float da = std::abs(d[a]);
+    if (!(da > 0.0f)) return false;
+    // Slab clip of the segment (tMin, tMax) against the box; an axis-parallel ray outside a slab
+    // misses (its NaN or infinite slab bounds never widen the interval).
+    float tEnter = ray.tMin;
+    float tExit = ray.tMax;
+    for (int k = 0; k < 3; ++k) {
+        if (d[k] == 0.0f) {
+            if (o[k] < sceneBox.lo[k] || o[k] > sceneBox.hi[k]) return false;
+            continue;
+        }
+        const float inv = 1.0f / d[k];
+        float t0 = (sceneBox.lo[k] - o[k]) * inv;
+        float t1 = (sceneBox.hi[k] - o[k]) * inv;
+        if (t0 > t1) std::swap(t0, t1);
+        tEnter = std::max(tEnter, t0);
+        tExit = std::min(tExit, t1);
+    }
+    if (!(tEnter <= tExit) || !(tEnter < ray.tMax)) return false;
+    // The start moves to the entry point, clamped so rounding cannot put it outside.
+    const glm::vec3 p = glm::clamp(o + tEnter * d, sceneBox.lo, sceneBox.hi);
+    const int face = 2 * a + (d[a] < 0.0f ? 1 : 0);
+    const int b = (a + 1) % 3;
+    const int c = (a + 2) % 3;
+    const float inv = 1.0f / da;
+    out.face = face;
+    out.p[0] = FaceSign(face) * p[a];
+    out.p[1] = p[b];
+    out.p[2] = p[c];
+    out.p[3] = d[b] * inv;
+    out.p[4] = d[c] * inv;
+    out.reach = (tExit - tEnter) * da;
+    if (!std::isfinite(out.reach)) out.reach = 3.402823466e38f;
+    return true;
+}
+
+}  // namespace rayclass::classify

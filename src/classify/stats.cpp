@@ -1,0 +1,139 @@
+#include "rayclass/classify/stats.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <string>
+
+#include "rayclass/classify/query.h"
+
+namespace rayclass::classify {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double>(b - a).count();
+}
+
+glm::vec3 GeometricNormal(const scene::Scene& scene, uint32_t prim, const glm::vec3& p) {
+    if (prim < scene.SphereBase()) {
+        const auto& v = scene.triangles[prim].p;
+        return glm::cross(v[1] - v[0], v[2] - v[0]);
+    }
+    if (prim < scene.QuadricBase()) return p - scene.spheres[prim - scene.SphereBase()].center;
+    const scene::Quadric& q = scene.quadrics[prim - scene.QuadricBase()];
+    return geometry::QuadricGradient(q.c, p);
+}
+
+}  // namespace
+
+size_t PeakRssBytes() {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line)) {
+        if (line.rfind("VmHWM:", 0) == 0) return size_t(std::stoull(line.substr(6))) * 1024;
+    }
+    return 0;
+}
+
+std::vector<Ray> AnchorEyeRays(const scene::Scene& scene, uint32_t width, uint32_t height) {
+    const Bounds3f box = scene.Bounds();
+    const glm::vec3 eye = box.Center() - glm::vec3(0.25f * box.Size().x, 0.0f, 0.0f);
+    const glm::vec3 forward(1, 0, 0), up(0, 1, 0), right(0, 0, 1);
+    const float tanY = std::tan(glm::radians(60.0f) * 0.5f);
+    const float tanX = tanY * float(width) / float(height);
+    std::vector<Ray> rays;
+    rays.reserve(size_t(width) * height);
+    for (uint32_t y = 0; y < height; ++y) {
+        for (uint32_t x = 0; x < width; ++x) {
+            const float sx = (2.0f * (float(x) + 0.5f) / float(width) - 1.0f) * tanX;
+            const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(height)) * tanY;
+            Ray r;
+            r.origin = eye;
+            r.direction = glm::normalize(forward + sx * right + sy * up);
+            rays.push_back(r);
+        }
+    }
+    return rays;
+}
+
+std::vector<Ray> MirrorRays(const scene::Scene& scene, std::span<const Ray> rays,
+                            std::span<const geometry::Hit<float>> hits) {
+    const float offset = 1e-4f * scene.Bounds().Diagonal();
+    std::vector<Ray> out;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        if (!hits[i].Valid()) continue;
+        const Ray& r = rays[i];
+        const glm::vec3 p = r.origin + hits[i].t * r.direction;
+        glm::vec3 n = GeometricNormal(scene, hits[i].prim, p);
+        if (!(glm::length(n) > 0.0f)) continue;
+        n = glm::normalize(n);
+        if (glm::dot(n, r.direction) > 0.0f) n = -n;
+        Ray m;
+        m.origin = p + offset * n;
+        m.direction = glm::normalize(r.direction - 2.0f * glm::dot(r.direction, n) * n);
+        out.push_back(m);
+    }
+    return out;
+}
+
+ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
+                           const Params& params, int repeats,
+                           std::span<geometry::Hit<float>> hits) {
+    ClassifyStats s;
+    s.nRays = uint32_t(rays.size());
+    s.bruteForceTests = scene.PrimitiveCount();
+    const auto t0 = Clock::now();
+    Hierarchy h(scene, params);
+    s.setupMs = 1e3 * Seconds(t0, Clock::now());
+
+    std::vector<double> times;
+    LeafBatch batch;
+    for (int r = 0; r < std::max(repeats, 1); ++r) {
+        // A fresh hierarchy each time, but the batch's arrays are reused, as a renderer would.
+        h.Reset();
+        const auto a = Clock::now();
+        h.Classify(rays, batch);
+        times.push_back(Seconds(a, Clock::now()));
+    }
+    std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
+    const double n = std::max<double>(s.nRays, 1.0);
+    s.classifyNsPerRay = 1e9 * times[times.size() / 2] / n;
+
+    s.nMissed = uint32_t(batch.missed.size());
+    s.nLeaves = uint32_t(batch.leaves.size());
+    s.nNodes = uint32_t(h.Nodes().size());
+    s.maxDepth = h.Counters().maxDepth;
+    s.boxTestsPerRay = double(h.Counters().boxTests) / n;
+    s.rayMovesPerRay = double(h.Counters().rayMoves) / n;
+    double candSum = 0.0;
+    for (const RcLeaf& leaf : batch.leaves) {
+        candSum += double(leaf.candCount) * leaf.rayCount;
+        s.maxCandidates = std::max(s.maxCandidates, leaf.candCount);
+    }
+    const double nClassified = std::max<double>(s.nRays - s.nMissed, 1.0);
+    s.avgCandidates = candSum / nClassified;
+
+    std::vector<geometry::Hit<float>> own;
+    if (hits.empty()) {
+        own.resize(rays.size());
+        hits = own;
+    }
+    const auto q = Clock::now();
+    const uint64_t tests = QueryHost(scene, batch, rays, hits);
+    s.queryNsPerRay = 1e9 * Seconds(q, Clock::now()) / n;
+    s.testsPerRay = double(tests) / n;
+
+    s.hierarchyBytes = h.MemoryBytes();
+    s.leafBytes = batch.leaves.capacity() * sizeof(RcLeaf) +
+                  batch.rayIndex.capacity() * sizeof(rc_uint) +
+                  batch.candidates.capacity() * sizeof(RcCandidate) +
+                  batch.missed.capacity() * sizeof(rc_uint);
+    s.peakRssBytes = PeakRssBytes();
+    return s;
+}
+
+}  // namespace rayclass::classify

@@ -1,0 +1,330 @@
+#include "rayclass/classify/hierarchy.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <set>
+
+#include "rayclass/classify/query.h"
+#include "rayclass/geometry/offset.h"
+
+namespace rayclass::classify {
+namespace {
+
+using geometry::Hit;
+
+scene::Triangle MakeTriangle(glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    scene::Triangle t;
+    t.p = {a, b, c};
+    return t;
+}
+
+// Random small triangles in [-1, 1]^3, a few spheres and a clipped ellipsoid.
+scene::Scene RandomScene(uint32_t seed, int nTriangles, int nSpheres, int nQuadrics) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> pos(-1.0f, 1.0f), off(-0.3f, 0.3f), rad(0.05f, 0.2f);
+    scene::Scene s;
+    for (int i = 0; i < nTriangles; ++i) {
+        const glm::vec3 c(pos(rng), pos(rng), pos(rng));
+        s.triangles.push_back(MakeTriangle(c + glm::vec3(off(rng), off(rng), off(rng)),
+                                           c + glm::vec3(off(rng), off(rng), off(rng)),
+                                           c + glm::vec3(off(rng), off(rng), off(rng))));
+    }
+    for (int i = 0; i < nSpheres; ++i) {
+        s.spheres.push_back({glm::vec3(pos(rng), pos(rng), pos(rng)), rad(rng)});
+    }
+    for (int i = 0; i < nQuadrics; ++i) {
+        scene::Quadric q;
+        const glm::vec3 c(pos(rng), pos(rng), pos(rng));
+        const float r = rad(rng);
+        // (x - cx)^2 + (y - cy)^2 + 4 (z - cz)^2 = r^2, clipped to its box's upper half in y.
+        q.c = {1, 1, 4, 0, 0, 0, -2 * c.x, -2 * c.y, -8 * c.z,
+               c.x * c.x + c.y * c.y + 4 * c.z * c.z - r * r};
+        q.boxMin = c - glm::vec3(r, 0.0f, r);
+        q.boxMax = c + glm::vec3(r);
+        s.quadrics.push_back(q);
+    }
+    return s;
+}
+
+glm::vec3 RandomDirection(std::mt19937& rng) {
+    std::normal_distribution<float> n;
+    glm::vec3 d;
+    do d = glm::vec3(n(rng), n(rng), n(rng));
+    while (glm::length(d) < 1e-3f);
+    return glm::normalize(d);
+}
+
+// Eye rays from one point, random rays from inside and outside the box, and some that miss.
+std::vector<Ray> RandomRays(uint32_t seed, int n) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> pos(-1.2f, 1.2f), far(-4.0f, 4.0f), cone(-0.4f, 0.4f);
+    std::vector<Ray> rays;
+    const glm::vec3 eye(-1.5f, 0.1f, 0.2f);
+    for (int i = 0; i < n; ++i) {
+        Ray r;
+        switch (i % 3) {
+            case 0:
+                r.origin = eye;
+                r.direction = glm::normalize(glm::vec3(1.0f, cone(rng), cone(rng)));
+                break;
+            case 1:
+                r.origin = glm::vec3(pos(rng), pos(rng), pos(rng));
+                r.direction = RandomDirection(rng);
+                break;
+            default:
+                r.origin = glm::vec3(far(rng), far(rng), far(rng));
+                r.direction = RandomDirection(rng);
+                break;
+        }
+        rays.push_back(r);
+    }
+    return rays;
+}
+
+// Parameters that split small ray sets deeply, so that small tests exercise deep hierarchies.
+Params DeepParams(const scene::Scene& s) {
+    Params p = Params::ForScene(s);
+    p.minRays = 4;
+    p.minCandidates = 2;
+    p.splitGain = 1.0f;
+    p.boxTestCost = 0.01f;
+    p.rayMoveCost = 0.01f;
+    return p;
+}
+
+std::vector<Hit<float>> BruteForce(const scene::Scene& s, const std::vector<Ray>& rays) {
+    std::vector<Hit<float>> hits;
+    for (const Ray& r : rays) hits.push_back(geometry::IntersectBruteForce(s, ToGeometryRay(r)));
+    return hits;
+}
+
+// Same primitive; same distance. Both paths run the same float routine on the same ray, so the
+// distances agree exactly; the tolerance of 1 ulp of t only guards against a future change of
+// operation order.
+void ExpectSameHits(const std::vector<Hit<float>>& a, const std::vector<Hit<float>>& b) {
+    ASSERT_EQ(a.size(), b.size());
+    int nDiffer = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        const bool same = a[i].prim == b[i].prim &&
+                          (!a[i].Valid() || std::abs(a[i].t - b[i].t) <=
+                                                std::abs(std::nextafter(a[i].t, INFINITY) - a[i].t));
+        if (!same && ++nDiffer <= 5) {
+            ADD_FAILURE() << "ray " << i << ": prim " << a[i].prim << " t " << a[i].t << " vs prim "
+                          << b[i].prim << " t " << b[i].t;
+        }
+    }
+    EXPECT_EQ(nDiffer, 0);
+}
+
+std::vector<Hit<float>> Query(const scene::Scene& s, const LeafBatch& batch,
+                              const std::vector<Ray>& rays) {
+    std::vector<Hit<float>> hits(rays.size());
+    QueryHost(s, batch, rays, hits);
+    return hits;
+}
+
+void ExpectEveryRayOnce(const LeafBatch& batch, uint32_t nRays) {
+    std::vector<int> seen(nRays, 0);
+    for (const RcLeaf& leaf : batch.leaves) {
+        for (uint32_t j = 0; j < leaf.rayCount; ++j) ++seen[batch.rayIndex[leaf.rayBegin + j]];
+    }
+    for (uint32_t id : batch.missed) ++seen[id];
+    for (uint32_t i = 0; i < nRays; ++i) ASSERT_EQ(seen[i], 1) << "ray " << i;
+    EXPECT_EQ(batch.nRays, nRays);
+}
+
+TEST(Hierarchy, EveryRayLandsInExactlyOneLeaf) {
+    for (uint32_t seed = 1; seed <= 3; ++seed) {
+        const scene::Scene s = RandomScene(seed, 300, 10, 5);
+        const auto rays = RandomRays(seed + 100, 3000);
+        Hierarchy h(s, DeepParams(s));
+        const LeafBatch batch = h.Classify(rays);
+        ExpectEveryRayOnce(batch, uint32_t(rays.size()));
+        EXPECT_GT(batch.leaves.size(), 50u);
+    }
+}
+
+TEST(Hierarchy, LeafListHoldsTheBruteForceHit) {
+    const scene::Scene s = RandomScene(7, 400, 10, 5);
+    const auto rays = RandomRays(8, 3000);
+    Hierarchy h(s, DeepParams(s));
+    const LeafBatch batch = h.Classify(rays);
+    const auto truth = BruteForce(s, rays);
+    int nHits = 0;
+    for (const RcLeaf& leaf : batch.leaves) {
+        std::set<uint32_t> list;
+        for (uint32_t c = 0; c < leaf.candCount; ++c) {
+            list.insert(batch.candidates[leaf.candBegin + c].prim);
+        }
+        for (uint32_t j = 0; j < leaf.rayCount; ++j) {
+            const uint32_t id = batch.rayIndex[leaf.rayBegin + j];
+            if (!truth[id].Valid()) continue;
+            ++nHits;
+            EXPECT_TRUE(list.count(truth[id].prim)) << "ray " << id << " prim " << truth[id].prim;
+        }
+    }
+    for (uint32_t id : batch.missed) EXPECT_FALSE(truth[id].Valid()) << "missed ray " << id;
+    EXPECT_GT(nHits, 1000);
+}
+
+TEST(Hierarchy, ListsAreSortedByNearDistance) {
+    const scene::Scene s = RandomScene(9, 300, 0, 0);
+    const auto rays = RandomRays(10, 2000);
+    Hierarchy h(s, DeepParams(s));
+    const LeafBatch batch = h.Classify(rays);
+    for (const RcLeaf& leaf : batch.leaves) {
+        const RcCandidate* c = batch.candidates.data() + leaf.candBegin;
+        for (uint32_t i = 1; i < leaf.candCount; ++i) ASSERT_LE(c[i - 1].nearX, c[i].nearX);
+    }
+}
+
+TEST(Hierarchy, DistanceOptimisedQueryEqualsBruteForce) {
+    for (uint32_t seed = 11; seed <= 13; ++seed) {
+        const scene::Scene s = RandomScene(seed, 400, 15, 5);
+        const auto rays = RandomRays(seed + 100, 3000);
+        Hierarchy h(s, DeepParams(s));
+        const LeafBatch batch = h.Classify(rays);
+        ExpectSameHits(Query(s, batch, rays), BruteForce(s, rays));
+    }
+}
+
+TEST(Hierarchy, QueryEqualsBruteForceForEverySplitVariant) {
+    const scene::Scene s = RandomScene(21, 300, 10, 5);
+    const auto rays = RandomRays(22, 2000);
+    const auto truth = BruteForce(s, rays);
+    for (SplitRule rule : {SplitRule::kMidpoint, SplitRule::kMedian}) {
+        for (int splitsPerList : {1, 3}) {
+            Params p = DeepParams(s);
+            p.splitRule = rule;
+            p.splitsPerList = splitsPerList;
+            p.dirWeight = 0.5f;
+            Hierarchy h(s, p);
+            ExpectSameHits(Query(s, h.Classify(rays), rays), truth);
+        }
+    }
+    // Default parameters: few splits at this ray count, still exact.
+    Hierarchy h(s, Params::ForScene(s));
+    ExpectSameHits(Query(s, h.Classify(rays), rays), truth);
+}
+
+TEST(Hierarchy, ShrunkIntervalsContainTheirRays) {
+    const scene::Scene s = RandomScene(31, 300, 5, 2);
+    const auto rays = RandomRays(32, 3000);
+    Hierarchy h(s, DeepParams(s));
+    const LeafBatch batch = h.Classify(rays);
+    const auto& nodes = h.Nodes();
+    for (const RcLeaf& leaf : batch.leaves) {
+        for (uint32_t j = 0; j < leaf.rayCount; ++j) {
+            const uint32_t id = batch.rayIndex[leaf.rayBegin + j];
+            Ray5 r;
+            ASSERT_TRUE(ToRay5(rays[id], h.SceneBox(), r));
+            EXPECT_EQ(uint32_t(r.face), leaf.face);
+            EXPECT_TRUE(nodes[leaf.node].box.Contains(r.p)) << "ray " << id;
+        }
+    }
+    // Children shrink inside their parent and are disjoint in the split.
+    int nSplit = 0;
+    for (const Node& n : nodes) {
+        if (n.IsLeaf()) continue;
+        ++nSplit;
+        for (uint32_t c : n.child) EXPECT_TRUE(n.box.Contains(nodes[c].box));
+    }
+    EXPECT_GT(nSplit, 20);
+}
+
+TEST(Hierarchy, RemainderReceivesExactlyTheRaysOutsideTheChildren) {
+    const scene::Scene s = RandomScene(41, 300, 5, 2);
+    const auto first = RandomRays(42, 3000);
+    const auto second = RandomRays(43, 3000);
+    Hierarchy h(s, DeepParams(s));
+    h.Classify(first);
+    const LeafBatch batch = h.Classify(second);
+    ExpectEveryRayOnce(batch, uint32_t(second.size()));
+    const auto& nodes = h.Nodes();
+    int nInRemainder = 0;
+    for (const RcLeaf& leaf : batch.leaves) {
+        for (uint32_t j = 0; j < leaf.rayCount; ++j) {
+            const uint32_t id = batch.rayIndex[leaf.rayBegin + j];
+            Ray5 r;
+            ASSERT_TRUE(ToRay5(second[id], h.SceneBox(), r));
+            // Walk the path by hand: a ray enters the remainder iff no child contains it.
+            uint32_t node = h.FaceRoot(r.face);
+            bool viaRemainder = false;
+            while (node != leaf.node) {
+                const Node& n = nodes[node];
+                ASSERT_FALSE(n.IsLeaf()) << "ray " << id << " left the path";
+                const bool in0 = nodes[n.child[0]].box.Contains(r.p);
+                const bool in1 = nodes[n.child[1]].box.Contains(r.p);
+                ASSERT_FALSE(in0 && in1);
+                if (in0 || in1) {
+                    node = n.child[in0 ? 0 : 1];
+                } else {
+                    ASSERT_NE(n.remainder, kNoNode);
+                    node = n.remainder;
+                    viaRemainder = true;
+                }
+            }
+            EXPECT_EQ(h.Route(r), leaf.node);
+            nInRemainder += viaRemainder ? 1 : 0;
+        }
+    }
+    EXPECT_GT(nInRemainder, 300);
+}
+
+TEST(Hierarchy, SecondGenerationMatchesAFreshHierarchy) {
+    const scene::Scene s = RandomScene(51, 400, 10, 5);
+    const auto first = RandomRays(52, 3000);
+    // Second generation: mirror rays off the first generation's hits.
+    std::vector<Ray> second;
+    for (const Ray& r : first) {
+        const Hit<float> hit = geometry::IntersectBruteForce(s, ToGeometryRay(r));
+        if (!hit.Valid() || hit.prim >= s.SphereBase()) continue;
+        const auto& p = s.triangles[hit.prim].p;
+        glm::vec3 n = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
+        if (glm::dot(n, r.direction) > 0.0f) n = -n;
+        Ray m;
+        m.origin = geometry::OffsetRayOrigin(r.origin + hit.t * r.direction, n);
+        m.direction = glm::reflect(r.direction, n);
+        second.push_back(m);
+    }
+    ASSERT_GT(second.size(), 500u);
+    Hierarchy shared(s, DeepParams(s));
+    shared.Classify(first);
+    const auto sharedHits = Query(s, shared.Classify(second), second);
+    Hierarchy fresh(s, DeepParams(s));
+    ExpectSameHits(sharedHits, Query(s, fresh.Classify(second), second));
+    ExpectSameHits(sharedHits, BruteForce(s, second));
+    // A third generation (the first again) through both remainders and old leaves.
+    ExpectSameHits(Query(s, shared.Classify(first), first), BruteForce(s, first));
+}
+
+TEST(Hierarchy, InsertAppendsRaysOfOneGeneration) {
+    const scene::Scene s = RandomScene(61, 200, 0, 0);
+    const auto a = RandomRays(62, 1000);
+    const auto b = RandomRays(63, 1000);
+    std::vector<Ray> both = a;
+    both.insert(both.end(), b.begin(), b.end());
+    Hierarchy h(s, DeepParams(s));
+    h.Insert(a);
+    h.Insert(b);
+    const LeafBatch batch = h.Subdivide();
+    ExpectEveryRayOnce(batch, uint32_t(both.size()));
+    ExpectSameHits(Query(s, batch, both), BruteForce(s, both));
+}
+
+TEST(Hierarchy, MemoryOfInnerListsIsScratch) {
+    const scene::Scene s = RandomScene(71, 300, 0, 0);
+    const auto rays = RandomRays(72, 3000);
+    Hierarchy h(s, DeepParams(s));
+    const LeafBatch batch = h.Classify(rays);
+    EXPECT_GT(h.Counters().boxTests, 0u);
+    EXPECT_GT(h.Counters().scratchBytes, 0u);
+    EXPECT_GT(h.MemoryBytes(), h.Counters().scratchBytes);
+    EXPECT_GE(h.Counters().maxDepth, 5u);
+}
+
+}  // namespace
+}  // namespace rayclass::classify
