@@ -154,8 +154,8 @@ inline float16 rc_triangles16(float3 o, float3 d, float tmin, float tmax,
     const float16 qvz = tvx * e1y - e1x * tvy;
     const float16 v = (d.x * qvx + d.y * qvy + d.z * qvz) * invDet;
     const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
-    const int16 ok = det != 0.0f & u >= 0.0f & u <= 1.0f & v >= 0.0f & u + v <= 1.0f &
-                     t > tmin & t < tmax;
+    const int16 ok = (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
+                     (u + v <= 1.0f) & (t > tmin) & (t < tmax);
     *uOut = u;
     *vOut = v;
     return select((float16)(INFINITY), t, ok);
@@ -307,7 +307,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     for (; c < leaf.candCount; ++c) {
         const RcCandidate cand = candidates[leaf.candBegin + c];
         /* Every lane done: its hit is strictly nearer than this candidate's box. */
-        const int16 done = bestPrim != (uint16)(RC_NO_HIT) & originX + bestT * speed < cand.nearX;
+        const int16 done =
+            (bestPrim != (uint16)(RC_NO_HIT)) & (originX + bestT * speed < cand.nearX);
         if (all(done)) break;
         const uint prim = cand.prim;
         if (prim < nT) {
@@ -327,9 +328,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
             const float16 v = (Dx * qvx + Dy * qvy + Dz * qvz) * invDet;
             const float16 t = (e2.x * qvx + e2.y * qvy + e2.z * qvz) * invDet;
             /* Nearer, or equally near with a lower id: the depth test with the id tie-break. */
-            const int16 better = det != 0.0f & u >= 0.0f & u <= 1.0f & v >= 0.0f &
-                                 u + v <= 1.0f & t > Tmin & t < Tmax &
-                                 (t < bestT | (t == bestT & (uint16)(prim) < bestPrim));
+            const int16 better = (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
+                                 (u + v <= 1.0f) & (t > Tmin) & (t < Tmax) &
+                                 ((t < bestT) | ((t == bestT) & ((uint16)(prim) < bestPrim)));
             bestT = select(bestT, t, better);
             bestU = select(bestU, u, better);
             bestV = select(bestV, v, better);
