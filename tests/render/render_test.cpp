@@ -56,13 +56,12 @@ TEST_P(RenderMatchesReference, WithinBounds) {
     options.aovs = true;
     options.progress = false;
 
-    RenderStats clStats, refStats;
-    ClRenderer renderer(SharedContext(), scene, options);
-    const image::Image cl = renderer.Render(clStats);
+    RenderStats refStats;
     const image::Image ref = RenderReference(scene, options, refStats);
-    const image::ImageComparison cmp = image::Compare(cl, ref);
-    RecordProperty("rmse", std::to_string(cmp.rmse));
-    RecordProperty("id_mismatch", std::to_string(cmp.idMismatchPixels));
+    options.accel = "brute";
+    RenderStats bruteStats;
+    const image::Image brute = ClRenderer(SharedContext(), scene, options).Render(bruteStats);
+    const image::ImageComparison cmp = image::Compare(brute, ref);
     std::printf("%s: rmse %.3g mean_abs %.3g max_abs %.3g id_mismatch %llu\n", c.file.c_str(),
                 cmp.rmse, cmp.meanAbsError, cmp.maxAbsError,
                 (unsigned long long)cmp.idMismatchPixels);
@@ -71,9 +70,24 @@ TEST_P(RenderMatchesReference, WithinBounds) {
     ASSERT_TRUE(cmp.hasIds);
     EXPECT_LE(cmp.idMismatchPixels, c.maxIdMismatch);
     // Both renderers spawn the same rays, up to the few pixels where float and double disagree.
-    EXPECT_EQ(clStats.raysByKind["eye"], refStats.raysByKind["eye"]);
+    EXPECT_EQ(bruteStats.raysByKind["eye"], refStats.raysByKind["eye"]);
     const double reflections = double(refStats.raysByKind["reflection"]);
-    EXPECT_NEAR(double(clStats.raysByKind["reflection"]), reflections, 0.01 * reflections + 20);
+    EXPECT_NEAR(double(bruteStats.raysByKind["reflection"]), reflections,
+                0.01 * reflections + 20);
+
+    // Every classified kernel style finds exactly the brute-force hits (same float routines,
+    // lower id wins ties), so ids and images are identical, not merely close.
+    for (const char* style : {"scalar", "vertex", "fragment", "auto"}) {
+        options.accel = "classify";
+        options.kernel = style;
+        RenderStats stats;
+        const image::Image img = ClRenderer(SharedContext(), scene, options).Render(stats);
+        const image::ImageComparison same = image::Compare(img, brute);
+        EXPECT_EQ(same.idMismatchPixels, 0u) << style;
+        EXPECT_EQ(same.maxAbsError, 0.0) << style;
+        EXPECT_EQ(stats.RaysTotal(), bruteStats.RaysTotal()) << style;
+        EXPECT_LT(stats.intersectionTests, bruteStats.intersectionTests) << style;
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, RenderMatchesReference, testing::ValuesIn(kCases),
@@ -83,6 +97,7 @@ INSTANTIATE_TEST_SUITE_P(Scenes, RenderMatchesReference, testing::ValuesIn(kCase
                          });
 
 TEST(ClRenderer, NoRayIsLost) {
+    // Classification with several batches per generation: every spawned ray is queried once.
     scene::Scene scene = scene::LoadScene(SceneDir() / "tests/glass.json");
     scene.camera.width = 64;
     scene.camera.height = 48;
