@@ -34,18 +34,19 @@ struct Params {
     // R * C * splitGain, exceeds the split's own cost, 2 * nCandidates * boxTestCost (two child
     // lists) + R * rayMoveCost.
     //
-    // Per-test costs in ns, measured by bench/intersect_bench.cpp (Google Benchmark, one core of
-    // the 2-vCPU Xeon (Sapphire Rapids) these machines have, Release build, scalar float routines
-    // of geometry/intersect.h over 4096 random primitives, 2026-11-22):
-    //   triangle 3.1 ns, sphere 3.3 ns, quadric 6.8 ns; candidate box test 0.45 ns per box
-    //   (filter), ray partition 0.9 ns per ray and level.
+    // Per-test costs in ns on one core of these 2-vCPU Xeon (Sapphire Rapids) machines, Release
+    // build, measured 2026-11-22 by bench/intersect_bench (scalar float routines of
+    // geometry/intersect.h through IntersectPrimitive, one ray against 4096 random primitives):
+    //   triangle 13.9 ns, sphere 5.2 ns, quadric 12.4 ns; list filter 0.45 ns per box (AVX-512).
+    // The ray-move cost, about 1 ns per ray and level, is classify_bench's partition time over
+    // its moves. Only the ratios matter to the decision.
     uint32_t minRays = 64;        // a work-group's worth of rays is the device's unit of work
     uint32_t minCandidates = 16;  // the device tests 16 candidates at once: fewer gain nothing
-    float triangleCost = 3.1f;
-    float sphereCost = 3.3f;
-    float quadricCost = 6.8f;
+    float triangleCost = 13.9f;
+    float sphereCost = 5.2f;
+    float quadricCost = 12.4f;
     float boxTestCost = 0.45f;
-    float rayMoveCost = 0.9f;
+    float rayMoveCost = 1.0f;
     float splitGain = 0.25f;  // fraction of a list a split is expected to drop per child
     int maxDepth = 60;
 
