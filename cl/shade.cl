@@ -1,6 +1,7 @@
 /* Whitted shading of one hit: emission + ambient, one shadow ray per point light carrying the
  * light's contribution (shading happens before the shadow query; the host adds it only when the
- * ray is unblocked), and the reflection and refraction rays with their weights. The reference
+ * ray is unblocked), and the reflection and refraction rays with their weights into slots 2i and
+ * 2i + 1 (spawned[] says which slots hold a ray). The reference
  * renderer (src/render/reference.cpp) implements the same model in double. */
 #include "rc_types.h"
 #include "intersect.cl"
@@ -84,7 +85,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
     __global const RcMaterial* materials, __global const RcLight* lights,
     __constant const RcRenderParams* params, __global float4* radiance, __global float4* normals,
-    __global RcShadowRay* shadowRays, __global RcRay* secondary) {
+    __global RcShadowRay* shadowRays, __global RcRay* secondary, __global uchar* spawned) {
     const uint i = get_global_id(0);
     if (i >= n) return;
     const RcRay ray = rays[i];
@@ -93,8 +94,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
     const float3 weight = ray.weight.xyz;
 
     for (uint l = 0; l < nLights; ++l) shadowRays[i * nLights + l].contribution = (float4)(0.0f);
-    secondary[2 * i].weight.w = 0.0f;
-    secondary[2 * i + 1].weight.w = 0.0f;
+    spawned[2 * i] = 0;
+    spawned[2 * i + 1] = 0;
 
     if (hit.prim == RC_NO_HIT) {
         radiance[i] = (float4)(weight * params->background.xyz, 0.0f);
@@ -160,6 +161,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
         out.kind = RC_RAY_REFLECTION;
         out.pad = 0;
         secondary[2 * i] = out;
+        spawned[2 * i] = 1;
     }
     const float3 wt = weight * ktEff;
     if (!tir && rc_worth_spawning(wt, depth, params)) {
@@ -174,6 +176,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
             out.kind = RC_RAY_REFRACTION;
             out.pad = 0;
             secondary[2 * i + 1] = out;
+            spawned[2 * i + 1] = 1;
         }
     }
 }

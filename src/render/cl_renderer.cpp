@@ -63,9 +63,8 @@ public:
 
     std::string Name() const override { return "brute"; }
 
-    uint64_t Intersect(const cl::Buffer& rays, std::span<const RcRay> hostRays,
+    uint64_t Intersect(const cl::Buffer& rays, uint32_t n, std::span<const RcRay>,
                        const cl::Buffer& hits, KernelTimer& timer) override {
-        const uint32_t n = uint32_t(hostRays.size());
         clrt::Check("clSetKernelArg(rc_intersect_brute)", [&] {
             intersect_.setArg(0, rays);
             intersect_.setArg(1, n);
@@ -116,19 +115,6 @@ private:
     std::vector<uint32_t> tests_;
 };
 
-const char* KindName(rc_uint kind) {
-    switch (kind) {
-        case RC_RAY_EYE:
-            return "eye";
-        case RC_RAY_REFLECTION:
-            return "reflection";
-        case RC_RAY_REFRACTION:
-            return "refraction";
-        default:
-            return "shadow";
-    }
-}
-
 }  // namespace
 
 void KernelTimer::Record(const std::string& kernel, const cl::Event& event) {
@@ -159,8 +145,9 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
     const std::string options =
         "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
         (extraOptions.empty() ? "" : " " + extraOptions);
-    return ctx.BuildProgram({"camera.cl", "intersect.cl", "shade.cl", "brute.cl", "classified.cl"},
-                            options);
+    return ctx.BuildProgram(
+        {"camera.cl", "intersect.cl", "shade.cl", "generation.cl", "brute.cl", "classified.cl"},
+        options);
 }
 
 ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene,
@@ -216,64 +203,65 @@ image::Image ClRenderer::Render(RenderStats& stats) {
 
     const uint32_t nLights = params.nLights;
     const size_t batch = std::max<uint32_t>(1, options_.batchRays);
-    cl::Buffer rays = DeviceBuffer(ctx_, batch * sizeof(RcRay));
+    // Per batch: the query's hits, the shading kernel's outputs.
     cl::Buffer hits = DeviceBuffer(ctx_, batch * sizeof(RcHit));
     cl::Buffer radiance = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
     cl::Buffer normals = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
     cl::Buffer shadow = DeviceBuffer(ctx_, batch * nLights * sizeof(RcShadowRay));
     cl::Buffer blocked = DeviceBuffer(ctx_, batch * nLights);
     cl::Buffer secondary = DeviceBuffer(ctx_, 2 * batch * sizeof(RcRay));
+    cl::Buffer spawned = DeviceBuffer(ctx_, 2 * batch);
+    cl::Buffer liveSlots = DeviceBuffer(ctx_, 2 * batch * sizeof(uint32_t));
+    cl::Kernel compactKernel(program, "rc_compact_rays");
 
     std::vector<RcHit> hostHits(batch);
     std::vector<rc_float4> hostRadiance(batch), hostNormals(batch);
     std::vector<RcShadowRay> hostShadow(batch * nLights);
-    std::vector<uint8_t> hostBlocked(batch * nLights);
-    std::vector<RcRay> hostSecondary(2 * batch);
-    std::vector<RcRay> eyeBatch(batch);
+    std::vector<uint8_t> hostBlocked(batch * nLights), hostSpawned(2 * batch);
+    std::vector<RcRay> hostRays(query->NeedsHostRays() ? batch : 0);
+    std::vector<uint32_t> hostLive;
+
+    // A generation's rays live on the device in pages of `batch` rays; a batch is one page. The
+    // host keeps only each ray's pixel, for accumulating contributions.
+    std::vector<cl::Buffer> pages, nextPages;
+    std::vector<uint32_t> pixels, nextPixels;
+    auto& q = ctx_.queue();
 
     KernelTimer timer;
     double hostSeconds = 0;
-    std::vector<RcRay> current, next;
     const size_t nEye = size_t(width) * height;
     auto lastProgress = Clock::now();
     bool printedProgress = false;
 
     for (uint32_t generation = 0;; ++generation) {
-        const size_t nRays = generation == 0 ? nEye : current.size();
+        const size_t nRays = generation == 0 ? nEye : pixels.size();
         if (nRays == 0) break;
         GenerationStats gen;
-        next.clear();
-        for (size_t first = 0; first < nRays; first += batch) {
+        nextPages.clear();
+        nextPixels.clear();
+        uint64_t nReflection = 0, nRefraction = 0;
+        for (size_t first = 0, page = 0; first < nRays; first += batch, ++page) {
             const uint32_t n = uint32_t(std::min(batch, nRays - first));
             if (generation == 0) {
-                clrt::Check("clSetKernelArg(rc_generate_eye_rays)", [&] {
-                    eyeKernel.setArg(0, camBuffer);
-                    eyeKernel.setArg(1, uint32_t(first));
-                    eyeKernel.setArg(2, n);
-                    eyeKernel.setArg(3, rays);
-                });
+                pages.push_back(DeviceBuffer(ctx_, batch * sizeof(RcRay)));
+                SetArgs(eyeKernel, camBuffer, uint32_t(first), n, pages.back());
                 Launch(ctx_, eyeKernel, n, timer);
-                // Eye rays are read back anyway (their pixels); earlier when the query wants them.
+            }
+            const cl::Buffer& rays = pages[generation == 0 ? pages.size() - 1 : page];
+            if (!hostRays.empty()) {
                 clrt::Check("clEnqueueReadBuffer", [&] {
-                    ctx_.queue().enqueueReadBuffer(rays, CL_TRUE, 0, n * sizeof(RcRay),
-                                                   eyeBatch.data());
-                });
-            } else {
-                clrt::Check("clEnqueueWriteBuffer", [&] {
-                    ctx_.queue().enqueueWriteBuffer(rays, CL_FALSE, 0, n * sizeof(RcRay),
-                                                    current.data() + first);
+                    q.enqueueReadBuffer(rays, CL_TRUE, 0, n * sizeof(RcRay), hostRays.data());
                 });
             }
-            const RcRay* batchRays = generation == 0 ? eyeBatch.data() : current.data() + first;
-            stats.intersectionTests +=
-                query->Intersect(rays, std::span<const RcRay>(batchRays, n), hits, timer);
+            stats.intersectionTests += query->Intersect(
+                rays, n, std::span<const RcRay>(hostRays.data(), hostRays.empty() ? 0 : n), hits,
+                timer);
             SetArgs(shadeKernel, rays, hits, n, sceneBuffers.triangles,
                     sceneBuffers.triangleShading, sceneBuffers.spheres, sceneBuffers.quadrics,
                     sceneBuffers.materials, sceneBuffers.lights, sceneBuffers.params, radiance,
-                    normals, shadow, secondary);
+                    normals, shadow, secondary, spawned);
             Launch(ctx_, shadeKernel, n, timer);
             const uint32_t nShadow = n * nLights;
-            auto& q = ctx_.queue();
             clrt::Check("clEnqueueReadBuffer", [&] {
                 if (nShadow > 0) {
                     q.enqueueReadBuffer(shadow, CL_TRUE, 0, nShadow * sizeof(RcShadowRay),
@@ -288,22 +276,23 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                 if (nShadow > 0) {
                     q.enqueueReadBuffer(blocked, CL_FALSE, 0, nShadow, hostBlocked.data());
                 }
-                q.enqueueReadBuffer(secondary, CL_FALSE, 0, 2 * size_t(n) * sizeof(RcRay),
-                                    hostSecondary.data());
-                if (generation == 0) {
+                q.enqueueReadBuffer(spawned, CL_FALSE, 0, 2 * size_t(n), hostSpawned.data());
+                if (generation == 0 && options_.aovs) {
                     q.enqueueReadBuffer(hits, CL_FALSE, 0, n * sizeof(RcHit), hostHits.data());
-                    if (options_.aovs) {
-                        q.enqueueReadBuffer(normals, CL_FALSE, 0, n * sizeof(rc_float4),
-                                            hostNormals.data());
-                    }
+                    q.enqueueReadBuffer(normals, CL_FALSE, 0, n * sizeof(rc_float4),
+                                        hostNormals.data());
                 }
                 q.finish();
             });
 
             const auto tHost = Clock::now();
+            auto pixelOf = [&](uint32_t i) {
+                return generation == 0 ? uint32_t(first + i) : pixels[first + i];
+            };
+            hostLive.clear();
             for (uint32_t i = 0; i < n; ++i) {
-                const RcRay& ray = batchRays[i];
-                glm::vec3& px = img.rgb[ray.pixel];
+                const uint32_t pixel = pixelOf(i);
+                glm::vec3& px = img.rgb[pixel];
                 px += glm::vec3(hostRadiance[i].x, hostRadiance[i].y, hostRadiance[i].z);
                 for (uint32_t l = 0; l < nLights; ++l) {
                     const RcShadowRay& s = hostShadow[size_t(i) * nLights + l];
@@ -313,21 +302,40 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                         px += glm::vec3(s.contribution.x, s.contribution.y, s.contribution.z);
                     }
                 }
-                for (int k = 0; k < 2; ++k) {
-                    const RcRay& s = hostSecondary[2 * size_t(i) + k];
-                    if (s.weight.w != 0.0f) next.push_back(s);
+                for (uint32_t k = 0; k < 2; ++k) {
+                    if (!hostSpawned[2 * size_t(i) + k]) continue;
+                    hostLive.push_back(2 * i + k);
+                    nextPixels.push_back(pixel);
+                    ++(k == 0 ? nReflection : nRefraction);
                 }
-                ++stats.raysByKind[KindName(ray.kind)];
                 if (generation == 0 && options_.aovs) {
-                    const RcHit& h = hostHits[i];
-                    img.id[ray.pixel] = h.prim;
-                    img.depth[ray.pixel] = h.t;
-                    img.normal[ray.pixel] =
+                    img.id[pixel] = hostHits[i].prim;
+                    img.depth[pixel] = hostHits[i].t;
+                    img.normal[pixel] =
                         glm::vec3(hostNormals[i].x, hostNormals[i].y, hostNormals[i].z);
                 }
             }
-            gen.rays += n;
             hostSeconds += SecondsSince(tHost);
+
+            // Append this batch's secondary rays to the next generation's pages.
+            if (!hostLive.empty()) {
+                clrt::Check("clEnqueueWriteBuffer", [&] {
+                    q.enqueueWriteBuffer(liveSlots, CL_FALSE, 0,
+                                         hostLive.size() * sizeof(uint32_t), hostLive.data());
+                });
+            }
+            size_t done = 0;
+            while (done < hostLive.size()) {
+                const size_t nextCount = nextPixels.size() - hostLive.size() + done;
+                const size_t offset = nextCount % batch;
+                if (offset == 0) nextPages.push_back(DeviceBuffer(ctx_, batch * sizeof(RcRay)));
+                const uint32_t m = uint32_t(std::min(hostLive.size() - done, batch - offset));
+                SetArgs(compactKernel, secondary, liveSlots, uint32_t(done), m, nextPages.back(),
+                        uint32_t(offset));
+                Launch(ctx_, compactKernel, m, timer);
+                done += m;
+            }
+            gen.rays += n;
 
             if (options_.progress && SecondsSince(lastProgress) > 1.0) {
                 std::fprintf(stderr, "\rrayclass: generation %u, %zu of %zu rays", generation,
@@ -336,10 +344,14 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                 printedProgress = true;
             }
         }
-        gen.spawned = next.size();
+        if (generation == 0) stats.raysByKind["eye"] += gen.rays;
+        stats.raysByKind["reflection"] += nReflection;
+        stats.raysByKind["refraction"] += nRefraction;
+        gen.spawned = nextPixels.size();
         stats.raysByKind["shadow"] += gen.shadowRays;
         stats.generations.push_back(gen);
-        std::swap(current, next);
+        std::swap(pages, nextPages);
+        std::swap(pixels, nextPixels);
     }
     if (printedProgress) std::fprintf(stderr, "\n");
 

@@ -85,9 +85,8 @@ public:
     bool NeedsHostRays() const override { return true; }
     double HostSeconds() const override { return hostSeconds_; }
 
-    uint64_t Intersect(const cl::Buffer& rays, std::span<const RcRay> hostRays,
+    uint64_t Intersect(const cl::Buffer& rays, uint32_t n, std::span<const RcRay> hostRays,
                        const cl::Buffer& hits, KernelTimer& timer) override {
-        const uint32_t n = uint32_t(hostRays.size());
         if (n == 0) return 0;
         const RcHit miss{std::numeric_limits<float>::infinity(), RC_NO_HIT, 0.0f, 0.0f};
         clrt::Check("clEnqueueFillBuffer", [&] {

@@ -42,13 +42,14 @@ class RayQuery {
 public:
     virtual ~RayQuery() = default;
     virtual std::string Name() const = 0;
-    // Whether Intersect needs hostRays filled (else an empty span may be passed with size n).
+    // Whether Intersect needs hostRays filled (else it gets an empty span).
     virtual bool NeedsHostRays() const { return false; }
     // Host time spent so far (classification, building the batch arrays).
     virtual double HostSeconds() const { return 0.0; }
     // Nearest hit of rays[0, n) (RcRay) into hits (RcHit); returns the primitive tests done.
-    virtual uint64_t Intersect(const cl::Buffer& rays, std::span<const RcRay> hostRays,
-                               const cl::Buffer& hits, KernelTimer& timer) = 0;
+    virtual uint64_t Intersect(const cl::Buffer& rays, uint32_t n,
+                               std::span<const RcRay> hostRays, const cl::Buffer& hits,
+                               KernelTimer& timer) = 0;
     // blocked[i] = 1 when shadow ray i (RcShadowRay, live ones only) hits anything before its
     // light; returns the primitive tests done.
     virtual uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,

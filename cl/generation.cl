@@ -1,0 +1,12 @@
+/* The next generation stays on the device: the live secondary slots of a batch (their indices
+ * listed by the host in slot order, so the order is deterministic) are copied into the next
+ * generation's pages. */
+#include "rc_types.h"
+
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_compact_rays(
+    __global const RcRay* secondary, __global const uint* liveSlots, uint liveFirst, uint n,
+    __global RcRay* page, uint pageOffset) {
+    const uint i = get_global_id(0);
+    if (i >= n) return;
+    page[pageOffset + i] = secondary[liveSlots[liveFirst + i]];
+}
