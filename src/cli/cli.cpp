@@ -15,6 +15,7 @@ commands:
   render SCENE -o OUT.{exr,png} [options]   render a JSON scene or a bare OBJ
   compare A.exr B.exr [options]             error statistics between two images
   devices                                   list OpenCL platforms and devices
+  classify-stats SCENE [options]            ray-classification statistics of a scene
 
 'rayclass <command> --help' describes a command's options.
   --help       this text
@@ -43,6 +44,7 @@ int Main(int argc, char** argv) {
         if (command == "render") return RenderCommand(rest, std::cout, std::cerr);
         if (command == "compare") return CompareCommand(rest, std::cout, std::cerr);
         if (command == "devices") return DevicesCommand(rest, std::cout, std::cerr);
+        if (command == "classify-stats") return ClassifyStatsCommand(rest, std::cout, std::cerr);
         std::cerr << "rayclass: unknown command '" << command << "'\n\n" << kUsage;
         return 2;
     } catch (const UsageError& e) {

@@ -12,6 +12,8 @@ int Main(int argc, char** argv);
 
 // The commands, for tests: args exclude the program and command names.
 int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int ClassifyStatsCommand(const std::vector<std::string>& args, std::ostream& out,
+                         std::ostream& err);
 int DevicesCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
 }  // namespace rayclass::cli
