@@ -14,6 +14,7 @@
  * the ray's current hit X cannot be nearer, and neither can any later one. */
 #include "rc_types.h"
 #include "intersect.cl"
+#include "shade.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -183,30 +184,26 @@ inline void rc_vertex_update(float16 t, float16 u, float16 v, __global const RcT
     }
 }
 
-__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_vertex(
-    __global const RcRay* rays, __global const uint* rayIndex, __global const uint* rayLeaf,
-    uint nSlots, __global const RcLeaf* leaves, __global const uint* leafFirstBlock,
-    __global const RcTriangleBlock16* blocks, __global const RcTriangle* triangles,
-    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-    __constant const RcRenderParams* params, __global RcHit* hits, __global uint* tests) {
-    const uint slot = get_global_id(0);
-    if (slot >= nSlots) return;
-    const uint id = rayIndex[slot];
-    const uint leafId = rayLeaf[slot];
-    const RcLeaf leaf = leaves[leafId];
-    const float3 o = rays[id].origin.xyz, d = rays[id].direction.xyz;
-    const float tmin = rays[id].origin.w, tmax = rays[id].direction.w;
+/* The nearest hit of one ray over its leaf's blocks; *tested counts the candidates in the blocks
+ * it went through. */
+inline RcHit rc_vertex_nearest(const RcRay* ray, RcLeaf leaf, uint firstBlock,
+                               __global const RcTriangleBlock16* blocks,
+                               __global const RcTriangle* triangles,
+                               __global const RcSphere* spheres,
+                               __global const RcQuadric* quadrics,
+                               __constant const RcRenderParams* params, uint* tested) {
+    const float3 o = ray->origin.xyz, d = ray->direction.xyz;
+    const float tmin = ray->origin.w, tmax = ray->direction.w;
     const float originX = rc_face_component(o, leaf.face);
     const float speed = fabs(rc_face_component(d, leaf.face));
     RcHit best;
     best.t = tmax;
     best.prim = RC_NO_HIT;
     best.u = best.v = 0.0f;
-    const uint first = leafFirstBlock[leafId];
     const uint nBlocks = (leaf.candCount + 15) / 16;
     uint b = 0;
     for (; b < nBlocks; ++b) {
-        __global const RcTriangleBlock16* blk = blocks + first + b;
+        __global const RcTriangleBlock16* blk = blocks + firstBlock + b;
         if (best.prim != RC_NO_HIT && originX + best.t * speed < blk->nearX) break;
         /* A hit at exactly best.t may still win on its lower id. */
         const float bound = fmin(tmax, nextafter(best.t, INFINITY));
@@ -220,8 +217,28 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
         }
     }
     if (best.prim == RC_NO_HIT) best.t = INFINITY;
-    hits[id] = best;
-    tests[slot] = min(b * 16, leaf.candCount);
+    *tested = min(b * 16, leaf.candCount);
+    return best;
+}
+
+/* The thesis's vertex unit whole: the work-item that found the hit shades it and writes its
+ * shadow, reflection and refraction rays. */
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_vertex_shade(
+    __global const RcRay* rays, __global const uint* rayIndex, __global const uint* rayLeaf,
+    uint nSlots, __global const RcLeaf* leaves, __global const uint* leafFirstBlock,
+    __global const RcTriangleBlock16* blocks, __global RcHit* hits, __global uint* tests,
+    RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
+    const uint slot = get_global_id(0);
+    if (slot >= nSlots) return;
+    const uint id = rayIndex[slot];
+    const uint leafId = rayLeaf[slot];
+    const RcRay ray = rays[id];
+    uint tested;
+    const RcHit hit = rc_vertex_nearest(&ray, leaves[leafId], leafFirstBlock[leafId], blocks,
+                                        triangles, spheres, quadrics, params, &tested);
+    hits[id] = hit;
+    tests[slot] = tested;
+    rc_shade_ray(id, &ray, hit, 1, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
 }
 
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_vertex(

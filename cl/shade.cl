@@ -79,56 +79,79 @@ inline int rc_worth_spawning(float3 w, uint depth, __constant const RcRenderPara
     return depth <= params->maxDepth && fmax(w.x, fmax(w.y, w.z)) >= params->minWeight;
 }
 
-__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade(
-    __global const RcRay* rays, __global const RcHit* hits, uint n,
-    __global const RcTriangle* triangles, __global const RcTriangleShading* triShading,
-    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-    __global const RcMaterial* materials, __global const RcLight* lights,
-    __constant const RcRenderParams* params, __global float4* radiance, __global float4* normals,
-    __global RcShadowRay* shadowRays, __global RcRay* secondary, __global uchar* spawned) {
-    const uint i = get_global_id(0);
-    if (i >= n) return;
-    const RcRay ray = rays[i];
-    const RcHit hit = hits[i];
-    const uint nLights = params->nLights;
-    const float3 weight = ray.weight.xyz;
+/* The scene every shading step reads and the outputs it writes, as parameter and argument
+ * lists, so the fused query-and-shade kernels (cl/classified.cl) pass them on unchanged. */
+#define RC_SHADE_SCENE_PARAMS                                                               \
+    __global const RcTriangle *triangles, __global const RcTriangleShading *triShading,    \
+        __global const RcSphere *spheres, __global const RcQuadric *quadrics,              \
+        __global const RcMaterial *materials, __global const RcLight *lights,              \
+        __constant const RcRenderParams *params
+#define RC_SHADE_SCENE_ARGS \
+    triangles, triShading, spheres, quadrics, materials, lights, params
+#define RC_SHADE_OUT_PARAMS                                                         \
+    __global float4 *radiance, __global float4 *normals, __global RcShadowRay *shadowRays, \
+        __global RcRay *secondary, __global uchar *spawned
+#define RC_SHADE_OUT_ARGS radiance, normals, shadowRays, secondary, spawned
 
-    for (uint l = 0; l < nLights; ++l) shadowRays[i * nLights + l].contribution = (float4)(0.0f);
+/* Light l's contribution at the hit of ray i, into shadow slot i * nLights + l (an empty slot
+ * when the light is behind the surface or adds nothing). */
+inline void rc_shade_light(uint i, uint l, const RcRay* ray, const RcSurface* s,
+                           __global const RcMaterial* m, __global const RcLight* lights,
+                           __constant const RcRenderParams* params,
+                           __global RcShadowRay* shadowRays) {
+    const uint slot = i * params->nLights + l;
+    const float3 d = ray->direction.xyz;
+    const float3 toLight = lights[l].position.xyz - s->p;
+    const float dist2 = dot(toLight, toLight);
+    const float3 ldir = toLight / sqrt(dist2);
+    const float cosl = dot(s->ns, ldir);
+    if (cosl <= 0.0f || dot(s->ng, ldir) <= 0.0f) {
+        shadowRays[slot].contribution = (float4)(0.0f);
+        return;
+    }
+    const float3 r = 2.0f * cosl * s->ns - ldir;
+    const float cosb = fmax(dot(r, -d), 0.0f);
+    const float3 brdf = m->kd.xyz * cosl + m->ks.xyz * pow(cosb, m->shininess);
+    const float3 c = ray->weight.xyz * lights[l].intensity.xyz / dist2 * brdf;
+    if (fmax(c.x, fmax(c.y, c.z)) <= 0.0f) {
+        shadowRays[slot].contribution = (float4)(0.0f);
+        return;
+    }
+    const float3 above = rc_offset_ray_origin(s->p, s->ng);
+    const float3 toLightFromOrigin = lights[l].position.xyz - above;
+    const float dist = length(toLightFromOrigin);
+    RcShadowRay sr;
+    sr.origin = (float4)(above, 0.0f);
+    sr.direction = (float4)(toLightFromOrigin / dist, dist);
+    sr.contribution = (float4)(c, 1.0f);
+    shadowRays[slot] = sr;
+}
+
+/* Shades the hit of ray i: radiance, normal, the reflection and refraction rays and, when
+ * withLights, every light's shadow slot (else a per-(ray, light) pass writes them). */
+inline void rc_shade_ray(uint i, const RcRay* ray, RcHit hit, int withLights,
+                         RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
+    const uint nLights = params->nLights;
+    const float3 weight = ray->weight.xyz;
     spawned[2 * i] = 0;
     spawned[2 * i + 1] = 0;
-
     if (hit.prim == RC_NO_HIT) {
         radiance[i] = (float4)(weight * params->background.xyz, 0.0f);
         normals[i] = (float4)(0.0f);
+        if (withLights) {
+            for (uint l = 0; l < nLights; ++l)
+                shadowRays[i * nLights + l].contribution = (float4)(0.0f);
+        }
         return;
     }
-    const float3 o = ray.origin.xyz, d = ray.direction.xyz;
+    const float3 o = ray->origin.xyz, d = ray->direction.xyz;
     const RcSurface s = rc_surface(o, d, hit, triangles, triShading, spheres, quadrics,
                                    params->nTriangles, params->nSpheres);
     __global const RcMaterial* m = materials + s.material;
-    const float3 kd = m->kd.xyz, ks = m->ks.xyz;
-    radiance[i] = (float4)(weight * (m->emission.xyz + kd * params->ambient.xyz), 0.0f);
+    radiance[i] = (float4)(weight * (m->emission.xyz + m->kd.xyz * params->ambient.xyz), 0.0f);
     normals[i] = (float4)(s.ns, 0.0f);
-
-    const float3 above = rc_offset_ray_origin(s.p, s.ng);
-    for (uint l = 0; l < nLights; ++l) {
-        const float3 toLight = lights[l].position.xyz - s.p;
-        const float dist2 = dot(toLight, toLight);
-        const float3 ldir = toLight / sqrt(dist2);
-        const float cosl = dot(s.ns, ldir);
-        if (cosl <= 0.0f || dot(s.ng, ldir) <= 0.0f) continue;
-        const float3 r = 2.0f * cosl * s.ns - ldir;
-        const float cosb = fmax(dot(r, -d), 0.0f);
-        const float3 brdf = kd * cosl + ks * pow(cosb, m->shininess);
-        const float3 c = weight * lights[l].intensity.xyz / dist2 * brdf;
-        if (fmax(c.x, fmax(c.y, c.z)) <= 0.0f) continue;
-        const float3 toLightFromOrigin = lights[l].position.xyz - above;
-        const float dist = length(toLightFromOrigin);
-        RcShadowRay sr;
-        sr.origin = (float4)(above, 0.0f);
-        sr.direction = (float4)(toLightFromOrigin / dist, dist);
-        sr.contribution = (float4)(c, 1.0f);
-        shadowRays[i * nLights + l] = sr;
+    if (withLights) {
+        for (uint l = 0; l < nLights; ++l) rc_shade_light(i, l, ray, &s, m, lights, params, shadowRays);
     }
 
     const float3 kr = m->kr.xyz, kt = m->kt.xyz;
@@ -146,17 +169,17 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
         krEff = kr + kt;
         ktEff = (float3)(0.0f);
     }
-    const uint depth = ray.depth + 1;
+    const uint depth = ray->depth + 1;
     const float3 wr = weight * krEff;
     if (rc_worth_spawning(wr, depth, params)) {
         float3 rdir = d + 2.0f * cosi * s.ns;
         /* A shading normal can tilt the mirror direction below the surface: fall back to ng. */
         if (dot(rdir, s.ng) <= 0.0f) rdir = d - 2.0f * dot(d, s.ng) * s.ng;
         RcRay out;
-        out.origin = (float4)(above, 0.0f);
+        out.origin = (float4)(rc_offset_ray_origin(s.p, s.ng), 0.0f);
         out.direction = (float4)(normalize(rdir), INFINITY);
         out.weight = (float4)(wr, 1.0f);
-        out.pixel = ray.pixel;
+        out.pixel = ray->pixel;
         out.depth = depth;
         out.kind = RC_RAY_REFLECTION;
         out.pad = 0;
@@ -171,7 +194,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
             out.origin = (float4)(rc_offset_ray_origin(s.p, -s.ng), 0.0f);
             out.direction = (float4)(normalize(tdir), INFINITY);
             out.weight = (float4)(wt, 1.0f);
-            out.pixel = ray.pixel;
+            out.pixel = ray->pixel;
             out.depth = depth;
             out.kind = RC_RAY_REFRACTION;
             out.pad = 0;
@@ -179,4 +202,45 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
             spawned[2 * i + 1] = 1;
         }
     }
+}
+
+/* Every ray of the batch, lights included. */
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade(
+    __global const RcRay* rays, __global const RcHit* hits, uint n, RC_SHADE_SCENE_PARAMS,
+    RC_SHADE_OUT_PARAMS) {
+    const uint i = get_global_id(0);
+    if (i >= n) return;
+    const RcRay ray = rays[i];
+    rc_shade_ray(i, &ray, hits[i], 1, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
+}
+
+/* The rays ids[0, nIds) of the batch; lights only when withLights (else rc_shade_lights). */
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade_ids(
+    __global const RcRay* rays, __global const RcHit* hits, __global const uint* ids, uint nIds,
+    uint withLights, RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
+    const uint j = get_global_id(0);
+    if (j >= nIds) return;
+    const uint i = ids[j];
+    const RcRay ray = rays[i];
+    rc_shade_ray(i, &ray, hits[i], (int)withLights, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
+}
+
+/* The thesis's second fragment pass: one work-item per (ray, light) pair of the rays ids[0, nIds),
+ * so every lane of a vector does the same light computation. */
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade_lights(
+    __global const RcRay* rays, __global const RcHit* hits, __global const uint* ids, uint nIds,
+    RC_SHADE_SCENE_PARAMS, __global RcShadowRay* shadowRays) {
+    const uint j = get_global_id(0);
+    const uint nLights = params->nLights;
+    if (j >= nIds * nLights) return;
+    const uint i = ids[j / nLights], l = j % nLights;
+    const RcHit hit = hits[i];
+    if (hit.prim == RC_NO_HIT) {
+        shadowRays[i * nLights + l].contribution = (float4)(0.0f);
+        return;
+    }
+    const RcRay ray = rays[i];
+    const RcSurface s = rc_surface(ray.origin.xyz, ray.direction.xyz, hit, triangles, triShading,
+                                   spheres, quadrics, params->nTriangles, params->nSpheres);
+    rc_shade_light(i, l, &ray, &s, materials + s.material, lights, params, shadowRays);
 }

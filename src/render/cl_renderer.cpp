@@ -63,8 +63,9 @@ public:
 
     std::string Name() const override { return "brute"; }
 
-    uint64_t Intersect(const cl::Buffer& rays, uint32_t n, std::span<const RcRay>,
-                       const cl::Buffer& hits, KernelTimer& timer) override {
+    QueryResult Intersect(const cl::Buffer& rays, uint32_t n, std::span<const RcRay>,
+                          const cl::Buffer& hits, const ShadeBuffers&,
+                          KernelTimer& timer) override {
         clrt::Check("clSetKernelArg(rc_intersect_brute)", [&] {
             intersect_.setArg(0, rays);
             intersect_.setArg(1, n);
@@ -76,7 +77,7 @@ public:
         });
         Launch(ctx_, intersect_, n, timer);
         const auto& p = scene_.hostParams;
-        return uint64_t(n) * (p.nTriangles + p.nSpheres + p.nQuadrics);
+        return {uint64_t(n) * (p.nTriangles + p.nSpheres + p.nQuadrics), false};
     }
 
     uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
@@ -205,12 +206,16 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     const size_t batch = std::max<uint32_t>(1, options_.batchRays);
     // Per batch: the query's hits, the shading kernel's outputs.
     cl::Buffer hits = DeviceBuffer(ctx_, batch * sizeof(RcHit));
-    cl::Buffer radiance = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
-    cl::Buffer normals = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
-    cl::Buffer shadow = DeviceBuffer(ctx_, batch * nLights * sizeof(RcShadowRay));
+    ShadeBuffers shade;
+    shade.radiance = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
+    shade.normals = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
+    shade.shadow = DeviceBuffer(ctx_, batch * nLights * sizeof(RcShadowRay));
+    shade.secondary = DeviceBuffer(ctx_, 2 * batch * sizeof(RcRay));
+    shade.spawned = DeviceBuffer(ctx_, 2 * batch);
+    const cl::Buffer &radiance = shade.radiance, &normals = shade.normals,
+                     &shadow = shade.shadow, &secondary = shade.secondary,
+                     &spawned = shade.spawned;
     cl::Buffer blocked = DeviceBuffer(ctx_, batch * nLights);
-    cl::Buffer secondary = DeviceBuffer(ctx_, 2 * batch * sizeof(RcRay));
-    cl::Buffer spawned = DeviceBuffer(ctx_, 2 * batch);
     cl::Buffer liveSlots = DeviceBuffer(ctx_, 2 * batch * sizeof(uint32_t));
     cl::Kernel compactKernel(program, "rc_compact_rays");
 
@@ -253,14 +258,17 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                     q.enqueueReadBuffer(rays, CL_TRUE, 0, n * sizeof(RcRay), hostRays.data());
                 });
             }
-            stats.intersectionTests += query->Intersect(
+            const QueryResult found = query->Intersect(
                 rays, n, std::span<const RcRay>(hostRays.data(), hostRays.empty() ? 0 : n), hits,
-                timer);
-            SetArgs(shadeKernel, rays, hits, n, sceneBuffers.triangles,
-                    sceneBuffers.triangleShading, sceneBuffers.spheres, sceneBuffers.quadrics,
-                    sceneBuffers.materials, sceneBuffers.lights, sceneBuffers.params, radiance,
-                    normals, shadow, secondary, spawned);
-            Launch(ctx_, shadeKernel, n, timer);
+                shade, timer);
+            stats.intersectionTests += found.tests;
+            if (!found.shaded) {
+                SetArgs(shadeKernel, rays, hits, n, sceneBuffers.triangles,
+                        sceneBuffers.triangleShading, sceneBuffers.spheres, sceneBuffers.quadrics,
+                        sceneBuffers.materials, sceneBuffers.lights, sceneBuffers.params,
+                        radiance, normals, shadow, secondary, spawned);
+                Launch(ctx_, shadeKernel, n, timer);
+            }
             const uint32_t nShadow = n * nLights;
             clrt::Check("clEnqueueReadBuffer", [&] {
                 if (nShadow > 0) {
@@ -359,7 +367,10 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     const auto& ks = timer.Seconds();
     stats.queryTimeS = query->HostSeconds();
     for (const auto& [name, seconds] : ks) {
-        if (name != "rc_shade" && name != "rc_generate_eye_rays") stats.queryTimeS += seconds;
+        if (name.starts_with("rc_query") || name.starts_with("rc_occluded") ||
+            name.starts_with("rc_intersect") || name == "rc_gather_blocks") {
+            stats.queryTimeS += seconds;
+        }
     }
     stats.timeS["host"] = hostSeconds;
     if (options_.accel != "brute") stats.timeS["host_classify"] = query->HostSeconds();

@@ -75,9 +75,11 @@ public:
           queryScalar_(program, "rc_query_scalar"),
           occludedScalar_(program, "rc_occluded_scalar"),
           gather_(program, "rc_gather_blocks"),
-          queryVertex_(program, "rc_query_vertex"),
+          queryVertexShade_(program, "rc_query_vertex_shade"),
           occludedVertex_(program, "rc_occluded_vertex"),
-          queryFragment_(program, "rc_query_fragment") {}
+          queryFragment_(program, "rc_query_fragment"),
+          shadeIds_(program, "rc_shade_ids"),
+          shadeLights_(program, "rc_shade_lights") {}
 
     std::string Name() const override {
         return std::string("classify/") + KernelStyleName(style_);
@@ -85,15 +87,16 @@ public:
     bool NeedsHostRays() const override { return true; }
     double HostSeconds() const override { return hostSeconds_; }
 
-    uint64_t Intersect(const cl::Buffer& rays, uint32_t n, std::span<const RcRay> hostRays,
-                       const cl::Buffer& hits, KernelTimer& timer) override {
-        if (n == 0) return 0;
+    QueryResult Intersect(const cl::Buffer& rays, uint32_t n, std::span<const RcRay> hostRays,
+                          const cl::Buffer& hits, const ShadeBuffers& shade,
+                          KernelTimer& timer) override {
+        if (n == 0) return {};
         const RcHit miss{std::numeric_limits<float>::infinity(), RC_NO_HIT, 0.0f, 0.0f};
         clrt::Check("clEnqueueFillBuffer", [&] {
             ctx_.queue().enqueueFillBuffer(hits, miss, 0, n * sizeof(RcHit));
         });
         Classify(hostRays.size(), [&](size_t i) { return ToClassifyRay(hostRays[i]); });
-        return Query(rays, hits, /*shadow=*/false, timer);
+        return Query(rays, hits, &shade, timer);
     }
 
     uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
@@ -118,7 +121,7 @@ public:
             return r;
         });
         for (auto& id : batch_.rayIndex) id = live_[id];
-        return Query(shadowRays, blocked, /*shadow=*/true, timer);
+        return Query(shadowRays, blocked, nullptr, timer).tests;
     }
 
 private:
@@ -156,8 +159,10 @@ private:
         hostSeconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
     }
 
-    uint64_t Query(const cl::Buffer& rays, const cl::Buffer& out, bool shadow,
-                   KernelTimer& timer) {
+    // Nearest hits (shade != nullptr: also shades every ray) or occlusion (shade == nullptr).
+    QueryResult Query(const cl::Buffer& rays, const cl::Buffer& out, const ShadeBuffers* shade,
+                      KernelTimer& timer) {
+        const bool shadow = shade == nullptr;
         const auto t0 = Clock::now();
         const cl::Buffer& leaves = leavesBuf_.Upload(ctx_, batch_.leaves);
         const cl::Buffer& rayIndex = rayIndexBuf_.Upload(ctx_, batch_.rayIndex);
@@ -172,8 +177,7 @@ private:
                     scene_.spheres, scene_.quadrics, scene_.params, out, testsBuf);
             hostSeconds_ += Seconds(t0);
             Launch(ctx_, k, nSlots, timer);
-            tests += SumTests(testsBuf, nSlots);
-            return tests;
+            return {SumTests(testsBuf, nSlots), false};
         }
         // Vertex-style leaves: their rays as slots, their candidates as blocks of 16.
         if (!vertexLeaves_.empty() || shadow) {
@@ -213,24 +217,38 @@ private:
             const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
             SetArgs(gather_, blockLeaf, blockFirst, nBlocks, leaves, candidates,
                     scene_.triangles, scene_.params, blocks);
-            cl::Kernel& k = shadow ? occludedVertex_ : queryVertex_;
-            SetArgs(k, rays, slots, slotLeaf, nSlots, leaves, leafFirstBlock, blocks,
-                    scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
-                    testsBuf);
+            cl::Kernel& k = shadow ? occludedVertex_ : queryVertexShade_;
+            if (shadow) {
+                SetArgs(k, rays, slots, slotLeaf, nSlots, leaves, leafFirstBlock, blocks,
+                        scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
+                        testsBuf);
+            } else {
+                SetArgs(k, rays, slots, slotLeaf, nSlots, leaves, leafFirstBlock, blocks, out,
+                        testsBuf, scene_.triangles, scene_.triangleShading, scene_.spheres,
+                        scene_.quadrics, scene_.materials, scene_.lights, scene_.params,
+                        shade->radiance, shade->normals, shade->shadow, shade->secondary,
+                        shade->spawned);
+            }
             hostSeconds_ += Seconds(t0);
             Launch(ctx_, gather_, nBlocks, timer);
             Launch(ctx_, k, nSlots, timer);
             tests += SumTests(testsBuf, nSlots);
         }
-        if (!shadow && !fragmentLeaves_.empty()) {
+        if (shadow) return {tests, false};
+        // The rays the vertex kernel did not shade: fragment leaves' rays and the misses.
+        unshaded_.assign(batch_.missed.begin(), batch_.missed.end());
+        if (!fragmentLeaves_.empty()) {
             const auto t1 = Clock::now();
             packetLeaf_.clear();
             packetFirst_.clear();
             for (uint32_t l : fragmentLeaves_) {
-                for (uint32_t r = 0; r < batch_.leaves[l].rayCount; r += 16) {
+                const RcLeaf& leaf = batch_.leaves[l];
+                for (uint32_t r = 0; r < leaf.rayCount; r += 16) {
                     packetLeaf_.push_back(l);
                     packetFirst_.push_back(r);
                 }
+                unshaded_.insert(unshaded_.end(), batch_.rayIndex.begin() + leaf.rayBegin,
+                                 batch_.rayIndex.begin() + leaf.rayBegin + leaf.rayCount);
             }
             const uint32_t nPackets = uint32_t(packetLeaf_.size());
             const cl::Buffer& packetLeaf = packetLeafBuf_.Upload(ctx_, packetLeaf_);
@@ -244,7 +262,23 @@ private:
             Launch(ctx_, queryFragment_, nPackets, timer);
             tests += SumTests(testsBuf, nPackets);
         }
-        return tests;
+        if (!unshaded_.empty()) {
+            // The thesis's fragment pass 2: per ray (radiance, secondary rays), then per
+            // (ray, light) pair (shadow rays).
+            const uint32_t nIds = uint32_t(unshaded_.size());
+            const cl::Buffer& ids = unshadedBuf_.Upload(ctx_, unshaded_);
+            const uint32_t withLights = 0;
+            SetArgs(shadeIds_, rays, out, ids, nIds, withLights, scene_.triangles,
+                    scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
+                    scene_.lights, scene_.params, shade->radiance, shade->normals, shade->shadow,
+                    shade->secondary, shade->spawned);
+            Launch(ctx_, shadeIds_, nIds, timer);
+            SetArgs(shadeLights_, rays, out, ids, nIds, scene_.triangles,
+                    scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
+                    scene_.lights, scene_.params, shade->shadow);
+            Launch(ctx_, shadeLights_, size_t(nIds) * scene_.hostParams.nLights, timer);
+        }
+        return {tests, true};
     }
 
     static double Seconds(Clock::time_point t0) {
@@ -267,16 +301,16 @@ private:
     const SceneBuffers& scene_;
     classify::Hierarchy hierarchy_;
     KernelStyle style_;
-    cl::Kernel queryScalar_, occludedScalar_, gather_, queryVertex_, occludedVertex_,
-        queryFragment_;
+    cl::Kernel queryScalar_, occludedScalar_, gather_, queryVertexShade_, occludedVertex_,
+        queryFragment_, shadeIds_, shadeLights_;
     classify::LeafBatch batch_;
     std::vector<classify::Ray> classifyRays_;
     std::vector<uint32_t> live_, rayLeaf_, vertexLeaves_, fragmentLeaves_, vertexSlots_,
         vertexRayLeaf_, blockLeaf_, blockFirst_, leafFirstBlock_, packetLeaf_, packetFirst_,
-        testsHost_;
+        testsHost_, unshaded_;
     GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,
         blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_,
-        packetFirstBuf_, fragmentTestsBuf_;
+        packetFirstBuf_, fragmentTestsBuf_, unshadedBuf_;
     double hostSeconds_ = 0;
 };
 

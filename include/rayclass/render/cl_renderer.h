@@ -36,6 +36,17 @@ struct SceneBuffers {
     SceneBuffers(clrt::Context& ctx, const DeviceScene& scene, const RcRenderParams& renderParams);
 };
 
+// What shading writes per batch (see cl/shade.cl): radiance and normal per ray, nLights shadow
+// slots per ray, two secondary slots per ray and their spawned flags.
+struct ShadeBuffers {
+    cl::Buffer radiance, normals, shadow, secondary, spawned;
+};
+
+struct QueryResult {
+    uint64_t tests = 0;   // primitive intersection tests done
+    bool shaded = false;  // the query's kernels shaded every ray too (into ShadeBuffers)
+};
+
 // How the rays of a batch find their nearest hit and their occluders. The rays are on the
 // device already; hostRays is the same batch on the host, for queries that classify rays there.
 class RayQuery {
@@ -46,10 +57,11 @@ public:
     virtual bool NeedsHostRays() const { return false; }
     // Host time spent so far (classification, building the batch arrays).
     virtual double HostSeconds() const { return 0.0; }
-    // Nearest hit of rays[0, n) (RcRay) into hits (RcHit); returns the primitive tests done.
-    virtual uint64_t Intersect(const cl::Buffer& rays, uint32_t n,
-                               std::span<const RcRay> hostRays, const cl::Buffer& hits,
-                               KernelTimer& timer) = 0;
+    // Nearest hit of rays[0, n) (RcRay) into hits (RcHit). Query styles whose kernels shade
+    // the hits they find (vertex style) also write `shade` and say so.
+    virtual QueryResult Intersect(const cl::Buffer& rays, uint32_t n,
+                                  std::span<const RcRay> hostRays, const cl::Buffer& hits,
+                                  const ShadeBuffers& shade, KernelTimer& timer) = 0;
     // blocked[i] = 1 when shadow ray i (RcShadowRay, live ones only) hits anything before its
     // light; returns the primitive tests done.
     virtual uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
