@@ -15,7 +15,7 @@ inline Context& TestContext() {
 }
 
 // The options the renderer builds with (BuildRenderProgram), so probes see the same compiler.
-inline const char* kProbeOptions = "-cl-std=CL1.2 -DRC_LOCAL_SIZE=64";
+inline constexpr const char* kProbeOptions = "-cl-std=CL1.2 -DRC_LOCAL_SIZE=64";
 
 // Copies `v` into a read-only device buffer (one element when empty: OpenCL rejects size 0).
 template <typename T>
