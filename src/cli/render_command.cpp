@@ -1,11 +1,14 @@
+#include <unistd.h>
+
 #include <charconv>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <optional>
 #include <ostream>
 #include <set>
 #include <sstream>
-#include <unistd.h>
 
 #include "rayclass/cli/cli.h"
 #include "rayclass/clrt/context.h"
@@ -149,23 +152,41 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
     return r;
 }
 
-// Writes text to `path` through a temporary file and a rename, like the images.
-void WriteTextAtomically(const std::string& path, const std::string& text) {
-    const std::string tmp = path + ".tmp-" + std::to_string(getpid());
-    {
-        std::ofstream out(tmp, std::ios::binary);
-        out << text;
-        out.close();
-        if (!out) {
-            std::remove(tmp.c_str());
-            throw Error(path + ": cannot write");
+// A text file written through a temporary file and a rename, like the images. The temporary is
+// created up front, so that a path that cannot be written fails before anything is rendered and
+// no image is left behind by a command that fails; it is removed unless Commit succeeds.
+class PendingTextFile {
+  public:
+    explicit PendingTextFile(std::string path)
+        : path_(std::move(path)), tmp_(path_ + ".tmp-" + std::to_string(getpid())) {
+        // A directory in the way would only fail the final rename, after the image is written.
+        std::error_code ignored;
+        if (std::filesystem::is_directory(path_, ignored)) throw Error(path_ + ": cannot write");
+        out_.open(tmp_, std::ios::binary);
+        if (!out_) throw Error(path_ + ": cannot write");
+    }
+    PendingTextFile(const PendingTextFile&) = delete;
+    PendingTextFile& operator=(const PendingTextFile&) = delete;
+    ~PendingTextFile() {
+        if (committed_) return;
+        out_.close();
+        std::remove(tmp_.c_str());
+    }
+
+    void Commit(const std::string& text) {
+        out_ << text;
+        out_.close();
+        if (!out_ || std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+            throw Error(path_ + ": cannot write");
         }
+        committed_ = true;
     }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-        std::remove(tmp.c_str());
-        throw Error(path + ": cannot write");
-    }
-}
+
+  private:
+    std::string path_, tmp_;
+    std::ofstream out_;
+    bool committed_ = false;
+};
 
 }  // namespace
 
@@ -179,6 +200,8 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
     const RenderArgs r = ParseRenderArgs(args);
+    std::optional<PendingTextFile> statsFile;
+    if (!r.statsFile.empty()) statsFile.emplace(r.statsFile);
 
     scene::Scene scene = scene::LoadScene(r.scene);
     if (r.width) scene.camera.width = r.width;
@@ -204,7 +227,7 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
 
     stats.timeS["scene_load"] = loadSeconds;
     stats.timeS["total"] = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (!r.statsFile.empty()) WriteTextAtomically(r.statsFile, stats.ToJson().dump(2) + "\n");
+    if (statsFile) statsFile->Commit(stats.ToJson().dump(2) + "\n");
     if (r.options.progress) {
         err << "rayclass: " << r.output << " (" << img.width << "x" << img.height << ", "
             << stats.RaysTotal() << " rays, " << stats.timeS["total"] << " s)\n";

@@ -2,7 +2,7 @@
 // distance that scales with the point's magnitude (a fixed number of ulps), after Waechter &
 // Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems ch. 6.
 // Near the origin, where ulps vanish, a small absolute offset takes over. The kernels use the
-// same constants (cl/offset.cl) for float.
+// same constants (rc_offset_ray_origin in cl/intersect.cl) for float.
 #pragma once
 
 #include <bit>

@@ -1,0 +1,36 @@
+// Compile-time checks of the host layout of the structs shared with the kernels (rc_types.h):
+// the sizes its comments state, 16-byte alignment wherever a rc_float4 is a member, and the
+// offsets that depend on padding. tests/clrt/layout_test.cpp checks the same on the device.
+#include <cstddef>
+
+#include "rc_types.h"
+
+static_assert(sizeof(rc_float4) == 16 && alignof(rc_float4) == 16);
+static_assert(sizeof(rc_uint) == 4);
+
+static_assert(sizeof(RcTriangle) == 48);
+static_assert(sizeof(RcTriangleShading) == 64);
+static_assert(sizeof(RcSphere) == 32);
+static_assert(sizeof(RcQuadric) == 96);
+static_assert(sizeof(RcMaterial) == 96);
+static_assert(sizeof(RcLight) == 32);
+static_assert(sizeof(RcCamera) == 80);
+static_assert(sizeof(RcRay) == 64);
+static_assert(sizeof(RcHit) == 16);
+static_assert(sizeof(RcShadowRay) == 48);
+static_assert(sizeof(RcRenderParams) == 64);
+
+static_assert(alignof(RcTriangle) == 16 && alignof(RcTriangleShading) == 16 &&
+              alignof(RcSphere) == 16 && alignof(RcQuadric) == 16 && alignof(RcMaterial) == 16 &&
+              alignof(RcLight) == 16 && alignof(RcCamera) == 16 && alignof(RcRay) == 16 &&
+              alignof(RcShadowRay) == 16 && alignof(RcRenderParams) == 16);
+static_assert(alignof(RcHit) == 4);
+
+// Scalars after the vectors, and the vectors of RcRenderParams after its eight scalars.
+static_assert(offsetof(RcTriangleShading, material) == 48);
+static_assert(offsetof(RcSphere, material) == 16);
+static_assert(offsetof(RcQuadric, material) == 80);
+static_assert(offsetof(RcMaterial, shininess) == 80);
+static_assert(offsetof(RcCamera, tanHalfFovX) == 64);
+static_assert(offsetof(RcRay, pixel) == 48);
+static_assert(offsetof(RcRenderParams, ambient) == 32);

@@ -1,0 +1,449 @@
+// The rayclass executable as a user runs it (RAYCLASS_BINARY, started through the shell in a
+// scratch directory): its exit statuses (0 success, 2 usage errors, 1 other failures), its exact
+// messages, and the files it leaves behind: the outputs of a successful render and nothing else,
+// nothing at all when a command fails, and a previous output untouched by a failed render.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "rayclass/image/image.h"
+
+namespace rayclass::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+    int status = -1;  // exit status; -1 when the process did not exit normally
+    std::string out, err;
+};
+
+std::string EnvOr(const char* name, const std::string& fallback) {
+    const char* value = std::getenv(name);
+    return value ? value : fallback;
+}
+
+std::string Binary() { return EnvOr("RAYCLASS_BINARY", "rayclass"); }
+std::string Cornell() { return EnvOr("RAYCLASS_SOURCE_DIR", ".") + "/scenes/cornell.json"; }
+
+std::string ShellQuoted(const std::string& s) {
+    std::string q(1, '\'');
+    for (char c : s) {
+        if (c == '\'') {
+            q.append("'\\''");
+        } else {
+            q.push_back(c);
+        }
+    }
+    q.push_back('\'');
+    return q;
+}
+
+std::string ReadText(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+void WriteText(const fs::path& file, const std::string& text) {
+    std::ofstream(file, std::ios::binary) << text;
+}
+
+// A scratch directory per test: the command runs in work/, its stdout and stderr are captured
+// beside it, so work/ holds exactly what the command and the test put there.
+class Cli : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        root_ = fs::temp_directory_path() /
+                ("rayclass-cli-" + std::string(info->name()) + "-" + std::to_string(getpid()));
+        fs::remove_all(root_);
+        fs::create_directories(root_ / "work");
+    }
+    void TearDown() override { fs::remove_all(root_); }
+
+    fs::path Work(const std::string& name = "") const { return root_ / "work" / name; }
+
+    Result Run(const std::vector<std::string>& args) const {
+        // Built by appending: operator+ with short literals trips a false -Wrestrict in GCC 12
+        // (bug 105329).
+        std::string command = "cd ";
+        command.append(ShellQuoted(Work().string())).append(" && ").append(ShellQuoted(Binary()));
+        for (const auto& a : args) command.append(" ").append(ShellQuoted(a));
+        command.append(" >").append(ShellQuoted((root_ / "stdout").string()));
+        command.append(" 2>").append(ShellQuoted((root_ / "stderr").string()));
+        command.append(" </dev/null");
+        const int raw = std::system(command.c_str());
+        Result r;
+        r.status = raw != -1 && WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+        r.out = ReadText(root_ / "stdout");
+        r.err = ReadText(root_ / "stderr");
+        return r;
+    }
+
+    // The names in work/, sorted.
+    std::vector<std::string> Entries() const {
+        std::vector<std::string> names;
+        for (const auto& e : fs::directory_iterator(Work())) {
+            names.push_back(e.path().filename().string());
+        }
+        std::sort(names.begin(), names.end());
+        return names;
+    }
+
+    fs::path root_;
+};
+
+TEST_F(Cli, VersionPrintsTheProjectVersion) {
+    const Result r = Run({"--version"});
+    EXPECT_EQ(r.status, 0);
+    EXPECT_EQ(r.out, "rayclass " RAYCLASS_VERSION "\n");
+    EXPECT_EQ(r.err, "");
+}
+
+TEST_F(Cli, HelpListsTheCommandsOnStdout) {
+    for (const std::string flag : {"--help", "-h", "help"}) {
+        const Result r = Run({flag});
+        EXPECT_EQ(r.status, 0) << flag;
+        EXPECT_EQ(r.out.rfind("usage: rayclass <command> [options]\n", 0), 0u) << r.out;
+        for (const char* command : {"\n  render ", "\n  compare ", "\n  devices "}) {
+            EXPECT_NE(r.out.find(command), std::string::npos) << flag << ": " << command;
+        }
+        EXPECT_EQ(r.err, "");
+    }
+}
+
+TEST_F(Cli, RenderHelpDescribesEveryOption) {
+    const Result r = Run({"render", "--help"});
+    EXPECT_EQ(r.status, 0);
+    EXPECT_EQ(r.out.rfind("usage: rayclass render SCENE -o OUT.{exr,png} [options]\n", 0), 0u);
+    for (const char* option :
+         {"-o, --output", "--width", "--height", "--aov", "--max-depth", "--min-weight", "--device",
+          "--reference", "--stats", "--exposure", "--batch-rays", "--cl-options", "-q, --quiet"}) {
+        EXPECT_NE(r.out.find(option), std::string::npos) << option;
+    }
+    EXPECT_EQ(r.err, "");
+    EXPECT_EQ(Entries(), std::vector<std::string>{});
+}
+
+TEST_F(Cli, NoArgumentsPrintUsageOnStderr) {
+    const Result r = Run({});
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(r.err.rfind("usage: rayclass <command> [options]\n", 0), 0u) << r.err;
+}
+
+TEST_F(Cli, UnknownCommandIsAUsageError) {
+    const Result r = Run({"frobnicate"});
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(r.err.rfind("rayclass: unknown command 'frobnicate'\n\nusage: rayclass <command>", 0),
+              0u)
+        << r.err;
+}
+
+TEST_F(Cli, DevicesListsACpuDevice) {
+    const Result r = Run({"devices"});
+    EXPECT_EQ(r.status, 0);
+    EXPECT_EQ(r.err, "");
+    // "0: NAME [cpu]" followed by its platform and version lines.
+    EXPECT_TRUE(std::regex_search(r.out, std::regex(R"((^|\n)\d+: .+ \[cpu\]\n   platform: )")))
+        << r.out;
+
+    const Result extra = Run({"devices", "extra"});
+    EXPECT_EQ(extra.status, 2);
+    EXPECT_EQ(extra.err, "rayclass devices: unexpected argument 'extra'\n");
+}
+
+struct Failure {
+    std::vector<std::string> args;  // after "render"; "SCENE" stands for scenes/cornell.json
+    int status;
+    std::string err;     // the exact stderr, or its beginning when prefixOnly
+    std::string output;  // the output file the command names
+    bool prefixOnly = false;
+};
+
+class CliFailure : public Cli {
+  protected:
+    // Runs the failing command twice: in a directory without its output file it creates nothing,
+    // and over a previous output file it leaves that file as it was. `inputs` are the files the
+    // test put in work/ beforehand.
+    void Expect(const Failure& f, std::vector<std::string> inputs = {}) {
+        std::vector<std::string> args = {"render"};
+        for (const auto& a : f.args) args.push_back(a == "SCENE" ? Cornell() : a);
+        std::string line;
+        for (const auto& a : f.args) line += " " + a;
+        std::sort(inputs.begin(), inputs.end());
+
+        Result r = Run(args);
+        EXPECT_EQ(r.status, f.status) << line << "\n" << r.err;
+        if (f.prefixOnly) {
+            EXPECT_EQ(r.err.substr(0, f.err.size()), f.err) << line;
+        } else {
+            EXPECT_EQ(r.err, f.err) << line;
+        }
+        EXPECT_EQ(r.out, "") << line;
+        EXPECT_EQ(Entries(), inputs) << line << ": a failed render left files behind";
+
+        if (f.output.empty() || f.output.find('/') != std::string::npos) return;
+        const std::string previous = "the previous " + f.output + "\n";
+        WriteText(Work(f.output), previous);
+        r = Run(args);
+        EXPECT_EQ(r.status, f.status) << line;
+        EXPECT_EQ(ReadText(Work(f.output)), previous) << line << ": the previous output changed";
+        fs::remove(Work(f.output));
+        EXPECT_EQ(Entries(), inputs) << line << ": a failed render left files behind";
+    }
+};
+
+TEST_F(CliFailure, UsageErrorsExitWith2AndNameTheProblem) {
+    const std::vector<Failure> failures = {
+        {{"SCENE", "-o", "x.exr", "--bogus"},
+         2,
+         "rayclass render: unknown option '--bogus' (see 'rayclass render --help')\n",
+         "x.exr"},
+        {{}, 2, "rayclass render: no scene given (see 'rayclass render --help')\n", ""},
+        {{"SCENE"}, 2, "rayclass render: no output given: -o OUT.exr or -o OUT.png\n", ""},
+        {{"SCENE", "-o"}, 2, "rayclass render: -o needs a value\n", ""},
+        {{"SCENE", "-o", "x.exr", "--width", "abc"},
+         2,
+         "rayclass render: --width expects a number in [1, 16384], not 'abc'\n",
+         "x.exr"},
+        {{"SCENE", "-o", "x.exr", "--width", "0"},
+         2,
+         "rayclass render: --width expects a number in [1, 16384], not '0'\n",
+         "x.exr"},
+        {{"SCENE", "-o", "x.exr", "--height", "16385"},
+         2,
+         "rayclass render: --height expects a number in [1, 16384], not '16385'\n",
+         "x.exr"},
+        {{"SCENE", "-o", "x.exr", "--width", "-64"},
+         2,
+         "rayclass render: --width expects a number in [1, 16384], not '-64'\n",
+         "x.exr"},
+        {{"SCENE", "-o", "x.exr", "--width", "64px"},
+         2,
+         "rayclass render: --width expects a number in [1, 16384], not '64px'\n",
+         "x.exr"},
+        {{"SCENE", "-o", "x.exr", "--aov", "depth,foo"},
+         2,
+         "rayclass render: unknown AOV 'foo' (use depth, id, normal)\n",
+         "x.exr"},
+        {{"SCENE", "-o", "x.png", "--aov", "depth"},
+         2,
+         "rayclass render: --aov needs an .exr output\n",
+         "x.png"},
+        {{"SCENE", "-o", "x.tiff"},
+         2,
+         "rayclass render: x.tiff: unsupported output format '.tiff' (use .exr or .png)\n",
+         "x.tiff"},
+        {{"SCENE", "-o", "x"},
+         2,
+         "rayclass render: x: unsupported output format '' (use .exr or .png)\n",
+         "x"},
+        {{"SCENE", "-o", "x.exr", "--stats", "s.txt"},
+         2,
+         "rayclass render: --stats expects a .json file, not 's.txt'\n",
+         "x.exr"},
+        {{"SCENE", "SCENE", "-o", "x.exr"},
+         2,
+         "rayclass render: unexpected argument '" + Cornell() + "' (one scene per render)\n",
+         "x.exr"},
+    };
+    for (const auto& f : failures) Expect(f);
+}
+
+TEST_F(CliFailure, UnusableScenesExitWith1AndNameTheFile) {
+    // The loader's messages (docs/scene-format.md): FILE[:LINE]: PROBLEM, with FILE as given.
+    WriteText(Work("broken.json"), "{\"objects\": [}\n");
+    WriteText(Work("unknown.json"), "{\"objcts\": []}\n");
+    WriteText(Work("scene.txt"), "{}\n");
+    fs::create_directory(Work("dir.json"));
+    fs::create_symlink("loop.json", Work("loop.json"));  // open() fails with ELOOP
+    const std::vector<std::string> inputs = {"broken.json", "unknown.json", "scene.txt", "dir.json",
+                                             "loop.json"};
+    const std::vector<Failure> failures = {
+        {{"missing.json", "-o", "x.exr"},
+         1,
+         "rayclass render: error: missing.json: missing file\n",
+         "x.exr"},
+        {{"broken.json", "-o", "x.exr"},
+         1,
+         "rayclass render: error: broken.json:1: syntax error while parsing value - unexpected "
+         "'}'; expected '[', '{', or a literal\n",
+         "x.exr"},
+        {{"unknown.json", "-o", "x.png"},
+         1,
+         "rayclass render: error: unknown.json:1: scene: unknown key 'objcts'\n",
+         "x.png"},
+        {{"dir.json", "-o", "x.exr"},
+         1,
+         "rayclass render: error: dir.json: is a directory\n",
+         "x.exr"},
+        {{"loop.json", "-o", "x.exr"},
+         1,
+         "rayclass render: error: loop.json: cannot read file (Too many levels of symbolic "
+         "links)\n",
+         "x.exr"},
+        {{"scene.txt", "-o", "x.exr"},
+         1,
+         "rayclass render: error: scene.txt: unknown scene file extension '.txt' (expected "
+         ".json or .obj)\n",
+         "x.exr"},
+    };
+    for (const auto& f : failures) Expect(f, inputs);
+}
+
+TEST_F(CliFailure, UnreadableSceneExitsWith1) {
+    if (geteuid() == 0) GTEST_SKIP() << "root reads files regardless of their permissions";
+    WriteText(Work("secret.json"), "{}\n");
+    fs::permissions(Work("secret.json"), fs::perms::none);
+    Expect({{"secret.json", "-o", "x.exr"},
+            1,
+            "rayclass render: error: secret.json: cannot read file (Permission denied)\n",
+            "x.exr"},
+           {"secret.json"});
+}
+
+TEST_F(CliFailure, FailuresAfterLoadingLeaveNoOutput) {
+    const std::vector<Failure> failures = {
+        {{"SCENE", "-o", "x.exr", "--width", "8", "--height", "8", "--device", "banana"},
+         1,
+         "rayclass render: error: --device must be cpu, gpu, auto or a device index, not "
+         "'banana'\n",
+         "x.exr"},
+        {{"SCENE", "-o", "x.exr", "--width", "8", "--height", "8", "--cl-options",
+          "-cl-no-such-option"},
+         1,
+         "rayclass render: error: building OpenCL program (camera.cl, intersect.cl, shade.cl, "
+         "brute.cl) with options '-cl-std=CL1.2 -DRC_LOCAL_SIZE=64 -cl-no-such-option' failed "
+         "with CL_INVALID_BUILD_OPTIONS (-43)\nbuild log:\n",
+         "x.exr",
+         true},
+        // The stats file cannot be written: the image must not be written either.
+        {{"SCENE", "-o", "x.exr", "--width", "8", "--height", "8", "--stats", "nodir/s.json"},
+         1,
+         "rayclass render: error: nodir/s.json: cannot write\n",
+         "x.exr"},
+        {{"SCENE", "-o", "nodir/x.exr", "--width", "8", "--height", "8", "-q"},
+         1,
+         "rayclass render: error: nodir/x.exr: cannot write: No such file or directory\n",
+         "nodir/x.exr"},
+    };
+    for (const auto& f : failures) Expect(f);
+
+    // A directory where the stats file should go.
+    fs::create_directory(Work("s.json"));
+    Expect({{"SCENE", "-o", "x.exr", "--width", "8", "--height", "8", "--stats", "s.json"},
+            1,
+            "rayclass render: error: s.json: cannot write\n",
+            "x.exr"},
+           {"s.json"});
+}
+
+uint64_t Sum(const nlohmann::json& generations, const char* key) {
+    uint64_t total = 0;
+    for (const auto& g : generations) total += g.at(key).get<uint64_t>();
+    return total;
+}
+
+TEST_F(Cli, RenderWritesTheImageAndConsistentStatsAndNothingElse) {
+    const Result r = Run({"render", Cornell(), "--width", "64", "--height", "48", "-o", "x.exr",
+                          "--aov", "depth,id,normal", "--stats", "s.json"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(Entries(), (std::vector<std::string>{"s.json", "x.exr"}));
+
+    const image::Image img = image::ReadImage(Work("x.exr"));
+    EXPECT_EQ(img.width, 64u);
+    EXPECT_EQ(img.height, 48u);
+    EXPECT_EQ(img.depth.size(), 64u * 48u);
+    EXPECT_EQ(img.id.size(), 64u * 48u);
+    EXPECT_EQ(img.normal.size(), 64u * 48u);
+
+    const auto stats = nlohmann::json::parse(ReadText(Work("s.json")));
+    for (const char* key : {"width", "height", "device", "rays_total", "rays_by_kind",
+                            "rays_by_generation", "intersection_tests", "mrays_per_s", "time_s"}) {
+        EXPECT_TRUE(stats.contains(key)) << key;
+    }
+    EXPECT_EQ(stats.at("width"), 64);
+    EXPECT_EQ(stats.at("height"), 48);
+    EXPECT_TRUE(stats.at("device").is_string());
+    EXPECT_FALSE(stats.at("device").get<std::string>().empty());
+
+    const auto& kinds = stats.at("rays_by_kind");
+    for (const char* kind : {"eye", "shadow", "reflection", "refraction"}) {
+        EXPECT_TRUE(kinds.contains(kind)) << kind;
+    }
+    const uint64_t eye = kinds.at("eye"), shadow = kinds.at("shadow"),
+                   reflection = kinds.at("reflection"), refraction = kinds.at("refraction");
+    EXPECT_EQ(eye, 64u * 48u);
+    EXPECT_EQ(stats.at("rays_total").get<uint64_t>(), eye + shadow + reflection + refraction);
+    // The Cornell scene has a mirror and a glass object: every kind of ray occurs.
+    EXPECT_GT(shadow, 0u);
+    EXPECT_GT(reflection, 0u);
+    EXPECT_GT(refraction, 0u);
+
+    // Generations: eye rays first, each spawning the next, ending with one that spawns nothing.
+    const auto& gens = stats.at("rays_by_generation");
+    ASSERT_TRUE(gens.is_array());
+    ASSERT_GE(gens.size(), 2u);
+    EXPECT_EQ(gens[0].at("rays").get<uint64_t>(), eye);
+    for (size_t i = 0; i + 1 < gens.size(); ++i) {
+        EXPECT_EQ(gens[i].at("spawned"), gens[i + 1].at("rays")) << "generation " << i;
+    }
+    EXPECT_EQ(gens.back().at("spawned"), 0);
+    EXPECT_EQ(Sum(gens, "rays"), eye + reflection + refraction);
+    EXPECT_EQ(Sum(gens, "shadow_rays"), shadow);
+    // Brute force tests every ray against all 25 primitives, and a shadow ray at most that many.
+    const uint64_t tests = stats.at("intersection_tests");
+    EXPECT_GE(tests, (eye + reflection + refraction) * 25);
+    EXPECT_LE(tests, (eye + reflection + refraction + shadow) * 25);
+    EXPECT_GT(stats.at("mrays_per_s").get<double>(), 0.0);
+
+    const auto& times = stats.at("time_s");
+    for (const char* key : {"scene_load", "program_build", "total"}) {
+        ASSERT_TRUE(times.contains(key)) << key;
+        EXPECT_GE(times.at(key).get<double>(), 0.0) << key;
+    }
+    for (const char* kernel : {"kernel_rc_generate_eye_rays", "kernel_rc_intersect_brute",
+                               "kernel_rc_occluded_brute", "kernel_rc_shade"}) {
+        EXPECT_TRUE(times.contains(kernel)) << kernel;
+    }
+    EXPECT_LE(times.at("program_build").get<double>(), times.at("total").get<double>());
+
+    // Without -q, one line on stderr names the output, its size and the rays.
+    EXPECT_EQ(r.err.rfind("rayclass: x.exr (64x48, " +
+                              std::to_string(eye + shadow + reflection + refraction) + " rays, ",
+                          0),
+              0u)
+        << r.err;
+}
+
+TEST_F(Cli, QuietPngRenderReplacesThePreviousOutput) {
+    WriteText(Work("x.png"), "the previous x.png\n");
+    const Result r = Run({"render", Cornell(), "--width", "16", "--height", "12", "-o", "x.png",
+                          "--exposure", "1", "-q"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(r.err, "");
+    EXPECT_EQ(Entries(), std::vector<std::string>{"x.png"});
+    EXPECT_EQ(ReadText(Work("x.png")).substr(0, 8), "\x89PNG\r\n\x1a\n");
+    const image::Image img = image::ReadImage(Work("x.png"));
+    EXPECT_EQ(img.width, 16u);
+    EXPECT_EQ(img.height, 12u);
+}
+
+}  // namespace
+}  // namespace rayclass::cli
