@@ -101,6 +101,33 @@ __kernel void rc_layout_probe(__global uint* out) {
     RC_FIELD(RcRenderParams, pad1);
     RC_FIELD(RcRenderParams, ambient);
     RC_FIELD(RcRenderParams, background);
+    RC_STRUCT(RcLeaf);
+    RC_FIELD(RcLeaf, rayBegin);
+    RC_FIELD(RcLeaf, rayCount);
+    RC_FIELD(RcLeaf, candBegin);
+    RC_FIELD(RcLeaf, candCount);
+    RC_FIELD(RcLeaf, face);
+    RC_FIELD(RcLeaf, node);
+    RC_FIELD(RcLeaf, pad0);
+    RC_FIELD(RcLeaf, pad1);
+    RC_STRUCT(RcCandidate);
+    RC_FIELD(RcCandidate, prim);
+    RC_FIELD(RcCandidate, nearX);
+    RC_STRUCT(RcTriangleBlock16);
+    RC_FIELD(RcTriangleBlock16, v0x);
+    RC_FIELD(RcTriangleBlock16, v0y);
+    RC_FIELD(RcTriangleBlock16, v0z);
+    RC_FIELD(RcTriangleBlock16, e1x);
+    RC_FIELD(RcTriangleBlock16, e1y);
+    RC_FIELD(RcTriangleBlock16, e1z);
+    RC_FIELD(RcTriangleBlock16, e2x);
+    RC_FIELD(RcTriangleBlock16, e2y);
+    RC_FIELD(RcTriangleBlock16, e2z);
+    RC_FIELD(RcTriangleBlock16, prim);
+    RC_FIELD(RcTriangleBlock16, otherMask);
+    RC_FIELD(RcTriangleBlock16, count);
+    RC_FIELD(RcTriangleBlock16, nearX);
+    RC_FIELD(RcTriangleBlock16, pad);
 
     out[0] = n;
 }

@@ -19,6 +19,9 @@ static_assert(sizeof(RcRay) == 64);
 static_assert(sizeof(RcHit) == 16);
 static_assert(sizeof(RcShadowRay) == 48);
 static_assert(sizeof(RcRenderParams) == 64);
+static_assert(sizeof(RcLeaf) == 32);
+static_assert(sizeof(RcCandidate) == 8);
+static_assert(sizeof(RcTriangleBlock16) == 704);
 
 static_assert(alignof(RcTriangle) == 16 && alignof(RcTriangleShading) == 16 &&
               alignof(RcSphere) == 16 && alignof(RcQuadric) == 16 && alignof(RcMaterial) == 16 &&

@@ -120,6 +120,33 @@ std::vector<Entry> HostLayout() {
     RC_FIELD(RcRenderParams, pad1);
     RC_FIELD(RcRenderParams, ambient);
     RC_FIELD(RcRenderParams, background);
+    RC_STRUCT(RcLeaf);
+    RC_FIELD(RcLeaf, rayBegin);
+    RC_FIELD(RcLeaf, rayCount);
+    RC_FIELD(RcLeaf, candBegin);
+    RC_FIELD(RcLeaf, candCount);
+    RC_FIELD(RcLeaf, face);
+    RC_FIELD(RcLeaf, node);
+    RC_FIELD(RcLeaf, pad0);
+    RC_FIELD(RcLeaf, pad1);
+    RC_STRUCT(RcCandidate);
+    RC_FIELD(RcCandidate, prim);
+    RC_FIELD(RcCandidate, nearX);
+    RC_STRUCT(RcTriangleBlock16);
+    RC_FIELD(RcTriangleBlock16, v0x);
+    RC_FIELD(RcTriangleBlock16, v0y);
+    RC_FIELD(RcTriangleBlock16, v0z);
+    RC_FIELD(RcTriangleBlock16, e1x);
+    RC_FIELD(RcTriangleBlock16, e1y);
+    RC_FIELD(RcTriangleBlock16, e1z);
+    RC_FIELD(RcTriangleBlock16, e2x);
+    RC_FIELD(RcTriangleBlock16, e2y);
+    RC_FIELD(RcTriangleBlock16, e2z);
+    RC_FIELD(RcTriangleBlock16, prim);
+    RC_FIELD(RcTriangleBlock16, otherMask);
+    RC_FIELD(RcTriangleBlock16, count);
+    RC_FIELD(RcTriangleBlock16, nearX);
+    RC_FIELD(RcTriangleBlock16, pad);
 #undef RC_STRUCT
 #undef RC_FIELD
     return e;
@@ -144,7 +171,7 @@ std::vector<uint32_t> DeviceLayout() {
 std::vector<std::string> DeclaredFields(const std::string& header) {
     static const std::regex kStruct(R"(typedef struct (\w+) \{([^}]*)\} \1;)");
     static const std::regex kComment(R"(/\*[^*]*\*+([^/*][^*]*\*+)*/)");
-    static const std::regex kDecl(R"(^\s*(\w+)\s+([\w\s,]+)$)");
+    static const std::regex kDecl(R"(^\s*(\w+)\s+([\w\s,\[\]]+)$)");
     std::vector<std::string> fields;
     for (std::sregex_iterator it(header.begin(), header.end(), kStruct), end; it != end; ++it) {
         const std::string name = (*it)[1];
@@ -157,7 +184,8 @@ std::vector<std::string> DeclaredFields(const std::string& header) {
                 fields.push_back(name + ".<unparsed: " + text + ">");
                 continue;
             }
-            static const std::regex kName(R"(\w+)");
+            // Names, not array sizes: "v0x[16]" declares v0x.
+            static const std::regex kName(R"(\b[A-Za-z_]\w*)");
             const std::string names = decl[2];
             for (std::sregex_iterator n(names.begin(), names.end(), kName); n != end; ++n) {
                 fields.push_back(name + "." + n->str());
