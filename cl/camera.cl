@@ -1,6 +1,7 @@
 /* Eye rays: one per pixel, the formula documented at RcCamera in rc_types.h. A launch writes the
  * rays of pixels [first, first + n) so big images go through in batches. */
 #include "rc_types.h"
+#include "encoding.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -18,11 +19,12 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_gene
     const uint x = pixel % cam->width, y = pixel / cam->width;
     RcRay r;
     r.origin = (float4)(cam->position.xyz, 0.0f);
-    r.direction = (float4)(rc_eye_direction(cam, x, y), INFINITY);
+    uint packed;
+    r.direction = (float4)(rc_encode_direction(rc_eye_direction(cam, x, y), &packed), INFINITY);
     r.weight = (float4)(1.0f, 1.0f, 1.0f, 1.0f);
     r.pixel = pixel;
     r.depth = 0;
     r.kind = RC_RAY_EYE;
-    r.pad = 0;
+    r.polar16 = packed;
     rays[i] = r;
 }

@@ -77,7 +77,7 @@ __kernel void rc_layout_probe(__global uint* out) {
     RC_FIELD(RcRay, pixel);
     RC_FIELD(RcRay, depth);
     RC_FIELD(RcRay, kind);
-    RC_FIELD(RcRay, pad);
+    RC_FIELD(RcRay, polar16);
 
     RC_STRUCT(RcHit);
     RC_FIELD(RcHit, t);

@@ -5,6 +5,7 @@
  * renderer (src/render/reference.cpp) implements the same model in double. */
 #include "rc_types.h"
 #include "intersect.cl"
+#include "encoding.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -177,12 +178,13 @@ inline void rc_shade_ray(uint i, const RcRay* ray, RcHit hit, int withLights,
         if (dot(rdir, s.ng) <= 0.0f) rdir = d - 2.0f * dot(d, s.ng) * s.ng;
         RcRay out;
         out.origin = (float4)(rc_offset_ray_origin(s.p, s.ng), 0.0f);
-        out.direction = (float4)(normalize(rdir), INFINITY);
+        uint packed;
+        out.direction = (float4)(rc_encode_direction(normalize(rdir), &packed), INFINITY);
         out.weight = (float4)(wr, 1.0f);
         out.pixel = ray->pixel;
         out.depth = depth;
         out.kind = RC_RAY_REFLECTION;
-        out.pad = 0;
+        out.polar16 = packed;
         secondary[2 * i] = out;
         spawned[2 * i] = 1;
     }
@@ -192,12 +194,13 @@ inline void rc_shade_ray(uint i, const RcRay* ray, RcHit hit, int withLights,
         if (dot(tdir, s.ng) < 0.0f) {
             RcRay out;
             out.origin = (float4)(rc_offset_ray_origin(s.p, -s.ng), 0.0f);
-            out.direction = (float4)(normalize(tdir), INFINITY);
+            uint packed;
+            out.direction = (float4)(rc_encode_direction(normalize(tdir), &packed), INFINITY);
             out.weight = (float4)(wt, 1.0f);
             out.pixel = ray->pixel;
             out.depth = depth;
             out.kind = RC_RAY_REFRACTION;
-            out.pad = 0;
+            out.polar16 = packed;
             secondary[2 * i + 1] = out;
             spawned[2 * i + 1] = 1;
         }

@@ -103,7 +103,8 @@ typedef struct RcRay {
     rc_uint pixel;
     rc_uint depth;
     rc_uint kind;
-    rc_uint pad;
+    rc_uint polar16; /* the direction as packed polar angles (cl/encoding.cl), 0 unless the
+                        kernels are built with RC_POLAR16 */
 } RcRay;
 
 /* Nearest hit of a ray: distance t along the unit direction, primitive id (RC_NO_HIT on a miss),

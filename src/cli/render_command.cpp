@@ -37,6 +37,8 @@ options:
                           from 'rayclass devices' (default auto)
   --accel A               ray query: classify (5D ray classification, default) or brute
   --kernel K              classified query kernels: auto (default), vertex, fragment, scalar
+  --ray-encoding E        ray directions as float (default) or polar16: packed 16-bit polar
+                          angles, the thesis's compact form (costs accuracy, see README)
   --reference             render with the double-precision host reference renderer
   --stats FILE.json       write ray counts and timings as JSON
   --exposure E            PNG only: scale by 2^E before tone mapping (default 0)
@@ -117,6 +119,12 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
         } else if (a == "--kernel") {
             r.options.kernel = value();
             render::ParseKernelStyle(r.options.kernel);
+        } else if (a == "--ray-encoding") {
+            r.options.rayEncoding = value();
+            if (r.options.rayEncoding != "float" && r.options.rayEncoding != "polar16") {
+                throw UsageError("--ray-encoding must be float or polar16, not '" +
+                                 r.options.rayEncoding + "'");
+            }
         } else if (a == "--reference") {
             r.reference = true;
         } else if (a == "--stats") {

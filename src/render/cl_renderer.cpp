@@ -147,7 +147,8 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
         "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
         (extraOptions.empty() ? "" : " " + extraOptions);
     return ctx.BuildProgram(
-        {"camera.cl", "intersect.cl", "shade.cl", "generation.cl", "brute.cl", "classified.cl"},
+        {"camera.cl", "intersect.cl", "encoding.cl", "shade.cl", "generation.cl", "brute.cl",
+         "classified.cl"},
         options);
 }
 
@@ -171,7 +172,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     stats.nPrimitives = scene_.PrimitiveCount();
 
     auto t0 = Clock::now();
-    const cl::Program program = BuildRenderProgram(ctx_, options_.buildOptions);
+    const cl::Program program = BuildRenderProgram(
+        ctx_, options_.buildOptions + (options_.rayEncoding == "polar16" ? " -DRC_POLAR16" : ""));
     stats.timeS["program_build"] = SecondsSince(t0);
 
     RcRenderParams params{};

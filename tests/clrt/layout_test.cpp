@@ -96,7 +96,7 @@ std::vector<Entry> HostLayout() {
     RC_FIELD(RcRay, pixel);
     RC_FIELD(RcRay, depth);
     RC_FIELD(RcRay, kind);
-    RC_FIELD(RcRay, pad);
+    RC_FIELD(RcRay, polar16);
 
     RC_STRUCT(RcHit);
     RC_FIELD(RcHit, t);

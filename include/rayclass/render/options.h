@@ -15,6 +15,7 @@ struct RenderOptions {
     std::string accel = "classify";  // ray query: classify (ray classification) or brute
     std::string kernel = "auto";     // classified query style: scalar, vertex, fragment, auto
     std::string buildOptions;       // extra OpenCL build options
+    std::string rayEncoding = "float";  // ray directions: float or polar16 (cl/encoding.cl)
     bool progress = true;           // progress line on stderr for renders over a second
 };
 
