@@ -205,7 +205,10 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     cl::Kernel shadeKernel(program, "rc_shade");
 
     const uint32_t nLights = params.nLights;
-    const size_t batch = std::max<uint32_t>(1, options_.batchRays);
+    // Later generations are split into batches of the same size, so no buffer need be larger
+    // than the image.
+    const size_t batch = std::max<size_t>(1, std::min<size_t>(options_.batchRays,
+                                                               size_t(width) * height));
     // Per batch: the query's hits, the shading kernel's outputs.
     cl::Buffer hits = DeviceBuffer(ctx_, batch * sizeof(RcHit));
     ShadeBuffers shade;
@@ -377,6 +380,14 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     stats.timeS["host"] = hostSeconds;
     if (options_.accel != "brute") stats.timeS["host_classify"] = query->HostSeconds();
     stats.timeS["render"] = SecondsSince(tStart);
+    // What neither the kernels' profiling nor the host timers cover: copies between host and
+    // device, buffer allocation, launch overhead and waiting.
+    double accounted = hostSeconds + query->HostSeconds();
+    for (const char* key : {"program_build", "classify_setup"}) {
+        if (stats.timeS.count(key)) accounted += stats.timeS[key];
+    }
+    for (const auto& [name, seconds] : ks) accounted += seconds;
+    stats.timeS["transfer_and_other"] = std::max(0.0, stats.timeS["render"] - accounted);
     return img;
 }
 
