@@ -1,7 +1,6 @@
 #include <charconv>
-#include <ostream>
-
 #include <nlohmann/json.hpp>
+#include <ostream>
 
 #include "rayclass/classify/stats.h"
 #include "rayclass/cli/cli.h"
@@ -31,8 +30,8 @@ uint32_t ParseCount(const std::string& option, const std::string& text, uint32_t
     uint32_t v = 0;
     auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
     if (ec != std::errc() || ptr != text.data() + text.size() || v < 1 || v > hi) {
-        throw UsageError(option + " expects an integer in [1, " + std::to_string(hi) +
-                         "], not '" + text + "'");
+        throw UsageError(option + " expects an integer in [1, " + std::to_string(hi) + "], not '" +
+                         text + "'");
     }
     return v;
 }
@@ -122,9 +121,8 @@ int ClassifyStatsCommand(const std::vector<std::string>& args, std::ostream& out
     if (camera.empty()) camera = file.ends_with(".json") ? "scene" : "anchor";
     scene.camera.width = width;
     scene.camera.height = height;
-    const std::vector<classify::Ray> eye = camera == "anchor"
-                                               ? classify::AnchorEyeRays(scene, width, height)
-                                               : SceneEyeRays(scene);
+    const std::vector<classify::Ray> eye =
+        camera == "anchor" ? classify::AnchorEyeRays(scene, width, height) : SceneEyeRays(scene);
     const classify::Params params = classify::Params::ForScene(scene);
     std::vector<geometry::Hit<float>> hits(eye.size());
     const auto eyeStats = classify::ComputeStats(scene, eye, params, int(repeat), hits);
@@ -142,8 +140,8 @@ int ClassifyStatsCommand(const std::vector<std::string>& args, std::ostream& out
         out << j.dump(2) << "\n";
         return 0;
     }
-    out << "scene: " << file << "\nprimitives: " << scene.PrimitiveCount()
-        << "\ncamera: " << camera << " " << width << "x" << height << "\n";
+    out << "scene: " << file << "\nprimitives: " << scene.PrimitiveCount() << "\ncamera: " << camera
+        << " " << width << "x" << height << "\n";
     for (const char* gen : {"eye", "mirror"}) {
         for (const auto& [key, v] : j[gen].items()) out << gen << "." << key << ": " << v << "\n";
     }

@@ -65,8 +65,7 @@ T ParseNumber(const std::string& option, const std::string& text, T lo, T hi) {
     auto [ptr, ec] = std::from_chars(text.data(), end, value);
     if (ec != std::errc() || ptr != end || !(value >= lo && value <= hi)) {
         std::ostringstream msg;
-        msg << option << " expects a number in [" << lo << ", " << hi << "], not '" << text
-            << "'";
+        msg << option << " expects a number in [" << lo << ", " << hi << "], not '" << text << "'";
         throw UsageError(msg.str());
     }
     return value;
@@ -149,8 +148,7 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
     if (r.output.empty()) throw UsageError("no output given: -o OUT.exr or -o OUT.png");
     const std::string ext = Extension(r.output);
     if (ext != ".exr" && ext != ".png") {
-        throw UsageError(r.output + ": unsupported output format '" + ext +
-                         "' (use .exr or .png)");
+        throw UsageError(r.output + ": unsupported output format '" + ext + "' (use .exr or .png)");
     }
     if (!r.aovs.empty() && ext != ".exr") throw UsageError("--aov needs an .exr output");
     if (!r.statsFile.empty() && Extension(r.statsFile) != ".json") {

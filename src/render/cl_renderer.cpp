@@ -1,10 +1,11 @@
 #include "rayclass/render/cl_renderer.h"
 
-#include "rayclass/classify/params.h"
-#include "rayclass/render/classified_query.h"
-
 #include <chrono>
 #include <cstdio>
+#include <future>
+
+#include "rayclass/classify/params.h"
+#include "rayclass/render/classified_query.h"
 
 namespace rayclass::render {
 
@@ -54,7 +55,7 @@ void SetArgs(cl::Kernel& kernel, const Args&... args) {
 }
 
 class BruteForceQuery final : public RayQuery {
-public:
+  public:
     BruteForceQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene)
         : ctx_(ctx),
           scene_(scene),
@@ -63,7 +64,7 @@ public:
 
     std::string Name() const override { return "brute"; }
 
-    QueryResult Intersect(const cl::Buffer& rays, uint32_t n, std::span<const RcRay>,
+    QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch*,
                           const cl::Buffer& hits, const ShadeBuffers&,
                           KernelTimer& timer) override {
         clrt::Check("clSetKernelArg(rc_intersect_brute)", [&] {
@@ -108,7 +109,7 @@ public:
         return total;
     }
 
-private:
+  private:
     clrt::Context& ctx_;
     const SceneBuffers& scene_;
     cl::Kernel intersect_, occluded_;
@@ -143,17 +144,14 @@ std::unique_ptr<RayQuery> MakeBruteForceQuery(clrt::Context& ctx, const cl::Prog
 }
 
 cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions) {
-    const std::string options =
-        "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
-        (extraOptions.empty() ? "" : " " + extraOptions);
-    return ctx.BuildProgram(
-        {"camera.cl", "intersect.cl", "encoding.cl", "shade.cl", "generation.cl", "brute.cl",
-         "classified.cl"},
-        options);
+    const std::string options = "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
+                                (extraOptions.empty() ? "" : " " + extraOptions);
+    return ctx.BuildProgram({"camera.cl", "intersect.cl", "encoding.cl", "shade.cl",
+                             "generation.cl", "brute.cl", "classified.cl"},
+                            options);
 }
 
-ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene,
-                       const RenderOptions& options)
+ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options)
     : ctx_(ctx), scene_(scene), options_(options) {}
 
 image::Image ClRenderer::Render(RenderStats& stats) {
@@ -207,8 +205,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     const uint32_t nLights = params.nLights;
     // Later generations are split into batches of the same size, so no buffer need be larger
     // than the image.
-    const size_t batch = std::max<size_t>(1, std::min<size_t>(options_.batchRays,
-                                                               size_t(width) * height));
+    const size_t batch =
+        std::max<size_t>(1, std::min<size_t>(options_.batchRays, size_t(width) * height));
     // Per batch: the query's hits, the shading kernel's outputs.
     cl::Buffer hits = DeviceBuffer(ctx_, batch * sizeof(RcHit));
     ShadeBuffers shade;
@@ -217,9 +215,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     shade.shadow = DeviceBuffer(ctx_, batch * nLights * sizeof(RcShadowRay));
     shade.secondary = DeviceBuffer(ctx_, 2 * batch * sizeof(RcRay));
     shade.spawned = DeviceBuffer(ctx_, 2 * batch);
-    const cl::Buffer &radiance = shade.radiance, &normals = shade.normals,
-                     &shadow = shade.shadow, &secondary = shade.secondary,
-                     &spawned = shade.spawned;
+    const cl::Buffer &radiance = shade.radiance, &normals = shade.normals, &shadow = shade.shadow,
+                     &secondary = shade.secondary, &spawned = shade.spawned;
     cl::Buffer blocked = DeviceBuffer(ctx_, batch * nLights);
     cl::Buffer liveSlots = DeviceBuffer(ctx_, 2 * batch * sizeof(uint32_t));
     cl::Kernel compactKernel(program, "rc_compact_rays");
@@ -228,7 +225,6 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     std::vector<rc_float4> hostRadiance(batch), hostNormals(batch);
     std::vector<RcShadowRay> hostShadow(batch * nLights);
     std::vector<uint8_t> hostBlocked(batch * nLights), hostSpawned(2 * batch);
-    std::vector<RcRay> hostRays(query->NeedsHostRays() ? batch : 0);
     std::vector<uint32_t> hostLive;
 
     // A generation's rays live on the device in pages of `batch` rays; a batch is one page. The
@@ -236,6 +232,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     std::vector<cl::Buffer> pages, nextPages;
     std::vector<uint32_t> pixels, nextPixels;
     auto& q = ctx_.queue();
+    cl::CommandQueue readQueue = clrt::Check(
+        "clCreateCommandQueue", [&] { return cl::CommandQueue(ctx_.context(), ctx_.device()); });
 
     KernelTimer timer;
     double hostSeconds = 0;
@@ -250,28 +248,43 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         nextPages.clear();
         nextPixels.clear();
         uint64_t nReflection = 0, nRefraction = 0;
-        for (size_t first = 0, page = 0; first < nRays; first += batch, ++page) {
-            const uint32_t n = uint32_t(std::min(batch, nRays - first));
-            if (generation == 0) {
+        if (generation == 0) {
+            for (size_t first = 0; first < nRays; first += batch) {
+                const uint32_t n = uint32_t(std::min(batch, nRays - first));
                 pages.push_back(DeviceBuffer(ctx_, batch * sizeof(RcRay)));
                 SetArgs(eyeKernel, camBuffer, uint32_t(first), n, pages.back());
                 Launch(ctx_, eyeKernel, n, timer);
             }
-            const cl::Buffer& rays = pages[generation == 0 ? pages.size() - 1 : page];
-            if (!hostRays.empty()) {
-                clrt::Check("clEnqueueReadBuffer", [&] {
-                    q.enqueueReadBuffer(rays, CL_TRUE, 0, n * sizeof(RcRay), hostRays.data());
-                });
+        }
+        // The pages are complete: a worker reads batch k + 1 back and classifies it while the
+        // device queries and shades batch k.
+        clrt::Check("clFinish", [&] { q.finish(); });
+        auto prepare = [&](size_t page) -> std::unique_ptr<PreparedBatch> {
+            if (!query->NeedsHostRays()) return nullptr;
+            const size_t n = std::min(batch, nRays - page * batch);
+            std::vector<RcRay> host(n);
+            clrt::Check("clEnqueueReadBuffer", [&] {
+                readQueue.enqueueReadBuffer(pages[page], CL_TRUE, 0, n * sizeof(RcRay),
+                                            host.data());
+            });
+            return query->Prepare(host);
+        };
+        std::future<std::unique_ptr<PreparedBatch>> nextPrepared =
+            std::async(std::launch::async, prepare, 0);
+        for (size_t first = 0, page = 0; first < nRays; first += batch, ++page) {
+            const uint32_t n = uint32_t(std::min(batch, nRays - first));
+            const std::unique_ptr<PreparedBatch> prepared = nextPrepared.get();
+            if (first + batch < nRays) {
+                nextPrepared = std::async(std::launch::async, prepare, page + 1);
             }
-            const QueryResult found = query->Intersect(
-                rays, n, std::span<const RcRay>(hostRays.data(), hostRays.empty() ? 0 : n), hits,
-                shade, timer);
+            const cl::Buffer& rays = pages[page];
+            const QueryResult found = query->Intersect(rays, n, prepared.get(), hits, shade, timer);
             stats.intersectionTests += found.tests;
             if (!found.shaded) {
                 SetArgs(shadeKernel, rays, hits, n, sceneBuffers.triangles,
                         sceneBuffers.triangleShading, sceneBuffers.spheres, sceneBuffers.quadrics,
-                        sceneBuffers.materials, sceneBuffers.lights, sceneBuffers.params,
-                        radiance, normals, shadow, secondary, spawned);
+                        sceneBuffers.materials, sceneBuffers.lights, sceneBuffers.params, radiance,
+                        normals, shadow, secondary, spawned);
                 Launch(ctx_, shadeKernel, n, timer);
             }
             const uint32_t nShadow = n * nLights;
@@ -333,8 +346,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
             // Append this batch's secondary rays to the next generation's pages.
             if (!hostLive.empty()) {
                 clrt::Check("clEnqueueWriteBuffer", [&] {
-                    q.enqueueWriteBuffer(liveSlots, CL_FALSE, 0,
-                                         hostLive.size() * sizeof(uint32_t), hostLive.data());
+                    q.enqueueWriteBuffer(liveSlots, CL_FALSE, 0, hostLive.size() * sizeof(uint32_t),
+                                         hostLive.data());
                 });
             }
             size_t done = 0;

@@ -1,6 +1,7 @@
 #include "rayclass/render/classified_query.h"
 
 #include <chrono>
+#include <mutex>
 
 #include "rayclass/classify/hierarchy.h"
 #include "rayclass/core/error.h"
@@ -13,7 +14,7 @@ using Clock = std::chrono::steady_clock;
 
 // A device buffer that grows to the largest size asked for and is reused after that.
 class GrowingBuffer {
-public:
+  public:
     template <typename T>
     const cl::Buffer& Upload(clrt::Context& ctx, const std::vector<T>& data) {
         Reserve(ctx, data.size() * sizeof(T));
@@ -35,7 +36,7 @@ public:
         return buffer_;
     }
 
-private:
+  private:
     cl::Buffer buffer_;
     size_t capacity_ = 0;
 };
@@ -61,16 +62,26 @@ void SetArgs(cl::Kernel& kernel, const Args&... args) {
     });
 }
 
+// A classified batch: the leaves and, per leaf, its rays' slots and its kernel style.
+struct ClassifiedBatch final : PreparedBatch {
+    classify::LeafBatch batch;
+    std::vector<classify::Ray> rays;
+    std::vector<uint32_t> rayLeaf;         // per slot of batch.rayIndex: its leaf
+    std::vector<uint32_t> vertexLeaves;    // leaves the vertex-style kernel answers
+    std::vector<uint32_t> fragmentLeaves;  // leaves the fragment-style kernel answers
+};
+
 // Directions of a leaf's rays vary little: packets of its rays stay in lockstep.
 constexpr float kCoherentDirExtent = 0.125f;
 
 class ClassifiedQuery final : public RayQuery {
-public:
+  public:
     ClassifiedQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& buffers,
                     const scene::Scene& scene, const classify::Params& params, KernelStyle style)
         : ctx_(ctx),
           scene_(buffers),
           hierarchy_(scene, params),
+          shadowHierarchy_(scene, params),
           style_(style),
           queryScalar_(program, "rc_query_scalar"),
           occludedScalar_(program, "rc_occluded_scalar"),
@@ -81,50 +92,59 @@ public:
           shadeIds_(program, "rc_shade_ids"),
           shadeLights_(program, "rc_shade_lights") {}
 
-    std::string Name() const override {
-        return std::string("classify/") + KernelStyleName(style_);
-    }
+    std::string Name() const override { return std::string("classify/") + KernelStyleName(style_); }
     bool NeedsHostRays() const override { return true; }
-    double HostSeconds() const override { return hostSeconds_; }
+    double HostSeconds() const override {
+        std::lock_guard<std::mutex> lock(hostSecondsMutex_);
+        return hostSeconds_;
+    }
 
-    QueryResult Intersect(const cl::Buffer& rays, uint32_t n, std::span<const RcRay> hostRays,
+    std::unique_ptr<PreparedBatch> Prepare(std::span<const RcRay> hostRays) override {
+        auto out = std::make_unique<ClassifiedBatch>();
+        Classify(
+            hierarchy_, hostRays.size(), [&](size_t i) { return ToClassifyRay(hostRays[i]); },
+            *out);
+        return out;
+    }
+
+    QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
                           const cl::Buffer& hits, const ShadeBuffers& shade,
                           KernelTimer& timer) override {
         if (n == 0) return {};
         const RcHit miss{std::numeric_limits<float>::infinity(), RC_NO_HIT, 0.0f, 0.0f};
-        clrt::Check("clEnqueueFillBuffer", [&] {
-            ctx_.queue().enqueueFillBuffer(hits, miss, 0, n * sizeof(RcHit));
-        });
-        Classify(hostRays.size(), [&](size_t i) { return ToClassifyRay(hostRays[i]); });
-        return Query(rays, hits, &shade, timer);
+        clrt::Check("clEnqueueFillBuffer",
+                    [&] { ctx_.queue().enqueueFillBuffer(hits, miss, 0, n * sizeof(RcHit)); });
+        return Query(static_cast<const ClassifiedBatch&>(*prepared), rays, hits, &shade, timer);
     }
 
     uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
                       const cl::Buffer& blocked, KernelTimer& timer) override {
         const uint32_t n = uint32_t(hostRays.size());
         if (n == 0) return 0;
-        clrt::Check("clEnqueueFillBuffer", [&] {
-            ctx_.queue().enqueueFillBuffer(blocked, uint8_t(0), 0, n);
-        });
+        clrt::Check("clEnqueueFillBuffer",
+                    [&] { ctx_.queue().enqueueFillBuffer(blocked, uint8_t(0), 0, n); });
         // Only live slots are classified; their batch indices map back to slots.
         live_.clear();
         for (uint32_t i = 0; i < n; ++i) {
             if (hostRays[i].contribution.w != 0.0f) live_.push_back(i);
         }
-        Classify(live_.size(), [&](size_t i) {
-            const RcShadowRay& s = hostRays[live_[i]];
-            classify::Ray r;
-            r.origin = glm::vec3(s.origin.x, s.origin.y, s.origin.z);
-            r.tMin = s.origin.w;
-            r.direction = glm::vec3(s.direction.x, s.direction.y, s.direction.z);
-            r.tMax = s.direction.w;
-            return r;
-        });
-        for (auto& id : batch_.rayIndex) id = live_[id];
-        return Query(shadowRays, blocked, nullptr, timer).tests;
+        Classify(
+            shadowHierarchy_, live_.size(),
+            [&](size_t i) {
+                const RcShadowRay& s = hostRays[live_[i]];
+                classify::Ray r;
+                r.origin = glm::vec3(s.origin.x, s.origin.y, s.origin.z);
+                r.tMin = s.origin.w;
+                r.direction = glm::vec3(s.direction.x, s.direction.y, s.direction.z);
+                r.tMax = s.direction.w;
+                return r;
+            },
+            shadowBatch_);
+        for (auto& id : shadowBatch_.batch.rayIndex) id = live_[id];
+        return Query(shadowBatch_, shadowRays, blocked, nullptr, timer).tests;
     }
 
-private:
+  private:
     static classify::Ray ToClassifyRay(const RcRay& ray) {
         classify::Ray r;
         r.origin = glm::vec3(ray.origin.x, ray.origin.y, ray.origin.z);
@@ -135,75 +155,80 @@ private:
     }
 
     template <typename F>
-    void Classify(size_t n, F&& ray) {
+    void Classify(classify::Hierarchy& hierarchy, size_t n, F&& ray, ClassifiedBatch& out) {
         const auto t0 = Clock::now();
-        classifyRays_.resize(n);
-        for (size_t i = 0; i < n; ++i) classifyRays_[i] = ray(i);
-        hierarchy_.Classify(classifyRays_, batch_);
-        // Per-slot leaf ids and, per style, the block and packet lists of the leaves.
-        rayLeaf_.resize(batch_.rayIndex.size());
-        vertexLeaves_.clear();
-        fragmentLeaves_.clear();
-        const auto& nodes = hierarchy_.Nodes();
-        for (uint32_t l = 0; l < batch_.leaves.size(); ++l) {
-            const RcLeaf& leaf = batch_.leaves[l];
-            std::fill_n(rayLeaf_.begin() + leaf.rayBegin, leaf.rayCount, l);
+        out.rays.resize(n);
+        for (size_t i = 0; i < n; ++i) out.rays[i] = ray(i);
+        hierarchy.Classify(out.rays, out.batch);
+        // Per-slot leaf ids and, per style, the leaves.
+        out.rayLeaf.resize(out.batch.rayIndex.size());
+        out.vertexLeaves.clear();
+        out.fragmentLeaves.clear();
+        const auto& nodes = hierarchy.Nodes();
+        for (uint32_t l = 0; l < out.batch.leaves.size(); ++l) {
+            const RcLeaf& leaf = out.batch.leaves[l];
+            std::fill_n(out.rayLeaf.begin() + leaf.rayBegin, leaf.rayCount, l);
             bool fragment = style_ == KernelStyle::kFragment;
             if (style_ == KernelStyle::kAuto) {
                 const auto& box = nodes[leaf.node].box;
                 const float dirExtent = std::max(box.hi[3] - box.lo[3], box.hi[4] - box.lo[4]);
                 fragment = leaf.rayCount >= 16 && dirExtent <= kCoherentDirExtent;
             }
-            (fragment ? fragmentLeaves_ : vertexLeaves_).push_back(l);
+            (fragment ? out.fragmentLeaves : out.vertexLeaves).push_back(l);
         }
-        hostSeconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
+        AddHostSeconds(Seconds(t0));
+    }
+
+    void AddHostSeconds(double s) {
+        std::lock_guard<std::mutex> lock(hostSecondsMutex_);
+        hostSeconds_ += s;
     }
 
     // Nearest hits (shade != nullptr: also shades every ray) or occlusion (shade == nullptr).
-    QueryResult Query(const cl::Buffer& rays, const cl::Buffer& out, const ShadeBuffers* shade,
-                      KernelTimer& timer) {
+    QueryResult Query(const ClassifiedBatch& cb, const cl::Buffer& rays, const cl::Buffer& out,
+                      const ShadeBuffers* shade, KernelTimer& timer) {
         const bool shadow = shade == nullptr;
         const auto t0 = Clock::now();
-        const cl::Buffer& leaves = leavesBuf_.Upload(ctx_, batch_.leaves);
-        const cl::Buffer& rayIndex = rayIndexBuf_.Upload(ctx_, batch_.rayIndex);
-        const cl::Buffer& candidates = candidatesBuf_.Upload(ctx_, batch_.candidates);
+        const cl::Buffer& leaves = leavesBuf_.Upload(ctx_, cb.batch.leaves);
+        const cl::Buffer& rayIndex = rayIndexBuf_.Upload(ctx_, cb.batch.rayIndex);
+        const cl::Buffer& candidates = candidatesBuf_.Upload(ctx_, cb.batch.candidates);
         uint64_t tests = 0;
         if (style_ == KernelStyle::kScalar) {
-            const cl::Buffer& rayLeaf = rayLeafBuf_.Upload(ctx_, rayLeaf_);
-            const uint32_t nSlots = uint32_t(batch_.rayIndex.size());
+            const cl::Buffer& rayLeaf = rayLeafBuf_.Upload(ctx_, cb.rayLeaf);
+            const uint32_t nSlots = uint32_t(cb.batch.rayIndex.size());
             const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
             cl::Kernel& k = shadow ? occludedScalar_ : queryScalar_;
             SetArgs(k, rays, rayIndex, rayLeaf, nSlots, leaves, candidates, scene_.triangles,
                     scene_.spheres, scene_.quadrics, scene_.params, out, testsBuf);
-            hostSeconds_ += Seconds(t0);
+            AddHostSeconds(Seconds(t0));
             Launch(ctx_, k, nSlots, timer);
             return {SumTests(testsBuf, nSlots), false};
         }
         // Vertex-style leaves: their rays as slots, their candidates as blocks of 16.
-        if (!vertexLeaves_.empty() || shadow) {
+        if (!cb.vertexLeaves.empty() || shadow) {
             vertexSlots_.clear();
             vertexRayLeaf_.clear();
             blockLeaf_.clear();
             blockFirst_.clear();
-            leafFirstBlock_.assign(batch_.leaves.size(), 0);
+            leafFirstBlock_.assign(cb.batch.leaves.size(), 0);
             auto addVertexLeaf = [&](uint32_t l) {
-                const RcLeaf& leaf = batch_.leaves[l];
+                const RcLeaf& leaf = cb.batch.leaves[l];
                 leafFirstBlock_[l] = uint32_t(blockLeaf_.size());
                 for (uint32_t c = 0; c < leaf.candCount; c += 16) {
                     blockLeaf_.push_back(l);
                     blockFirst_.push_back(c);
                 }
                 for (uint32_t r = 0; r < leaf.rayCount; ++r) {
-                    vertexSlots_.push_back(batch_.rayIndex[leaf.rayBegin + r]);
+                    vertexSlots_.push_back(cb.batch.rayIndex[leaf.rayBegin + r]);
                     vertexRayLeaf_.push_back(l);
                 }
             };
             // Shadow rays take the vertex style whatever the setting: any-hit queries end at
             // the first hit, which lockstep packets cannot exploit.
             if (shadow) {
-                for (uint32_t l = 0; l < batch_.leaves.size(); ++l) addVertexLeaf(l);
+                for (uint32_t l = 0; l < cb.batch.leaves.size(); ++l) addVertexLeaf(l);
             } else {
-                for (uint32_t l : vertexLeaves_) addVertexLeaf(l);
+                for (uint32_t l : cb.vertexLeaves) addVertexLeaf(l);
             }
             const uint32_t nBlocks = uint32_t(blockLeaf_.size());
             const uint32_t nSlots = uint32_t(vertexSlots_.size());
@@ -215,8 +240,8 @@ private:
             const cl::Buffer& blocks =
                 blocksBuf_.Reserve(ctx_, size_t(nBlocks) * sizeof(RcTriangleBlock16));
             const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
-            SetArgs(gather_, blockLeaf, blockFirst, nBlocks, leaves, candidates,
-                    scene_.triangles, scene_.params, blocks);
+            SetArgs(gather_, blockLeaf, blockFirst, nBlocks, leaves, candidates, scene_.triangles,
+                    scene_.params, blocks);
             cl::Kernel& k = shadow ? occludedVertex_ : queryVertexShade_;
             if (shadow) {
                 SetArgs(k, rays, slots, slotLeaf, nSlots, leaves, leafFirstBlock, blocks,
@@ -229,26 +254,26 @@ private:
                         shade->radiance, shade->normals, shade->shadow, shade->secondary,
                         shade->spawned);
             }
-            hostSeconds_ += Seconds(t0);
+            AddHostSeconds(Seconds(t0));
             Launch(ctx_, gather_, nBlocks, timer);
             Launch(ctx_, k, nSlots, timer);
             tests += SumTests(testsBuf, nSlots);
         }
         if (shadow) return {tests, false};
         // The rays the vertex kernel did not shade: fragment leaves' rays and the misses.
-        unshaded_.assign(batch_.missed.begin(), batch_.missed.end());
-        if (!fragmentLeaves_.empty()) {
+        unshaded_.assign(cb.batch.missed.begin(), cb.batch.missed.end());
+        if (!cb.fragmentLeaves.empty()) {
             const auto t1 = Clock::now();
             packetLeaf_.clear();
             packetFirst_.clear();
-            for (uint32_t l : fragmentLeaves_) {
-                const RcLeaf& leaf = batch_.leaves[l];
+            for (uint32_t l : cb.fragmentLeaves) {
+                const RcLeaf& leaf = cb.batch.leaves[l];
                 for (uint32_t r = 0; r < leaf.rayCount; r += 16) {
                     packetLeaf_.push_back(l);
                     packetFirst_.push_back(r);
                 }
-                unshaded_.insert(unshaded_.end(), batch_.rayIndex.begin() + leaf.rayBegin,
-                                 batch_.rayIndex.begin() + leaf.rayBegin + leaf.rayCount);
+                unshaded_.insert(unshaded_.end(), cb.batch.rayIndex.begin() + leaf.rayBegin,
+                                 cb.batch.rayIndex.begin() + leaf.rayBegin + leaf.rayCount);
             }
             const uint32_t nPackets = uint32_t(packetLeaf_.size());
             const cl::Buffer& packetLeaf = packetLeafBuf_.Upload(ctx_, packetLeaf_);
@@ -258,7 +283,7 @@ private:
             SetArgs(queryFragment_, rays, rayIndex, packetLeaf, packetFirst, nPackets, leaves,
                     candidates, scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params,
                     out, testsBuf);
-            hostSeconds_ += Seconds(t1);
+            AddHostSeconds(Seconds(t1));
             Launch(ctx_, queryFragment_, nPackets, timer);
             tests += SumTests(testsBuf, nPackets);
         }
@@ -273,9 +298,9 @@ private:
                     scene_.lights, scene_.params, shade->radiance, shade->normals, shade->shadow,
                     shade->secondary, shade->spawned);
             Launch(ctx_, shadeIds_, nIds, timer);
-            SetArgs(shadeLights_, rays, out, ids, nIds, scene_.triangles,
-                    scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
-                    scene_.lights, scene_.params, shade->shadow);
+            SetArgs(shadeLights_, rays, out, ids, nIds, scene_.triangles, scene_.triangleShading,
+                    scene_.spheres, scene_.quadrics, scene_.materials, scene_.lights, scene_.params,
+                    shade->shadow);
             Launch(ctx_, shadeLights_, size_t(nIds) * scene_.hostParams.nLights, timer);
         }
         return {tests, true};
@@ -299,18 +324,20 @@ private:
 
     clrt::Context& ctx_;
     const SceneBuffers& scene_;
+    // Eye, reflection and refraction rays of every generation share one hierarchy (classified on
+    // the worker thread); shadow rays have their own (classified on the calling thread).
     classify::Hierarchy hierarchy_;
+    classify::Hierarchy shadowHierarchy_;
     KernelStyle style_;
     cl::Kernel queryScalar_, occludedScalar_, gather_, queryVertexShade_, occludedVertex_,
         queryFragment_, shadeIds_, shadeLights_;
-    classify::LeafBatch batch_;
-    std::vector<classify::Ray> classifyRays_;
-    std::vector<uint32_t> live_, rayLeaf_, vertexLeaves_, fragmentLeaves_, vertexSlots_,
-        vertexRayLeaf_, blockLeaf_, blockFirst_, leafFirstBlock_, packetLeaf_, packetFirst_,
-        testsHost_, unshaded_;
+    ClassifiedBatch shadowBatch_;
+    std::vector<uint32_t> live_, vertexSlots_, vertexRayLeaf_, blockLeaf_, blockFirst_,
+        leafFirstBlock_, packetLeaf_, packetFirst_, testsHost_, unshaded_;
     GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,
-        blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_,
-        packetFirstBuf_, fragmentTestsBuf_, unshadedBuf_;
+        blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_, packetFirstBuf_,
+        fragmentTestsBuf_, unshadedBuf_;
+    mutable std::mutex hostSecondsMutex_;
     double hostSeconds_ = 0;
 };
 

@@ -39,7 +39,7 @@ double FresnelDielectric(double cosi, double eta) {
 }
 
 class Tracer {
-public:
+  public:
     Tracer(const scene::Scene& scene, const RenderOptions& options)
         : scene_(scene), options_(options) {}
 
@@ -116,7 +116,7 @@ public:
         }
     }
 
-private:
+  private:
     bool WorthSpawning(const V& w, uint32_t depth) const {
         return depth <= options_.maxDepth && MaxComponent(w) >= double(options_.minWeight);
     }
@@ -132,8 +132,8 @@ private:
             V n = glm::cross(p1 - p0, p2 - p0);
             const double len = glm::length(n);
             s.ng = len > 0.0 ? n / len : -ray.d;
-            s.ns = tri.hasNormals ? w * V(tri.n[0]) + hit.u * V(tri.n[1]) + hit.v * V(tri.n[2])
-                                  : s.ng;
+            s.ns =
+                tri.hasNormals ? w * V(tri.n[0]) + hit.u * V(tri.n[1]) + hit.v * V(tri.n[2]) : s.ng;
             s.material = tri.material;
         } else if (id < scene_.QuadricBase()) {
             const auto& sp = scene_.spheres[id - scene_.SphereBase()];
@@ -210,7 +210,8 @@ image::Image RenderReference(const scene::Scene& scene, const RenderOptions& opt
         stats.raysByKind["refraction"] += c.refraction;
         stats.intersectionTests += c.tests;
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     stats.queryTimeS = seconds;
     stats.timeS["render"] = seconds;
     return img;

@@ -20,11 +20,11 @@ namespace rayclass::render {
 
 // Sums the device time of every launch per kernel name.
 class KernelTimer {
-public:
+  public:
     void Record(const std::string& kernel, const cl::Event& event);
     const std::map<std::string, double>& Seconds() const { return seconds_; }
 
-private:
+  private:
     std::map<std::string, double> seconds_;
 };
 
@@ -47,21 +47,33 @@ struct QueryResult {
     bool shaded = false;  // the query's kernels shaded every ray too (into ShadeBuffers)
 };
 
+// The host-side work a query does on a batch before its kernels can run (ray classification).
+// Prepare makes it, on a worker thread while the device works on the previous batch.
+struct PreparedBatch {
+    virtual ~PreparedBatch() = default;
+};
+
 // How the rays of a batch find their nearest hit and their occluders. The rays are on the
 // device already; hostRays is the same batch on the host, for queries that classify rays there.
 class RayQuery {
-public:
+  public:
     virtual ~RayQuery() = default;
     virtual std::string Name() const = 0;
-    // Whether Intersect needs hostRays filled (else it gets an empty span).
+    // Whether Prepare needs the batch's rays on the host.
     virtual bool NeedsHostRays() const { return false; }
-    // Host time spent so far (classification, building the batch arrays).
+    // Host work on a batch of rays (called in batch order, from one thread at a time, possibly
+    // concurrently with Intersect or Occluded of an earlier batch). nullptr: nothing to prepare.
+    virtual std::unique_ptr<PreparedBatch> Prepare(std::span<const RcRay> hostRays) {
+        (void)hostRays;
+        return nullptr;
+    }
+    // Host time spent so far (classification, building the batch arrays), summed over threads.
     virtual double HostSeconds() const { return 0.0; }
     // Nearest hit of rays[0, n) (RcRay) into hits (RcHit). Query styles whose kernels shade
     // the hits they find (vertex style) also write `shade` and say so.
-    virtual QueryResult Intersect(const cl::Buffer& rays, uint32_t n,
-                                  std::span<const RcRay> hostRays, const cl::Buffer& hits,
-                                  const ShadeBuffers& shade, KernelTimer& timer) = 0;
+    virtual QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
+                                  const cl::Buffer& hits, const ShadeBuffers& shade,
+                                  KernelTimer& timer) = 0;
     // blocked[i] = 1 when shadow ray i (RcShadowRay, live ones only) hits anything before its
     // light; returns the primitive tests done.
     virtual uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
@@ -76,11 +88,11 @@ std::unique_ptr<RayQuery> MakeBruteForceQuery(clrt::Context& ctx, const cl::Prog
 cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions = {});
 
 class ClRenderer {
-public:
+  public:
     ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options);
     image::Image Render(RenderStats& stats);
 
-private:
+  private:
     clrt::Context& ctx_;
     const scene::Scene& scene_;
     RenderOptions options_;

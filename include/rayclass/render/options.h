@@ -7,16 +7,16 @@
 namespace rayclass::render {
 
 struct RenderOptions {
-    uint32_t maxDepth = 6;     // deepest secondary ray spawned (eye rays have depth 0)
-    float minWeight = 1e-3f;   // adaptive depth control: weaker secondary rays are not spawned
-    bool aovs = false;         // fill depth, id and normal layers of the first hit
+    uint32_t maxDepth = 6;          // deepest secondary ray spawned (eye rays have depth 0)
+    float minWeight = 1e-3f;        // adaptive depth control: weaker secondary rays are not spawned
+    bool aovs = false;              // fill depth, id and normal layers of the first hit
     uint32_t batchRays = 1u << 20;  // rays per kernel launch (bounds device buffers)
     std::string device = "auto";    // OpenCL device: auto, cpu, gpu or an index
-    std::string accel = "classify";  // ray query: classify (ray classification) or brute
-    std::string kernel = "auto";     // classified query style: scalar, vertex, fragment, auto
-    std::string buildOptions;       // extra OpenCL build options
+    std::string accel = "classify";     // ray query: classify (ray classification) or brute
+    std::string kernel = "auto";        // classified query style: scalar, vertex, fragment, auto
+    std::string buildOptions;           // extra OpenCL build options
     std::string rayEncoding = "float";  // ray directions: float or polar16 (cl/encoding.cl)
-    bool progress = true;           // progress line on stderr for renders over a second
+    bool progress = true;               // progress line on stderr for renders over a second
 };
 
 }  // namespace rayclass::render
