@@ -150,8 +150,16 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
 }
 
 ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene,
-                       const RenderOptions& options)
-    : ctx_(ctx), scene_(scene), options_(options) {}
+                       const RenderOptions& options, EyeHitSource* eyeHits)
+    : ctx_(ctx), scene_(scene), options_(options), eyeHits_(eyeHits) {
+    if (options_.eyeRays != "kernel" && options_.eyeRays != "raster") {
+        throw Error("unknown eye-ray path '" + options_.eyeRays + "' (use raster or kernel)");
+    }
+    if (options_.eyeRays == "kernel") eyeHits_ = nullptr;
+    if (options_.eyeRays == "raster" && !eyeHits_) {
+        throw Error("eye rays 'raster' need a raster pass (no OpenGL context was made)");
+    }
+}
 
 image::Image ClRenderer::Render(RenderStats& stats) {
     const auto tStart = Clock::now();
@@ -212,6 +220,13 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     double hostSeconds = 0;
     std::vector<RcRay> current, next;
     const size_t nEye = size_t(width) * height;
+    // Generation 0's hits from another source (the raster pass), uploaded batch by batch below.
+    std::vector<RcHit> eyeHits;
+    if (eyeHits_) {
+        t0 = Clock::now();
+        eyeHits = eyeHits_->FindHits(scene_, basis, stats);
+        stats.timeS["eye_hits_" + eyeHits_->Name()] = SecondsSince(t0);
+    }
     auto lastProgress = Clock::now();
     bool printedProgress = false;
 
@@ -236,7 +251,14 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                                                     current.data() + first);
                 });
             }
-            stats.intersectionTests += query->Intersect(rays, n, hits, timer);
+            if (generation == 0 && eyeHits_) {
+                clrt::Check("clEnqueueWriteBuffer", [&] {
+                    ctx_.queue().enqueueWriteBuffer(hits, CL_FALSE, 0, n * sizeof(RcHit),
+                                                    eyeHits.data() + first);
+                });
+            } else {
+                stats.intersectionTests += query->Intersect(rays, n, hits, timer);
+            }
             clrt::Check("clSetKernelArg(rc_shade)", [&] {
                 int a = 0;
                 shadeKernel.setArg(a++, rays);

@@ -14,6 +14,8 @@ struct RenderOptions {
     std::string device = "auto";    // OpenCL device: auto, cpu, gpu or an index
     std::string buildOptions;       // extra OpenCL build options
     bool progress = true;           // progress line on stderr for renders over a second
+    std::string eyeRays = "kernel";  // first hits of eye rays: "kernel" (ray query) or "raster"
+    std::string hull = "auto";       // raster hulls of spheres/quadrics: sphere|box|billboard|auto
 };
 
 }  // namespace rayclass::render
