@@ -193,6 +193,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     const SceneBuffers sceneBuffers(ctx_, deviceScene, params);
     auto query = MakeBruteForceQuery(ctx_, program, sceneBuffers);
     stats.accel = query->Name();
+    stats.eyeRays = eyeHits_ ? eyeHits_->Name() : "kernel";
 
     const RcCamera cam = basis.ToDevice();
     const cl::Buffer camBuffer = UploadVector(ctx_, std::vector<RcCamera>{cam});
