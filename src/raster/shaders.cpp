@@ -68,6 +68,25 @@ void main() {
         return;
     }
     vec2 A = ToPixel(a), B = ToPixel(b), C = ToPixel(c);
+    // Plane (nearly) through the eye: rays almost parallel to it make the float test's determinant
+    // pure rounding noise, so the kernel can report "hits" anywhere along the plane's trace, far
+    // outside the triangle. Cover the whole trace line across the screen, as thick as the
+    // triangle's projection plus the margin.
+    vec3 n = cross(b - a, c - a);
+    float rmax = max(length(a), max(length(b), length(c)));
+    if (abs(dot(n, a)) < 1e-3 * length(n) * rmax && length(n.xy) > 1e-6 * length(n)) {
+        vec2 m = normalize(vec2(n.x, -n.y));  // the trace's normal in pixels (rows run down)
+        vec2 along = vec2(-m.y, m.x);
+        float reach = length(vec2(uSize)) + length(A - 0.5 * vec2(uSize));
+        float lo = min(0.0, min(dot(B - A, m), dot(C - A, m))) - uMargin;
+        float hi = max(0.0, max(dot(B - A, m), dot(C - A, m))) + uMargin;
+        EmitPixel(A - reach * along + lo * m);
+        EmitPixel(A + reach * along + lo * m);
+        EmitPixel(A - reach * along + hi * m);
+        EmitPixel(A + reach * along + hi * m);
+        EndPrimitive();
+        return;
+    }
     vec2 lo = min(A, min(B, C)) - uMargin, hi = max(A, max(B, C)) + uMargin;
     if (hi.x < 0.0 || hi.y < 0.0 || lo.x > float(uSize.x) || lo.y > float(uSize.y)) return;
     float area2 = Cross2(B - A, C - A);
