@@ -1,6 +1,7 @@
 #include <unistd.h>
 
 #include <charconv>
+#include <memory>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +15,7 @@
 #include "rayclass/clrt/context.h"
 #include "rayclass/core/error.h"
 #include "rayclass/image/image.h"
+#include "rayclass/raster/raster_pass.h"
 #include "rayclass/render/cl_renderer.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/reference.h"
@@ -44,6 +46,11 @@ options:
   --exposure E            PNG only: scale by 2^E before tone mapping (default 0)
   --batch-rays N          rays per kernel launch (default 1048576)
   --cl-options STRING     extra OpenCL build options (e.g. -cl-fast-relaxed-math)
+  --eye-rays P            first hits of the eye rays: raster (OpenGL hull projection, headless
+                          EGL) or kernel (the OpenCL ray query); default raster when an OpenGL
+                          context can be made, else kernel with a notice
+  --hull H                raster hulls of spheres and quadrics: sphere, box, billboard or auto
+                          (spheres by sphere, quadrics by box; default auto)
   -q, --quiet             no progress line
 )";
 
@@ -55,6 +62,7 @@ struct RenderArgs {
     bool reference = false;
     std::string statsFile;
     float exposure = 0.0f;
+    std::string eyeRays;  // empty: raster when a GL context can be made
     render::RenderOptions options;
 };
 
@@ -134,6 +142,14 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
             r.options.batchRays = ParseNumber<uint32_t>(a, value(), 64, 1u << 24);
         } else if (a == "--cl-options") {
             r.options.buildOptions = value();
+        } else if (a == "--eye-rays") {
+            r.eyeRays = value();
+            if (r.eyeRays != "raster" && r.eyeRays != "kernel") {
+                throw UsageError("--eye-rays expects raster or kernel, not '" + r.eyeRays + "'");
+            }
+        } else if (a == "--hull") {
+            r.options.hull = value();
+            raster::ParseHull(r.options.hull);  // throws UsageError on an unknown name
         } else if (a == "-q" || a == "--quiet") {
             r.options.progress = false;
         } else if (!a.empty() && a[0] == '-') {
@@ -220,7 +236,24 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
         img = render::RenderReference(scene, r.options, stats);
     } else {
         clrt::Context ctx(r.options.device);
-        render::ClRenderer renderer(ctx, scene, r.options);
+        render::RenderOptions options = r.options;
+        std::unique_ptr<raster::RasterEyeHits> eyeHits;
+        if (r.eyeRays != "kernel") {
+            std::string why;
+            raster::GlContext* gl = raster::GlContext::Shared(&why);
+            if (gl) {
+                raster::RasterOptions rasterOptions;
+                rasterOptions.hull = raster::ParseHull(options.hull);
+                eyeHits = std::make_unique<raster::RasterEyeHits>(*gl, rasterOptions);
+                options.eyeRays = "raster";
+            } else if (r.eyeRays == "raster") {
+                throw GlError(why);
+            } else {
+                err << "rayclass: no OpenGL context, eye rays by kernel (" << why << ")\n";
+                options.eyeRays = "kernel";
+            }
+        }
+        render::ClRenderer renderer(ctx, scene, options, eyeHits.get());
         img = renderer.Render(stats);
     }
     if (!r.aovs.count("depth")) img.depth.clear();

@@ -151,8 +151,17 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
                             options);
 }
 
-ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options)
-    : ctx_(ctx), scene_(scene), options_(options) {}
+ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene,
+                       const RenderOptions& options, EyeHitSource* eyeHits)
+    : ctx_(ctx), scene_(scene), options_(options), eyeHits_(eyeHits) {
+    if (options_.eyeRays != "kernel" && options_.eyeRays != "raster") {
+        throw Error("unknown eye-ray path '" + options_.eyeRays + "' (use raster or kernel)");
+    }
+    if (options_.eyeRays == "kernel") eyeHits_ = nullptr;
+    if (options_.eyeRays == "raster" && !eyeHits_) {
+        throw Error("eye rays 'raster' need a raster pass (no OpenGL context was made)");
+    }
+}
 
 image::Image ClRenderer::Render(RenderStats& stats) {
     const auto tStart = Clock::now();
@@ -196,6 +205,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         stats.timeS["classify_setup"] = SecondsSince(t0);
     }
     stats.accel = query->Name();
+    stats.eyeRays = eyeHits_ ? eyeHits_->Name() : "kernel";
 
     const RcCamera cam = basis.ToDevice();
     const cl::Buffer camBuffer = UploadVector(ctx_, std::vector<RcCamera>{cam});
@@ -238,6 +248,13 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     KernelTimer timer;
     double hostSeconds = 0;
     const size_t nEye = size_t(width) * height;
+    // Generation 0's hits from another source (the raster pass), uploaded batch by batch below.
+    std::vector<RcHit> eyeHits;
+    if (eyeHits_) {
+        t0 = Clock::now();
+        eyeHits = eyeHits_->FindHits(scene_, basis, stats);
+        stats.timeS["eye_hits_" + eyeHits_->Name()] = SecondsSince(t0);
+    }
     auto lastProgress = Clock::now();
     bool printedProgress = false;
 
@@ -260,7 +277,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         // device queries and shades batch k.
         clrt::Check("clFinish", [&] { q.finish(); });
         auto prepare = [&](size_t page) -> std::unique_ptr<PreparedBatch> {
-            if (!query->NeedsHostRays()) return nullptr;
+            if (!query->NeedsHostRays() || (generation == 0 && eyeHits_)) return nullptr;
             const size_t n = std::min(batch, nRays - page * batch);
             std::vector<RcRay> host(n);
             clrt::Check("clEnqueueReadBuffer", [&] {
@@ -278,7 +295,15 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                 nextPrepared = std::async(std::launch::async, prepare, page + 1);
             }
             const cl::Buffer& rays = pages[page];
-            const QueryResult found = query->Intersect(rays, n, prepared.get(), hits, shade, timer);
+            QueryResult found;
+            if (generation == 0 && eyeHits_) {
+                clrt::Check("clEnqueueWriteBuffer", [&] {
+                    q.enqueueWriteBuffer(hits, CL_FALSE, 0, n * sizeof(RcHit),
+                                         eyeHits.data() + first);
+                });
+            } else {
+                found = query->Intersect(rays, n, prepared.get(), hits, shade, timer);
+            }
             stats.intersectionTests += found.tests;
             if (!found.shaded) {
                 SetArgs(shadeKernel, rays, hits, n, sceneBuffers.triangles,

@@ -14,6 +14,7 @@ nlohmann::json RenderStats::ToJson() const {
     j["height"] = height;
     j["device"] = device;
     j["accel"] = accel;
+    j["eye_rays"] = eyeRays;
     j["primitives"] = nPrimitives;
     j["rays_total"] = RaysTotal();
     j["rays_by_kind"] = raysByKind;

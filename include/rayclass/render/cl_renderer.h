@@ -87,15 +87,30 @@ std::unique_ptr<RayQuery> MakeBruteForceQuery(clrt::Context& ctx, const cl::Prog
 // The program holding every kernel the renderer uses, with the options they need.
 cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions = {});
 
+// Supplies the nearest hits of generation 0 (the eye rays) in place of the ray query, e.g. the
+// OpenGL raster pass. FindHits returns one RcHit per pixel, row-major, row 0 at the top, for the
+// rays rc_generate_eye_rays makes from `camera`.
+class EyeHitSource {
+public:
+    virtual ~EyeHitSource() = default;
+    virtual std::string Name() const = 0;
+    virtual std::vector<RcHit> FindHits(const scene::Scene& scene, const CameraBasis& camera,
+                                        RenderStats& stats) = 0;
+};
+
 class ClRenderer {
   public:
-    ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options);
+    // With options.eyeRays == "raster", `eyeHits` (required then) answers generation 0; the eye
+    // rays themselves still come from the kernel.
+    ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
+               EyeHitSource* eyeHits = nullptr);
     image::Image Render(RenderStats& stats);
 
   private:
     clrt::Context& ctx_;
     const scene::Scene& scene_;
     RenderOptions options_;
+    EyeHitSource* eyeHits_;
 };
 
 }  // namespace rayclass::render

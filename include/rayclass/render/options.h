@@ -17,6 +17,8 @@ struct RenderOptions {
     std::string buildOptions;           // extra OpenCL build options
     std::string rayEncoding = "float";  // ray directions: float or polar16 (cl/encoding.cl)
     bool progress = true;               // progress line on stderr for renders over a second
+    std::string eyeRays = "kernel";     // first hits of eye rays: "kernel" (ray query) or "raster"
+    std::string hull = "auto";          // raster hulls of spheres/quadrics: sphere|box|billboard|auto
 };
 
 }  // namespace rayclass::render

@@ -19,6 +19,7 @@ struct RenderStats {
     uint32_t width = 0, height = 0;
     std::string device;
     std::string accel = "brute";
+    std::string eyeRays = "kernel";  // who found the eye rays' first hits: kernel or raster
     uint64_t nPrimitives = 0;
     std::map<std::string, uint64_t> raysByKind{
         {"eye", 0}, {"shadow", 0}, {"reflection", 0}, {"refraction", 0}};

@@ -1,0 +1,128 @@
+// The eye rays' first hits by rasterization (Lessig 2004, sec. 4.2; design notes sec. 4): every
+// primitive is drawn as a hull that covers every pixel whose eye ray can hit it, and the fragment
+// shader tests that pixel's eye ray exactly against the primitive (the formulas of
+// geometry/intersect.h and cl/intersect.cl, in float), writes the hit distance as depth and keeps,
+// through the depth test, the nearest hit per pixel.
+//
+// - Eye rays: the formula of RcCamera (cl/camera.cl) per pixel, in the fragment shader.
+// - Triangles are drawn themselves, inflated in screen space (a geometry shader) by 0.75 pixel so
+//   that every pixel centre within half a pixel diagonal of the projection is covered: an edge-on
+//   triangle becomes its inflated bounding rectangle.
+// - Spheres and quadrics are drawn as hulls: a screen-aligned square around the projection of the
+//   bounding sphere (what a GL point of computed size covers), the front faces of the bounding
+//   box grown by a pixel footprint (back faces culled, so each ray is tested once), or a
+//   screen-aligned billboard over the box's angular extents. A hull that reaches within `zNear` of
+//   the eye plane covers the whole screen (the exact test decides).
+// - Depth = world distance times DepthScale(): by default the largest power of two 2^-k that keeps
+//   every distance from the eye to the scene bounds below 1, so a float depth buffer holds t * 2^-k
+//   exactly and the depth test compares hit distances exactly; equal distances keep the primitive
+//   drawn first, the lower id, as every query path does.
+// - Ids are full 32-bit global primitive ids (triangles, spheres, quadrics; RC_NO_HIT on a miss).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "rayclass/raster/gl.h"
+#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/device_scene.h"
+#include "rayclass/scene/scene.h"
+#include "rc_types.h"
+
+namespace rayclass::raster {
+
+enum class Hull { Sphere, Box, Billboard, Auto };
+
+// "sphere", "box", "billboard", "auto"; throws rayclass::UsageError on anything else.
+Hull ParseHull(const std::string& name);
+const char* HullName(Hull hull);
+
+struct RasterOptions {
+    // Hull of spheres and quadrics. Auto: spheres by their bounding sphere (the sphere itself),
+    // quadrics by their clip box.
+    Hull hull = Hull::Auto;
+    // Depth buffer: 32 (float, default), 24 or 16 (fixed point; for precision studies).
+    int depthBits = 32;
+    // Distance-to-depth factor; 0 derives it from the scene bounds and the camera (see above).
+    // Hits farther than 1 / depthScale are lost (depth clamps to 1, the cleared value).
+    double depthScale = 0;
+    // Count fragment-shader invocations and exact hits with atomic counters (costs time).
+    bool countFragments = false;
+    // Front-to-back slabs (1 = none): primitives sorted by their nearest possible distance and drawn
+    // in `slabs` groups; between groups the depth is copied to a texture and a fragment whose
+    // hull cannot come nearer than the current hit skips its exact test.
+    uint32_t slabs = 1;
+};
+
+struct RasterStats {
+    double uploadS = 0;    // camera uniforms, clearing
+    double drawS = 0;      // every draw call until glFinish
+    double readbackS = 0;  // glReadPixels of ids, distances and barycentrics
+    double totalS = 0;     // the whole Render call
+    uint64_t fragments = 0;  // fragment-shader invocations (countFragments)
+    uint64_t tested = 0;     // fragments that ran the exact test (not skipped by slabs)
+    uint64_t exactHits = 0;  // fragments whose exact test hit
+    double depthScale = 0;
+};
+
+class RasterPass {
+public:
+    // Uploads the scene's primitives to `gl`'s context (current on this thread).
+    RasterPass(GlContext& gl, const scene::Scene& scene, const RasterOptions& options = {});
+    ~RasterPass();
+    RasterPass(const RasterPass&) = delete;
+    RasterPass& operator=(const RasterPass&) = delete;
+
+    // One frame seen from `camera` (its width x height): the nearest hit of every pixel's eye ray,
+    // row-major with row 0 at the top, as the eye-ray query would return it: t along the unit
+    // direction, the global primitive id (RC_NO_HIT and t = +inf on a miss), barycentrics for
+    // triangles (0 otherwise).
+    std::vector<RcHit> Render(const RcCamera& camera, RasterStats* stats = nullptr);
+
+    // The factor of the last Render.
+    double DepthScale() const { return depthScale_; }
+    const RasterOptions& Options() const { return options_; }
+
+private:
+    enum Kind { kTriangles = 0, kSpheres = 1, kQuadrics = 2 };
+    GLuint Program(Kind kind, Hull hull, bool slabPass);
+    void EnsureFramebuffer(uint32_t width, uint32_t height);
+    void PrepareSlabs(const RcCamera& camera);
+
+    GlContext& gl_;
+    RasterOptions options_;
+    uint32_t count_[3] = {0, 0, 0};
+    uint32_t base_[3] = {0, 0, 0};
+    Bounds3f bounds_;
+    GlBuffer primitives_[3];
+    GlBuffer slabOrder_[3];
+    GlBuffer counters_;
+    GlVertexArray vao_;
+    GlFramebuffer fbo_;
+    GlTexture idTex_, distTex_, uvTex_, depthTex_, prevDepthTex_;
+    GlFramebuffer copyFbo_;
+    uint32_t width_ = 0, height_ = 0;
+    double depthScale_ = 0;
+    std::map<std::tuple<int, int, bool>, GlProgram> programs_;
+    // Slabs: per kind, the draw ranges of each slab in the sorted order.
+    std::vector<std::vector<std::pair<uint32_t, uint32_t>>> slabRanges_;
+    std::vector<scene::Sphere> sphereHulls_[3];  // per primitive: bounding sphere (slab sorting)
+};
+
+// The renderer's generation-0 hook: hits of the eye rays from a RasterPass.
+class RasterEyeHits final : public render::EyeHitSource {
+public:
+    RasterEyeHits(GlContext& gl, const RasterOptions& options) : gl_(gl), options_(options) {}
+    std::string Name() const override { return "raster"; }
+    std::vector<RcHit> FindHits(const scene::Scene& scene, const render::CameraBasis& camera,
+                                render::RenderStats& stats) override;
+
+private:
+    GlContext& gl_;
+    RasterOptions options_;
+};
+
+}  // namespace rayclass::raster

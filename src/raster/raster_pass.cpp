@@ -1,0 +1,360 @@
+#include "rayclass/raster/raster_pass.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "rayclass/core/error.h"
+#include "shaders.h"
+
+namespace rayclass::raster {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+constexpr float kMarginPixels = 0.75f;  // > half a pixel diagonal (0.7071)
+
+template <typename T>
+GlBuffer UploadStorage(const std::vector<T>& data) {
+    GLuint name = 0;
+    glCreateBuffers(1, &name);
+    GlBuffer buffer(name);
+    // A zero-sized store is legal, but binding one is not: keep at least 16 bytes.
+    const size_t bytes = std::max<size_t>(16, data.size() * sizeof(T));
+    std::vector<char> zeros;
+    const void* src = data.data();
+    if (data.empty()) {
+        zeros.assign(bytes, 0);
+        src = zeros.data();
+    }
+    glNamedBufferStorage(buffer.get(), GLsizeiptr(bytes), src, 0);
+    CheckGl("uploading primitives (glNamedBufferStorage)");
+    return buffer;
+}
+
+GlTexture MakeTexture(GLenum format, uint32_t width, uint32_t height) {
+    GLuint name = 0;
+    glCreateTextures(GL_TEXTURE_2D, 1, &name);
+    GlTexture tex(name);
+    glTextureStorage2D(tex.get(), 1, format, GLsizei(width), GLsizei(height));
+    glTextureParameteri(tex.get(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(tex.get(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    CheckGl("creating a framebuffer texture");
+    return tex;
+}
+
+}  // namespace
+
+Hull ParseHull(const std::string& name) {
+    if (name == "sphere") return Hull::Sphere;
+    if (name == "box") return Hull::Box;
+    if (name == "billboard") return Hull::Billboard;
+    if (name == "auto") return Hull::Auto;
+    throw UsageError("unknown hull '" + name + "' (use sphere, box, billboard or auto)");
+}
+
+const char* HullName(Hull hull) {
+    switch (hull) {
+        case Hull::Sphere: return "sphere";
+        case Hull::Box: return "box";
+        case Hull::Billboard: return "billboard";
+        default: return "auto";
+    }
+}
+
+RasterPass::RasterPass(GlContext& gl, const scene::Scene& scene, const RasterOptions& options)
+    : gl_(gl), options_(options) {
+    if (options_.depthBits != 16 && options_.depthBits != 24 && options_.depthBits != 32) {
+        throw Error("raster pass: depth buffer of " + std::to_string(options_.depthBits) +
+                    " bits (use 16, 24 or 32)");
+    }
+    options_.slabs = std::max<uint32_t>(1, options_.slabs);
+    gl_.MakeCurrent();
+    const render::DeviceScene device(scene);
+    count_[kTriangles] = uint32_t(device.triangles.size());
+    count_[kSpheres] = uint32_t(device.spheres.size());
+    count_[kQuadrics] = uint32_t(device.quadrics.size());
+    base_[kTriangles] = 0;
+    base_[kSpheres] = scene.SphereBase();
+    base_[kQuadrics] = scene.QuadricBase();
+    bounds_ = scene.Bounds();
+    primitives_[kTriangles] = UploadStorage(device.triangles);
+    primitives_[kSpheres] = UploadStorage(device.spheres);
+    primitives_[kQuadrics] = UploadStorage(device.quadrics);
+    if (options_.slabs > 1) {
+        // Bounding spheres for sorting primitives front to back.
+        for (const auto& t : scene.triangles) {
+            const glm::vec3 c = (t.p[0] + t.p[1] + t.p[2]) / 3.0f;
+            float r = 0;
+            for (const auto& p : t.p) r = std::max(r, glm::length(p - c));
+            sphereHulls_[kTriangles].push_back({c, r});
+        }
+        sphereHulls_[kSpheres] = scene.spheres;
+        for (const auto& q : scene.quadrics) {
+            sphereHulls_[kQuadrics].push_back(
+                {(q.boxMin + q.boxMax) * 0.5f, 0.5f * glm::length(q.boxMax - q.boxMin)});
+        }
+    }
+    GLuint name = 0;
+    glCreateVertexArrays(1, &name);
+    vao_ = GlVertexArray(name);
+    if (options_.countFragments) {
+        glCreateBuffers(1, &name);
+        counters_ = GlBuffer(name);
+        glNamedBufferStorage(counters_.get(), 3 * sizeof(GLuint), nullptr,
+                             GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
+    }
+    CheckGl("creating the raster pass");
+}
+
+RasterPass::~RasterPass() { gl_.MakeCurrent(); }
+
+GLuint RasterPass::Program(Kind kind, Hull hull, bool slabPass) {
+    const auto key = std::make_tuple(int(kind), kind == kTriangles ? 0 : int(hull), slabPass);
+    auto it = programs_.find(key);
+    if (it != programs_.end()) return it->second.get();
+    const int hullIndex = hull == Hull::Sphere ? 0 : hull == Hull::Box ? 1 : 2;
+    static const char* kKindNames[] = {"triangles", "spheres", "quadrics"};
+    const std::string name = std::string(kKindNames[kind]) +
+                             (kind == kTriangles ? "" : std::string("/") + HullName(hull));
+    GlProgram program =
+        LinkProgram(name, shaders::Vertex(kind, slabPass), shaders::Geometry(kind, hullIndex),
+                    shaders::Fragment(kind, options_.countFragments, slabPass));
+    return programs_.emplace(key, std::move(program)).first->second.get();
+}
+
+void RasterPass::EnsureFramebuffer(uint32_t width, uint32_t height) {
+    if (fbo_ && width == width_ && height == height_) return;
+    width_ = width;
+    height_ = height;
+    idTex_ = MakeTexture(GL_R32UI, width, height);
+    distTex_ = MakeTexture(GL_R32F, width, height);
+    uvTex_ = MakeTexture(GL_RG32F, width, height);
+    const GLenum depthFormat = options_.depthBits == 32   ? GL_DEPTH_COMPONENT32F
+                               : options_.depthBits == 24 ? GL_DEPTH_COMPONENT24
+                                                          : GL_DEPTH_COMPONENT16;
+    depthTex_ = MakeTexture(depthFormat, width, height);
+    GLuint name = 0;
+    glCreateFramebuffers(1, &name);
+    fbo_ = GlFramebuffer(name);
+    glNamedFramebufferTexture(fbo_.get(), GL_COLOR_ATTACHMENT0, idTex_.get(), 0);
+    glNamedFramebufferTexture(fbo_.get(), GL_COLOR_ATTACHMENT1, distTex_.get(), 0);
+    glNamedFramebufferTexture(fbo_.get(), GL_COLOR_ATTACHMENT2, uvTex_.get(), 0);
+    glNamedFramebufferTexture(fbo_.get(), GL_DEPTH_ATTACHMENT, depthTex_.get(), 0);
+    const GLenum buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glNamedFramebufferDrawBuffers(fbo_.get(), 3, buffers);
+    const GLenum status = glCheckNamedFramebufferStatus(fbo_.get(), GL_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE) {
+        throw GlError("OpenGL: raster framebuffer " + std::to_string(width) + "x" +
+                      std::to_string(height) + " is incomplete (status 0x" +
+                      [&] {
+                          char buf[16];
+                          std::snprintf(buf, sizeof buf, "%x", status);
+                          return std::string(buf);
+                      }() +
+                      ")");
+    }
+    if (options_.slabs > 1) prevDepthTex_ = MakeTexture(depthFormat, width, height);
+    CheckGl("creating the raster framebuffer");
+}
+
+void RasterPass::PrepareSlabs(const RcCamera& camera) {
+    // Every primitive by the nearest distance its bounding sphere allows, split into groups of
+    // equal size; inside a group each kind keeps id order (ties between equal distances then go
+    // to the lower id, as in the other query paths, unless they straddle two groups).
+    const glm::vec3 eye(camera.position.x, camera.position.y, camera.position.z);
+    struct Entry {
+        float near;
+        uint8_t kind;
+        uint32_t local;
+    };
+    std::vector<Entry> all;
+    for (int k = 0; k < 3; ++k) {
+        for (uint32_t i = 0; i < count_[k]; ++i) {
+            const auto& s = sphereHulls_[k][i];
+            all.push_back({std::max(0.0f, glm::length(s.center - eye) - s.radius), uint8_t(k), i});
+        }
+    }
+    std::stable_sort(all.begin(), all.end(),
+                     [](const Entry& a, const Entry& b) { return a.near < b.near; });
+    const uint32_t slabs = options_.slabs;
+    slabRanges_.assign(slabs, std::vector<std::pair<uint32_t, uint32_t>>(3, {0, 0}));
+    std::vector<uint32_t> order[3];
+    for (uint32_t s = 0; s < slabs; ++s) {
+        const size_t first = all.size() * s / slabs, last = all.size() * (s + 1) / slabs;
+        std::vector<uint32_t> members[3];
+        for (size_t e = first; e < last; ++e) members[all[e].kind].push_back(all[e].local);
+        for (int k = 0; k < 3; ++k) {
+            std::sort(members[k].begin(), members[k].end());
+            slabRanges_[s][k] = {uint32_t(order[k].size()), uint32_t(members[k].size())};
+            order[k].insert(order[k].end(), members[k].begin(), members[k].end());
+        }
+    }
+    for (int k = 0; k < 3; ++k) slabOrder_[k] = UploadStorage(order[k]);
+}
+
+std::vector<RcHit> RasterPass::Render(const RcCamera& camera, RasterStats* stats) {
+    const auto tStart = Clock::now();
+    gl_.MakeCurrent();
+    const uint32_t width = camera.width, height = camera.height;
+    EnsureFramebuffer(width, height);
+    const glm::dvec3 eye(camera.position.x, camera.position.y, camera.position.z);
+
+    // Depth scale: 2^-k with every corner of the scene bounds nearer than 2^k (with a margin for
+    // float distances a little beyond the bounds).
+    double maxDist = 0;
+    if (!bounds_.Empty()) {
+        for (int c = 0; c < 8; ++c) {
+            const glm::dvec3 p((c & 1) ? bounds_.hi.x : bounds_.lo.x,
+                               (c & 2) ? bounds_.hi.y : bounds_.lo.y,
+                               (c & 4) ? bounds_.hi.z : bounds_.lo.z);
+            maxDist = std::max(maxDist, glm::length(p - eye));
+        }
+    }
+    if (options_.depthScale > 0) {
+        depthScale_ = options_.depthScale;
+    } else {
+        int k = 0;
+        std::frexp(std::max(maxDist * 1.001, 1e-30), &k);  // maxDist * 1.001 < 2^k
+        depthScale_ = std::ldexp(1.0, -k);
+    }
+    const double diagonal = bounds_.Empty() ? 0.0 : double(bounds_.Diagonal());
+    const float zNear = float(std::max(1e-4 * std::max(diagonal, maxDist), 1e-12));
+    if (options_.slabs > 1) PrepareSlabs(camera);
+
+    const bool slabPass = options_.slabs > 1;
+    const Hull hulls[3] = {
+        Hull::Sphere,
+        options_.hull == Hull::Auto ? Hull::Sphere : options_.hull,
+        options_.hull == Hull::Auto ? Hull::Box : options_.hull,
+    };
+    GLuint programs[3];
+    for (int k = 0; k < 3; ++k) {
+        programs[k] = count_[k] ? Program(Kind(k), hulls[k], slabPass) : 0;
+        const GLuint p = programs[k];
+        if (!p) continue;
+        auto loc = [&](const char* n) { return glGetUniformLocation(p, n); };
+        glProgramUniform3f(p, loc("uEye"), camera.position.x, camera.position.y, camera.position.z);
+        glProgramUniform3f(p, loc("uForward"), camera.forward.x, camera.forward.y, camera.forward.z);
+        glProgramUniform3f(p, loc("uRight"), camera.right.x, camera.right.y, camera.right.z);
+        glProgramUniform3f(p, loc("uUp"), camera.up.x, camera.up.y, camera.up.z);
+        glProgramUniform2f(p, loc("uTanHalfFov"), camera.tanHalfFovX, camera.tanHalfFovY);
+        glProgramUniform2ui(p, loc("uSize"), width, height);
+        glProgramUniform1f(p, loc("uDepthScale"), float(depthScale_));
+        glProgramUniform1f(p, loc("uZNear"), zNear);
+        glProgramUniform1f(p, loc("uMargin"), kMarginPixels);
+        glProgramUniform1ui(p, loc("uBase"), base_[k]);
+        if (slabPass) glProgramUniform1i(p, loc("uPrevDepth"), 0);
+    }
+    CheckGl("setting the camera uniforms");
+
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+    glViewport(0, 0, GLsizei(width), GLsizei(height));
+    glDisable(GL_CULL_FACE);  // the box hull culls its back faces itself
+    glDisable(GL_BLEND);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    const GLuint missId[4] = {RC_NO_HIT, 0, 0, 0};
+    const GLfloat missDist[4] = {std::numeric_limits<float>::infinity(), 0, 0, 0};
+    const GLfloat zeroUV[4] = {0, 0, 0, 0};
+    const GLfloat farDepth = 1.0f;
+    glClearBufferuiv(GL_COLOR, 0, missId);
+    glClearBufferfv(GL_COLOR, 1, missDist);
+    glClearBufferfv(GL_COLOR, 2, zeroUV);
+    glClearBufferfv(GL_DEPTH, 0, &farDepth);
+    if (options_.countFragments) {
+        const GLuint zeros[3] = {0, 0, 0};
+        glNamedBufferSubData(counters_.get(), 0, sizeof zeros, zeros);
+        glBindBufferBase(GL_ATOMIC_COUNTER_BUFFER, 0, counters_.get());
+    }
+    glBindVertexArray(vao_.get());
+    glFinish();
+    CheckGl("clearing the raster framebuffer");
+    const auto tDraw = Clock::now();
+    const double uploadS = SecondsSince(tStart);
+
+    const uint32_t nSlabs = slabPass ? options_.slabs : 1;
+    for (uint32_t s = 0; s < nSlabs; ++s) {
+        if (slabPass) {
+            // The nearest hits so far, for the fragment shaders' early skip.
+            glCopyImageSubData(depthTex_.get(), GL_TEXTURE_2D, 0, 0, 0, 0, prevDepthTex_.get(),
+                               GL_TEXTURE_2D, 0, 0, 0, 0, GLsizei(width), GLsizei(height), 1);
+            glBindTextureUnit(0, prevDepthTex_.get());
+        }
+        for (int k = 0; k < 3; ++k) {
+            if (!programs[k]) continue;
+            uint32_t first = 0, n = count_[k];
+            if (slabPass) {
+                std::tie(first, n) = slabRanges_[s][k];
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, slabOrder_[k].get());
+            }
+            if (n == 0) continue;
+            glUseProgram(programs[k]);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, primitives_[k].get());
+            glDrawArrays(GL_POINTS, GLint(first), GLsizei(n));
+        }
+    }
+    glFinish();
+    CheckGl("drawing the raster pass");
+    const double drawS = SecondsSince(tDraw);
+
+    const auto tRead = Clock::now();
+    const size_t nPixels = size_t(width) * height;
+    std::vector<GLuint> ids(nPixels);
+    std::vector<GLfloat> dist(nPixels);
+    std::vector<GLfloat> uv(2 * nPixels);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(0, 0, GLsizei(width), GLsizei(height), GL_RED_INTEGER, GL_UNSIGNED_INT, ids.data());
+    glReadBuffer(GL_COLOR_ATTACHMENT1);
+    glReadPixels(0, 0, GLsizei(width), GLsizei(height), GL_RED, GL_FLOAT, dist.data());
+    glReadBuffer(GL_COLOR_ATTACHMENT2);
+    glReadPixels(0, 0, GLsizei(width), GLsizei(height), GL_RG, GL_FLOAT, uv.data());
+    CheckGl("reading back the raster framebuffer");
+    std::vector<RcHit> hits(nPixels);
+    for (size_t i = 0; i < nPixels; ++i) {
+        hits[i] = {dist[i], ids[i], uv[2 * i], uv[2 * i + 1]};
+    }
+    const double readbackS = SecondsSince(tRead);
+
+    if (stats) {
+        stats->uploadS = uploadS;
+        stats->drawS = drawS;
+        stats->readbackS = readbackS;
+        stats->depthScale = depthScale_;
+        if (options_.countFragments) {
+            GLuint counts[3] = {0, 0, 0};
+            glGetNamedBufferSubData(counters_.get(), 0, sizeof counts, counts);
+            stats->fragments = counts[0];
+            stats->tested = counts[1];
+            stats->exactHits = counts[2];
+        }
+        stats->totalS = SecondsSince(tStart);
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    return hits;
+}
+
+std::vector<RcHit> RasterEyeHits::FindHits(const scene::Scene& scene,
+                                           const render::CameraBasis& camera,
+                                           render::RenderStats& stats) {
+    const auto t0 = Clock::now();
+    RasterPass pass(gl_, scene, options_);
+    stats.timeS["raster_setup"] = SecondsSince(t0);
+    RasterStats rs;
+    std::vector<RcHit> hits = pass.Render(camera.ToDevice(), &rs);
+    stats.timeS["raster_draw"] = rs.drawS;
+    stats.timeS["raster_readback"] = rs.readbackS;
+    stats.timeS["raster_total"] = rs.totalS;
+    return hits;
+}
+
+}  // namespace rayclass::raster
