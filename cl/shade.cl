@@ -110,9 +110,14 @@ inline void rc_shade_light(uint i, uint l, const RcRay* ray, const RcSurface* s,
         shadowRays[slot].contribution = (float4)(0.0f);
         return;
     }
-    const float3 r = 2.0f * cosl * s->ns - ldir;
-    const float cosb = fmax(dot(r, -d), 0.0f);
-    const float3 brdf = m->kd.xyz * cosl + m->ks.xyz * pow(cosb, m->shininess);
+    const float3 ks = m->ks.xyz;
+    float3 brdf = m->kd.xyz * cosl;
+    /* pow is the costliest call of shading on a CPU device: skip it for matte surfaces. */
+    if (fmax(ks.x, fmax(ks.y, ks.z)) > 0.0f) {
+        const float3 r = 2.0f * cosl * s->ns - ldir;
+        const float cosb = fmax(dot(r, -d), 0.0f);
+        brdf += ks * pow(cosb, m->shininess);
+    }
     const float3 c = ray->weight.xyz * lights[l].intensity.xyz / dist2 * brdf;
     if (fmax(c.x, fmax(c.y, c.z)) <= 0.0f) {
         shadowRays[slot].contribution = (float4)(0.0f);

@@ -68,9 +68,12 @@ class Tracer {
             const V ldir = toLight / std::sqrt(dist2);
             const double cosl = glm::dot(s.ns, ldir);
             if (cosl <= 0.0 || glm::dot(s.ng, ldir) <= 0.0) continue;
-            const V r = 2.0 * cosl * s.ns - ldir;
-            const double cosb = std::max(glm::dot(r, -ray.d), 0.0);
-            const V brdf = V(m.kd) * cosl + V(m.ks) * std::pow(cosb, double(m.shininess));
+            V brdf = V(m.kd) * cosl;
+            if (MaxComponent(V(m.ks)) > 0.0) {
+                const V r = 2.0 * cosl * s.ns - ldir;
+                const double cosb = std::max(glm::dot(r, -ray.d), 0.0);
+                brdf += V(m.ks) * std::pow(cosb, double(m.shininess));
+            }
             const V c = weight * V(light.intensity) / dist2 * brdf;
             if (MaxComponent(c) <= 0.0) continue;
             const V toLightFromOrigin = V(light.position) - above;
