@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <mutex>
+#include <numeric>
 
 #include "rayclass/classify/hierarchy.h"
 #include "rayclass/core/error.h"
@@ -204,15 +205,32 @@ class ClassifiedQuery final : public RayQuery {
             Launch(ctx_, k, nSlots, timer);
             return {SumTests(testsBuf, nSlots), false};
         }
-        // Vertex-style leaves: their rays as slots, their candidates as blocks of 16.
-        if (!cb.vertexLeaves.empty() || shadow) {
+        // Vertex-style leaves: their rays as slots, their candidates as blocks of 16. Shadow rays
+        // take the vertex style whatever the setting: any-hit queries end at the first hit,
+        // which lockstep packets cannot exploit.
+        std::span<const uint32_t> vertexLeaves = cb.vertexLeaves;
+        if (shadow) {
+            allLeaves_.resize(cb.batch.leaves.size());
+            std::iota(allLeaves_.begin(), allLeaves_.end(), 0u);
+            vertexLeaves = allLeaves_;
+        }
+        // Incoherent rays can have long lists in many leaves: launch the leaves in chunks whose
+        // blocks fit one device allocation.
+        const size_t maxBlocks =
+            std::min<size_t>(ctx_.info().maxAllocBytes, size_t(256) << 20) /
+            sizeof(RcTriangleBlock16);
+        for (size_t next = 0; next < vertexLeaves.size();) {
+            const auto t1 = Clock::now();
             vertexSlots_.clear();
             vertexRayLeaf_.clear();
             blockLeaf_.clear();
             blockFirst_.clear();
             leafFirstBlock_.assign(cb.batch.leaves.size(), 0);
-            auto addVertexLeaf = [&](uint32_t l) {
+            for (; next < vertexLeaves.size(); ++next) {
+                const uint32_t l = vertexLeaves[next];
                 const RcLeaf& leaf = cb.batch.leaves[l];
+                const size_t leafBlocks = (leaf.candCount + 15) / 16;
+                if (!blockLeaf_.empty() && blockLeaf_.size() + leafBlocks > maxBlocks) break;
                 leafFirstBlock_[l] = uint32_t(blockLeaf_.size());
                 for (uint32_t c = 0; c < leaf.candCount; c += 16) {
                     blockLeaf_.push_back(l);
@@ -222,13 +240,6 @@ class ClassifiedQuery final : public RayQuery {
                     vertexSlots_.push_back(cb.batch.rayIndex[leaf.rayBegin + r]);
                     vertexRayLeaf_.push_back(l);
                 }
-            };
-            // Shadow rays take the vertex style whatever the setting: any-hit queries end at
-            // the first hit, which lockstep packets cannot exploit.
-            if (shadow) {
-                for (uint32_t l = 0; l < cb.batch.leaves.size(); ++l) addVertexLeaf(l);
-            } else {
-                for (uint32_t l : cb.vertexLeaves) addVertexLeaf(l);
             }
             const uint32_t nBlocks = uint32_t(blockLeaf_.size());
             const uint32_t nSlots = uint32_t(vertexSlots_.size());
@@ -254,7 +265,7 @@ class ClassifiedQuery final : public RayQuery {
                         shade->radiance, shade->normals, shade->shadow, shade->secondary,
                         shade->spawned);
             }
-            AddHostSeconds(Seconds(t0));
+            AddHostSeconds(Seconds(t1));
             Launch(ctx_, gather_, nBlocks, timer);
             Launch(ctx_, k, nSlots, timer);
             tests += SumTests(testsBuf, nSlots);
@@ -332,7 +343,7 @@ class ClassifiedQuery final : public RayQuery {
     cl::Kernel queryScalar_, occludedScalar_, gather_, queryVertexShade_, occludedVertex_,
         queryFragment_, shadeIds_, shadeLights_;
     ClassifiedBatch shadowBatch_;
-    std::vector<uint32_t> live_, vertexSlots_, vertexRayLeaf_, blockLeaf_, blockFirst_,
+    std::vector<uint32_t> live_, allLeaves_, vertexSlots_, vertexRayLeaf_, blockLeaf_, blockFirst_,
         leafFirstBlock_, packetLeaf_, packetFirst_, testsHost_, unshaded_;
     GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,
         blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_, packetFirstBuf_,
