@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "rayclass/scene/scene.h"
 
@@ -64,5 +65,15 @@ struct Params {
     // Defaults for `scene`: the padding from its diagonal.
     static Params ForScene(const scene::Scene& scene);
 };
+
+// Sets one parameter by its command-line name (`--classify NAME=VALUE`):
+//   min-rays N, min-candidates N, splits-per-list N (N >= 1), split midpoint|median,
+//   min-origin-fraction F, min-dir-fraction F (0 <= F <= 1), dir-weight W (W > 0).
+// Throws rayclass::UsageError naming the valid names or values when `name` is unknown or `value`
+// does not parse completely or is out of range.
+void SetParam(Params& params, const std::string& name, const std::string& value);
+
+// The names SetParam accepts, comma-separated, for help texts.
+const char* ParamNames();
 
 }  // namespace rayclass::classify
