@@ -80,9 +80,34 @@ std::vector<Ray> MirrorRays(const scene::Scene& scene, std::span<const Ray> rays
     return out;
 }
 
+std::vector<Ray> ShadowRays(std::span<const Ray> rays, std::span<const geometry::Hit<float>> hits,
+                            const glm::vec3& light, float tMin) {
+    std::vector<Ray> out;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        if (!hits[i].Valid()) continue;
+        const Ray& r = rays[i];
+        const glm::vec3 p = r.origin + hits[i].t * r.direction;
+        const glm::vec3 toLight = light - p;
+        const float dist = glm::length(toLight);
+        if (!(dist > 0.0f)) continue;
+        Ray s;
+        s.origin = p;
+        s.direction = toLight / dist;
+        s.tMin = tMin;
+        s.tMax = dist;
+        out.push_back(s);
+    }
+    return out;
+}
+
+glm::vec3 AnchorLight(const scene::Scene& scene, float f) {
+    const Bounds3f box = scene.Bounds();
+    return box.Center() + glm::vec3(0.0f, f * box.Size().y, 0.0f);
+}
+
 ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
                            const Params& params, int repeats,
-                           std::span<geometry::Hit<float>> hits) {
+                           std::span<geometry::Hit<float>> hits, bool anyHit) {
     ClassifyStats s;
     s.nRays = uint32_t(rays.size());
     s.bruteForceTests = scene.PrimitiveCount();
@@ -123,7 +148,7 @@ ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
         hits = own;
     }
     const auto q = Clock::now();
-    const uint64_t tests = QueryHost(scene, batch, rays, hits);
+    const uint64_t tests = QueryHost(scene, batch, rays, hits, anyHit);
     s.queryNsPerRay = 1e9 * Seconds(q, Clock::now()) / n;
     s.testsPerRay = double(tests) / n;
 

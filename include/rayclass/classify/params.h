@@ -36,7 +36,7 @@ struct Params {
     // lists) + R * rayMoveCost.
     //
     // Per-test costs in ns on one core of these 2-vCPU Xeon (Sapphire Rapids) machines, Release
-    // build, measured 2026-11-22 by bench/intersect_bench (scalar float routines of
+    // build, measured 2026-11-22 by bench/classify/intersect_bench (scalar float routines of
     // geometry/intersect.h through IntersectPrimitive, one ray against 4096 random primitives):
     //   triangle 13.9 ns, sphere 5.2 ns, quadric 12.4 ns; list filter 0.45 ns per box (AVX-512).
     // The ray-move cost, about 1 ns per ray and level, is classify_bench's partition time over
