@@ -302,10 +302,15 @@ void Hierarchy::Convert(std::span<const Ray> rays, uint32_t firstId, uint32_t* n
     float* c[kCoords];
     for (int k = 0; k < kCoords; ++k) c[k] = coord_[0][k].data();
     uint32_t* ids = id_[0].data();
+    // Where each face's X leaves the scene box: ends beyond it are cut there, so the rays that
+    // leave the box share one end, which then stays a constant that partitions do not move.
+    float faceEnd[kFaceCount];
+    for (int f = 0; f < kFaceCount; ++f) faceEnd[f] = BoxInFace(f, sceneBox_).hi[0];
     // A ray that ToRay5 maps: written at its face's next position.
     auto put = [&](const Ray5& r, uint32_t id) {
         const uint32_t at = next[r.face]++;
-        const float p[kCoords] = {r.p[0], r.p[1], r.p[2], r.p[3], r.p[4], r.p[0] + r.reach};
+        const float p[kCoords] = {r.p[0], r.p[1], r.p[2], r.p[3], r.p[4],
+                                  std::min(r.p[0] + r.reach, faceEnd[r.face])};
         for (int k = 0; k < kCoords; ++k) c[k][at] = p[k];
         ids[at] = id;
         GrowBounds(faceBounds[r.face], p);
@@ -383,7 +388,10 @@ void Hierarchy::Convert(std::span<const Ray> rays, uint32_t firstId, uint32_t* n
         const __m512 u = _mm512_mul_ps(db, inv);
         const __m512 v = _mm512_mul_ps(dc, inv);
         const __m512 reach = Min16(_mm512_mul_ps(_mm512_sub_ps(tmax, tmin), da), fmax);
-        const __m512 end = _mm512_add_ps(x, reach);
+        const __m512 hiA = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, bhi[2], bhi[1]), bhi[0]);
+        const __m512 loA = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, blo[2], blo[1]), blo[0]);
+        const __m512 xEnd = _mm512_mask_xor_ps(hiA, neg, loA, signMask);  // BoxInFace's hi X
+        const __m512 end = Min16(_mm512_add_ps(x, reach), xEnd);
         const __m512 p[kCoords] = {x, y, z, u, v, end};
         const __m512i id = _mm512_add_epi32(_mm512_set1_epi32(int(firstId + i)), lane);
         // Faces 2a + neg; bucket the fast lanes of each face present.
@@ -527,10 +535,10 @@ ListView Hierarchy::Filter(const Bounds6& tight, const ListView& list, int level
     // No ray of the node gets past X = end, and the list is sorted by near X: cut it there first.
     const float endHi = tight.hi[kDims];
     ListView in = list;
-    if (endHi < kFloatMax) in.n = size_t(std::upper_bound(in.x0, in.x0 + in.n, endHi) - in.x0);
+    in.n = size_t(std::upper_bound(in.x0, in.x0 + in.n, endHi) - in.x0);
     if (dst.Size() < in.n) dst.Resize(in.n);
     // Every ray's reach is its end minus its start X, so the node's is at most endHi - lo X.
-    const float reach = endHi < kFloatMax ? endHi - tight.lo[0] : kFloatMax;
+    const float reach = endHi - tight.lo[0];
     const size_t kept = FilterList(MakeBeamTest(tight.ToBox5(), reach), in, dst);
     counters_.boxTests += in.n;
     return View(dst, kept);
@@ -683,9 +691,7 @@ void Hierarchy::EmitLeaf(uint32_t node, uint32_t begin, uint32_t end, int buf,
     // The current nearest-hit bound: no ray of the leaf gets past X = endHi, and the list is
     // sorted by near X, so everything after that is cut at once (Filter has already cut it when
     // the leaf filtered its own list).
-    const size_t n = endHi < kFloatMax
-                         ? size_t(std::upper_bound(list.x0, list.x0 + list.n, endHi) - list.x0)
-                         : list.n;
+    const size_t n = size_t(std::upper_bound(list.x0, list.x0 + list.n, endHi) - list.x0);
     leaf.candBegin = uint32_t(out.candidates.size());
     leaf.candCount = uint32_t(n);
     out.candidates.resize(leaf.candBegin + n);
