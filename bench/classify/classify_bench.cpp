@@ -28,11 +28,11 @@ void Print(const char* name, const classify::ClassifyStats& s) {
     std::printf(
         "%-14s rays %8u  missed %6u  leaves %7u  nodes %7u  depth %2u  cand/ray %7.1f (max %6u)  "
         "tests/ray %7.2f (brute force %u)  box tests/ray %6.1f  moves/ray %5.1f  "
-        "classify %6.1f ns/ray  host query %7.1f ns/ray  hierarchy %6.1f MiB  leaves %6.1f MiB  "
+        "classify %6.1f ns/ray (cpu %6.1f)  host query %7.1f ns/ray  hierarchy %6.1f MiB  leaves %6.1f MiB  "
         "peak RSS %7.1f MiB\n",
         name, s.nRays, s.nMissed, s.nLeaves, s.nNodes, s.maxDepth, s.avgCandidates,
         s.maxCandidates, s.testsPerRay, s.bruteForceTests, s.boxTestsPerRay, s.rayMovesPerRay,
-        s.classifyNsPerRay, s.queryNsPerRay, double(s.hierarchyBytes) / 1048576.0,
+        s.classifyNsPerRay, s.classifyCpuNsPerRay, s.queryNsPerRay, double(s.hierarchyBytes) / 1048576.0,
         double(s.leafBytes) / 1048576.0, double(s.peakRssBytes) / 1048576.0);
     std::fflush(stdout);
 }

@@ -86,11 +86,22 @@ uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint3
         lLo[k] = rLo[k] = _mm512_set1_ps(kInf);
         lHi[k] = rHi[k] = _mm512_set1_ps(-kInf);
     }
+    // Local copies: stores through the destination pointers could otherwise alias `io`, and the
+    // compiler would reload every pointer after every store.
+    const float* src[kCoords];
+    float* dst[kCoords];
+    for (int k = 0; k < kCoords; ++k) {
+        src[k] = io.src[k];
+        dst[k] = io.dst[k];
+    }
+    const float* const key = io.key;
+    const uint32_t* const srcId = io.srcId;
+    uint32_t* const dstId = io.dstId;
     for (uint32_t i = begin; i < end; i += 16) {
         const uint32_t rest = end - i;
         const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
-        const __m512 key = _mm512_maskz_loadu_ps(live, io.key + i);
-        const __mmask16 left = _mm512_mask_cmp_ps_mask(live, key, m, _CMP_LT_OQ);
+        const __m512 kv = _mm512_maskz_loadu_ps(live, key + i);
+        const __mmask16 left = _mm512_mask_cmp_ps_mask(live, kv, m, _CMP_LT_OQ);
         const __mmask16 right = __mmask16(live & ~left);
         const uint32_t nl = uint32_t(std::popcount(unsigned(left)));
         const uint32_t nr = uint32_t(std::popcount(unsigned(right)));
@@ -98,17 +109,17 @@ uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint3
 #pragma GCC unroll 6
         for (int k = 0; k < kCoords; ++k) {
             if (!((kActive >> k) & 1)) continue;
-            const __m512 v = _mm512_maskz_loadu_ps(live, io.src[k] + i);
-            _mm512_mask_storeu_ps(io.dst[k] + l, ml, _mm512_maskz_compress_ps(left, v));
-            _mm512_mask_storeu_ps(io.dst[k] + r - nr, mr, _mm512_maskz_compress_ps(right, v));
+            const __m512 v = _mm512_maskz_loadu_ps(live, src[k] + i);
+            _mm512_mask_storeu_ps(dst[k] + l, ml, _mm512_maskz_compress_ps(left, v));
+            _mm512_mask_storeu_ps(dst[k] + r - nr, mr, _mm512_maskz_compress_ps(right, v));
             lLo[k] = _mm512_mask_min_ps(lLo[k], left, lLo[k], v);
             lHi[k] = _mm512_mask_max_ps(lHi[k], left, lHi[k], v);
             rLo[k] = _mm512_mask_min_ps(rLo[k], right, rLo[k], v);
             rHi[k] = _mm512_mask_max_ps(rHi[k], right, rHi[k], v);
         }
-        const __m512i id = _mm512_maskz_loadu_epi32(live, io.srcId + i);
-        _mm512_mask_storeu_epi32(io.dstId + l, ml, _mm512_maskz_compress_epi32(left, id));
-        _mm512_mask_storeu_epi32(io.dstId + r - nr, mr, _mm512_maskz_compress_epi32(right, id));
+        const __m512i id = _mm512_maskz_loadu_epi32(live, srcId + i);
+        _mm512_mask_storeu_epi32(dstId + l, ml, _mm512_maskz_compress_epi32(left, id));
+        _mm512_mask_storeu_epi32(dstId + r - nr, mr, _mm512_maskz_compress_epi32(right, id));
         l += nl;
         r -= nr;
     }
@@ -614,7 +625,7 @@ void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, co
 bool Hierarchy::ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays,
                             const ListView& list, int& dim) const {
     const Params& p = params_;
-    if (nRays <= p.minRays || list.n <= p.minCandidates || node.depth >= p.maxDepth) return false;
+    if (nRays < 2 || list.n <= p.minCandidates || node.depth >= p.maxDepth) return false;
     float best = 0.0f;
     dim = -1;
     for (int k = 0; k < kDims; ++k) {
@@ -642,7 +653,11 @@ bool Hierarchy::ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRa
         }
     }
     const double saved = double(nRays) * listCost * p.splitGain;
-    const double cost = 2.0 * double(list.n) * p.boxTestCost + double(nRays) * p.rayMoveCost;
+    double cost = 2.0 * double(list.n) * p.boxTestCost + double(nRays) * p.rayMoveCost;
+    // Below minRays the split also pays for the leaf it adds: the device runs each leaf as a
+    // work-group, and one that is not full still costs about what a full one's first candidate
+    // block does. So small groups split only for long lists, as long as the cost function says.
+    if (nRays <= p.minRays) cost += double(p.minRays) * 16.0 * p.triangleCost;
     return saved > cost;
 }
 

@@ -26,6 +26,7 @@ struct ClassifyStats {
     double boxTestsPerRay = 0.0;   // candidate tests while filtering lists
     double rayMovesPerRay = 0.0;   // levels a ray was moved through
     double classifyNsPerRay = 0.0; // Insert + Subdivide, median over the repeats, calling thread only
+    double classifyCpuNsPerRay = 0.0;  // the same in the thread's CPU time (excludes preemption)
     double queryNsPerRay = 0.0;    // scalar host query (reference path, not the device's)
     double setupMs = 0.0;          // per-scene preprocessing: presorted face lists
     size_t hierarchyBytes = 0;     // nodes + face lists + peak scratch
