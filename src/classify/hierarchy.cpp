@@ -541,6 +541,34 @@ Bounds6 Hierarchy::Bounds(int buf, uint32_t begin, uint32_t end) const {
     return b;
 }
 
+namespace {
+
+constexpr size_t kSampledFilterMin = 4096;  // lists shorter than this are always filtered
+constexpr float kSkipKeep = 0.8f;           // skip the filter when it would keep more
+constexpr size_t kSampleStride = 32;
+
+// The list up to the node's end (see Filter).
+ListView CutAtEnd(const Bounds6& tight, const ListView& list) {
+    ListView in = list;
+    in.n = size_t(std::upper_bound(in.x0, in.x0 + in.n, tight.hi[kDims]) - in.x0);
+    return in;
+}
+
+// The fraction of every kSampleStride-th box of the list (cut at the end) that the beam keeps.
+float SampledKeepFraction(const Bounds6& tight, const ListView& list) {
+    const ListView in = CutAtEnd(tight, list);
+    if (in.n < kSampledFilterMin) return 0.0f;
+    const BeamTest t = MakeBeamTest(tight.ToBox5(), tight.hi[kDims] - tight.lo[0]);
+    size_t kept = 0, tested = 0;
+    for (size_t i = kSampleStride / 2; i < in.n; i += kSampleStride) {
+        kept += BeamMayReach(t, in.x0[i], in.x1[i], in.y0[i], in.y1[i], in.z0[i], in.z1[i]) ? 1 : 0;
+        ++tested;
+    }
+    return float(kept) / float(tested);
+}
+
+}  // namespace
+
 ListView Hierarchy::Filter(const Bounds6& tight, const ListView& list, int level) {
     FaceList& dst = levelLists_[size_t(level)];
     // No ray of the node gets past X = end, and the list is sorted by near X: cut it there first.
@@ -600,7 +628,14 @@ void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, co
         return;
     }
 
-    ListView own = reuseList ? list : Filter(tight, list, depth);
+    // A long list that the node's beam would barely shorten (estimated on a sample) is not
+    // copied: the children filter it instead. Near the roots of wide generations (mirror rays)
+    // filters keep almost everything, and copying lists of 100k+ boxes is what costs there.
+    bool filtered = !reuseList;
+    if (filtered && list.n >= kSampledFilterMin && SampledKeepFraction(tight, list) > kSkipKeep) {
+        filtered = false;
+    }
+    ListView own = filtered ? Filter(tight, list, depth) : CutAtEnd(tight, list);
     int dim = 0;
     uint32_t mid = begin;
     Bounds6 leftBox, rightBox;
@@ -609,7 +644,7 @@ void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, co
         mid = Partition(dim, value, buf, begin, end, leftBox, rightBox);
     }
     if (mid == begin || mid == end) {
-        if (reuseList) own = Filter(tight, list, depth);
+        if (!filtered) own = Filter(tight, list, depth);
         EmitLeaf(node, begin, end, buf, own, tight.hi[kDims], out);
         return;
     }
@@ -617,7 +652,7 @@ void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, co
     const uint32_t right = NewNode(rightBox.ToBox5(), face, depth + 1, false);
     nodes_[node].child[0] = left;
     nodes_[node].child[1] = right;
-    const bool reuse = (depth + 1) % std::max(params_.splitsPerList, 1) != 0;
+    const bool reuse = filtered && (depth + 1) % std::max(params_.splitsPerList, 1) != 0;
     Process(left, begin, mid, other, leftBox, own, reuse, out);
     Process(right, mid, end, other, rightBox, own, reuse, out);
 }
