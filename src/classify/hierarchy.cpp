@@ -545,7 +545,7 @@ namespace {
 
 constexpr size_t kSampledFilterMin = 4096;  // lists shorter than this are always filtered
 constexpr float kSkipKeep = 0.8f;           // skip the filter when it would keep more
-constexpr size_t kSampleStride = 32;
+constexpr size_t kSamples = 64;             // boxes tested for the estimate
 
 // The list up to the node's end (see Filter).
 ListView CutAtEnd(const Bounds6& tight, const ListView& list) {
@@ -554,13 +554,14 @@ ListView CutAtEnd(const Bounds6& tight, const ListView& list) {
     return in;
 }
 
-// The fraction of every kSampleStride-th box of the list (cut at the end) that the beam keeps.
+// The fraction of kSamples evenly spaced boxes of the list (cut at the end) that the beam keeps.
 float SampledKeepFraction(const Bounds6& tight, const ListView& list) {
     const ListView in = CutAtEnd(tight, list);
     if (in.n < kSampledFilterMin) return 0.0f;
     const BeamTest t = MakeBeamTest(tight.ToBox5(), tight.hi[kDims] - tight.lo[0]);
     size_t kept = 0, tested = 0;
-    for (size_t i = kSampleStride / 2; i < in.n; i += kSampleStride) {
+    const size_t stride = in.n / kSamples;
+    for (size_t i = stride / 2; i < in.n; i += stride) {
         kept += BeamMayReach(t, in.x0[i], in.x1[i], in.y0[i], in.y1[i], in.z0[i], in.z1[i]) ? 1 : 0;
         ++tested;
     }
