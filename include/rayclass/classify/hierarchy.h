@@ -11,8 +11,12 @@
 //
 // Candidate lists hold every primitive whose padded box the node's beam may reach (conservative,
 // never drops a primitive a ray of the node hits), in the order of the box's near X, which the
-// face's presorted array fixes once and filtering keeps. Lists live only while a generation is
-// being subdivided: inner lists are scratch per depth, leaf lists go into the returned LeafBatch.
+// face's presorted array fixes once and filtering keeps. A beam ends where its rays end (their
+// tMax, cut at the scene box), so a node's list is first cut at the largest end X of its rays:
+// shadow rays' lists stop at the light. A node whose beam would keep most of a long list (checked
+// on a sample) passes the list to its children unfiltered instead of copying it. Lists live only
+// while a generation is being subdivided: inner lists are scratch per depth, leaf lists go into
+// the returned LeafBatch.
 //
 // Invariants (checked by tests/classify): every ray that can hit the scene lies in exactly one
 // leaf; a node's interval contains the 5D points of the rays that were routed to it.
