@@ -13,9 +13,25 @@
 
 namespace rayclass::classify {
 
+// A node's tight bounds: X, Y, Z, u, v and the end X of its rays (index 5).
+struct Bounds6 {
+    float lo[kDims + 1];
+    float hi[kDims + 1];
+    Box5 ToBox5() const {
+        Box5 b;
+        for (int k = 0; k < kDims; ++k) {
+            b.lo[k] = lo[k];
+            b.hi[k] = hi[k];
+        }
+        return b;
+    }
+};
+
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kFloatMax = 3.402823466e38f;
+constexpr int kCoords = kDims + 1;
 
 void MinMax(const float* x, size_t n, float& lo, float& hi) {
 #if defined(__AVX512F__)
@@ -47,8 +63,8 @@ void MinMax(const float* x, size_t n, float& lo, float& hi) {
 
 // Where a partition reads and writes the rays of a node: one array per dimension, and the ids.
 struct PartitionIo {
-    const float* src[kDims];
-    float* dst[kDims];
+    const float* src[kCoords];
+    float* dst[kCoords];
     const uint32_t* srcId;
     uint32_t* dstId;
     const float* key;
@@ -61,42 +77,53 @@ struct PartitionIo {
 // registers.
 template <int kActive>
 uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint32_t end,
-                       Box5& leftBox, Box5& rightBox) {
+                       Bounds6& leftBox, Bounds6& rightBox) {
     uint32_t l = begin, r = end;
 #if defined(__AVX512F__)
     const __m512 m = _mm512_set1_ps(value);
-    __m512 lLo[kDims], lHi[kDims], rLo[kDims], rHi[kDims];
-    for (int k = 0; k < kDims; ++k) {
+    __m512 lLo[kCoords], lHi[kCoords], rLo[kCoords], rHi[kCoords];
+    for (int k = 0; k < kCoords; ++k) {
         lLo[k] = rLo[k] = _mm512_set1_ps(kInf);
         lHi[k] = rHi[k] = _mm512_set1_ps(-kInf);
     }
+    // Local copies: stores through the destination pointers could otherwise alias `io`, and the
+    // compiler would reload every pointer after every store.
+    const float* src[kCoords];
+    float* dst[kCoords];
+    for (int k = 0; k < kCoords; ++k) {
+        src[k] = io.src[k];
+        dst[k] = io.dst[k];
+    }
+    const float* const key = io.key;
+    const uint32_t* const srcId = io.srcId;
+    uint32_t* const dstId = io.dstId;
     for (uint32_t i = begin; i < end; i += 16) {
         const uint32_t rest = end - i;
         const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
-        const __m512 key = _mm512_maskz_loadu_ps(live, io.key + i);
-        const __mmask16 left = _mm512_mask_cmp_ps_mask(live, key, m, _CMP_LT_OQ);
+        const __m512 kv = _mm512_maskz_loadu_ps(live, key + i);
+        const __mmask16 left = _mm512_mask_cmp_ps_mask(live, kv, m, _CMP_LT_OQ);
         const __mmask16 right = __mmask16(live & ~left);
         const uint32_t nl = uint32_t(std::popcount(unsigned(left)));
         const uint32_t nr = uint32_t(std::popcount(unsigned(right)));
         const __mmask16 ml = __mmask16((1u << nl) - 1u), mr = __mmask16((1u << nr) - 1u);
-#pragma GCC unroll 5
-        for (int k = 0; k < kDims; ++k) {
+#pragma GCC unroll 6
+        for (int k = 0; k < kCoords; ++k) {
             if (!((kActive >> k) & 1)) continue;
-            const __m512 v = _mm512_maskz_loadu_ps(live, io.src[k] + i);
-            _mm512_mask_storeu_ps(io.dst[k] + l, ml, _mm512_maskz_compress_ps(left, v));
-            _mm512_mask_storeu_ps(io.dst[k] + r - nr, mr, _mm512_maskz_compress_ps(right, v));
+            const __m512 v = _mm512_maskz_loadu_ps(live, src[k] + i);
+            _mm512_mask_storeu_ps(dst[k] + l, ml, _mm512_maskz_compress_ps(left, v));
+            _mm512_mask_storeu_ps(dst[k] + r - nr, mr, _mm512_maskz_compress_ps(right, v));
             lLo[k] = _mm512_mask_min_ps(lLo[k], left, lLo[k], v);
             lHi[k] = _mm512_mask_max_ps(lHi[k], left, lHi[k], v);
             rLo[k] = _mm512_mask_min_ps(rLo[k], right, rLo[k], v);
             rHi[k] = _mm512_mask_max_ps(rHi[k], right, rHi[k], v);
         }
-        const __m512i id = _mm512_maskz_loadu_epi32(live, io.srcId + i);
-        _mm512_mask_storeu_epi32(io.dstId + l, ml, _mm512_maskz_compress_epi32(left, id));
-        _mm512_mask_storeu_epi32(io.dstId + r - nr, mr, _mm512_maskz_compress_epi32(right, id));
+        const __m512i id = _mm512_maskz_loadu_epi32(live, srcId + i);
+        _mm512_mask_storeu_epi32(dstId + l, ml, _mm512_maskz_compress_epi32(left, id));
+        _mm512_mask_storeu_epi32(dstId + r - nr, mr, _mm512_maskz_compress_epi32(right, id));
         l += nl;
         r -= nr;
     }
-    for (int k = 0; k < kDims; ++k) {
+    for (int k = 0; k < kCoords; ++k) {
         if (!((kActive >> k) & 1)) continue;
         leftBox.lo[k] = ReduceMin(lLo[k]);
         leftBox.hi[k] = ReduceMax(lHi[k]);
@@ -107,14 +134,14 @@ uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint3
     for (uint32_t i = begin; i < end; ++i) {
         const bool isLeft = io.key[i] < value;
         const uint32_t at = isLeft ? l : r - 1;
-        for (int k = 0; k < kDims; ++k) {
+        for (int k = 0; k < kCoords; ++k) {
             if ((kActive >> k) & 1) io.dst[k][at] = io.src[k][i];
         }
         io.dstId[at] = io.srcId[i];
         l += isLeft ? 1 : 0;
         r -= isLeft ? 0 : 1;
     }
-    for (int k = 0; k < kDims; ++k) {
+    for (int k = 0; k < kCoords; ++k) {
         if (!((kActive >> k) & 1)) continue;
         MinMax(io.dst[k] + begin, l - begin, leftBox.lo[k], leftBox.hi[k]);
         MinMax(io.dst[k] + l, end - l, rightBox.lo[k], rightBox.hi[k]);
@@ -125,8 +152,8 @@ uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint3
 
 template <int kActive = 0>
 uint32_t DispatchPartition(int active, const PartitionIo& io, float value, uint32_t begin,
-                           uint32_t end, Box5& leftBox, Box5& rightBox) {
-    if constexpr (kActive == 1 << kDims) {
+                           uint32_t end, Bounds6& leftBox, Bounds6& rightBox) {
+    if constexpr (kActive == 1 << kCoords) {
         return begin;
     } else {
         if (active == kActive) return PartitionRays<kActive>(io, value, begin, end, leftBox, rightBox);
@@ -205,6 +232,226 @@ void Hierarchy::Insert(std::span<const Ray> rays) {
     nInserted_ += uint32_t(rays.size());
 }
 
+namespace {
+
+// The face of a ray's direction, or kFaceCount when the direction is zero or not finite (such a
+// ray misses everything, whichever path ToRay5 takes). ToRay5 picks the same face for the rest.
+inline int DirectionFace(const glm::vec3& d) {
+    if (!std::isfinite(d.x) || !std::isfinite(d.y) || !std::isfinite(d.z)) return kFaceCount;
+    const int a = DominantAxis(d);
+    if (!(std::abs(d[a]) > 0.0f)) return kFaceCount;
+    return 2 * a + (d[a] < 0.0f ? 1 : 0);
+}
+
+void GrowBounds(Bounds6& b, const float* p) {
+    for (int k = 0; k < kCoords; ++k) {
+        b.lo[k] = std::min(b.lo[k], p[k]);
+        b.hi[k] = std::max(b.hi[k], p[k]);
+    }
+}
+
+Bounds6 EmptyBounds() {
+    Bounds6 b;
+    for (int k = 0; k < kCoords; ++k) {
+        b.lo[k] = kInf;
+        b.hi[k] = -kInf;
+    }
+    return b;
+}
+
+#if defined(__AVX512F__)
+// Counts the rays of each face (kFaceCount: no usable direction), 16 at a time.
+void CountFaces(std::span<const Ray> rays, uint32_t* count) {
+    const float* base = reinterpret_cast<const float*>(rays.data());
+    const __m512i idx = _mm512_mullo_epi32(_mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10,
+                                                             11, 12, 13, 14, 15),
+                                           _mm512_set1_epi32(8));
+    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
+    const __m512 fmax = _mm512_set1_ps(kFloatMax);
+    const __m512 zero = _mm512_setzero_ps();
+    const size_t n = rays.size();
+    for (size_t i = 0; i < n; i += 16) {
+        const size_t rest = n - i;
+        const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
+        const float* at = base + i * 8;
+        const __m512 dx = _mm512_mask_i32gather_ps(zero, live, idx, at + 4, 4);
+        const __m512 dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
+        const __m512 dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
+        const __m512 ax = _mm512_and_ps(dx, absMask);
+        const __m512 ay = _mm512_and_ps(dy, absMask);
+        const __m512 az = _mm512_and_ps(dz, absMask);
+        const __mmask16 finite = _mm512_cmp_ps_mask(ax, fmax, _CMP_LE_OQ) &
+                                 _mm512_cmp_ps_mask(ay, fmax, _CMP_LE_OQ) &
+                                 _mm512_cmp_ps_mask(az, fmax, _CMP_LE_OQ);
+        const __mmask16 isX = _mm512_cmp_ps_mask(ax, ay, _CMP_GE_OQ) &
+                              _mm512_cmp_ps_mask(ax, az, _CMP_GE_OQ);
+        const __mmask16 isY = __mmask16(~isX & _mm512_cmp_ps_mask(ay, az, _CMP_GE_OQ));
+        const __mmask16 isZ = __mmask16(~isX & ~isY);
+        const __m512 da = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, az, ay), ax);
+        const __m512 sd = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dz, dy), dx);
+        const __mmask16 ok = __mmask16(live & finite & _mm512_cmp_ps_mask(da, zero, _CMP_GT_OQ));
+        const __mmask16 neg = _mm512_cmp_ps_mask(sd, zero, _CMP_LT_OQ);
+        count[0] += uint32_t(std::popcount(unsigned(ok & isX & ~neg)));
+        count[1] += uint32_t(std::popcount(unsigned(ok & isX & neg)));
+        count[2] += uint32_t(std::popcount(unsigned(ok & isY & ~neg)));
+        count[3] += uint32_t(std::popcount(unsigned(ok & isY & neg)));
+        count[4] += uint32_t(std::popcount(unsigned(ok & isZ & ~neg)));
+        count[5] += uint32_t(std::popcount(unsigned(ok & isZ & neg)));
+        count[kFaceCount] += uint32_t(std::popcount(unsigned(live & ~ok)));
+    }
+}
+#else
+void CountFaces(std::span<const Ray> rays, uint32_t* count) {
+    for (const Ray& r : rays) ++count[DirectionFace(r.direction)];
+}
+#endif
+
+}  // namespace
+
+void Hierarchy::Convert(std::span<const Ray> rays, uint32_t firstId, uint32_t* next,
+                        Bounds6* faceBounds, std::vector<rc_uint>& missed) {
+    float* c[kCoords];
+    for (int k = 0; k < kCoords; ++k) c[k] = coord_[0][k].data();
+    uint32_t* ids = id_[0].data();
+    // Where each face's X leaves the scene box: ends beyond it are cut there, so the rays that
+    // leave the box share one end, which then stays a constant that partitions do not move.
+    float faceEnd[kFaceCount];
+    for (int f = 0; f < kFaceCount; ++f) faceEnd[f] = BoxInFace(f, sceneBox_).hi[0];
+    // A ray that ToRay5 maps: written at its face's next position.
+    auto put = [&](const Ray5& r, uint32_t id) {
+        const uint32_t at = next[r.face]++;
+        const float p[kCoords] = {r.p[0], r.p[1], r.p[2], r.p[3], r.p[4],
+                                  std::min(r.p[0] + r.reach, faceEnd[r.face])};
+        for (int k = 0; k < kCoords; ++k) c[k][at] = p[k];
+        ids[at] = id;
+        GrowBounds(faceBounds[r.face], p);
+    };
+    const size_t n = rays.size();
+    size_t i = 0;
+#if defined(__AVX512F__)
+    // The fast path of ToRay5 for 16 rays at a time, with the same float operations so the points
+    // are bit-identical; lanes that need the slow path take the scalar one.
+    const float* base = reinterpret_cast<const float*>(rays.data());
+    const __m512i idx = _mm512_mullo_epi32(_mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10,
+                                                             11, 12, 13, 14, 15),
+                                           _mm512_set1_epi32(8));
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
+    const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
+    const __m512 fmax = _mm512_set1_ps(kFloatMax);
+    const __m512 zero = _mm512_setzero_ps();
+    const __m512 one = _mm512_set1_ps(1.0f);
+    const __m512 blo[3] = {_mm512_set1_ps(sceneBox_.lo.x), _mm512_set1_ps(sceneBox_.lo.y),
+                           _mm512_set1_ps(sceneBox_.lo.z)};
+    const __m512 bhi[3] = {_mm512_set1_ps(sceneBox_.hi.x), _mm512_set1_ps(sceneBox_.hi.y),
+                           _mm512_set1_ps(sceneBox_.hi.z)};
+    __m512 accLo[kFaceCount][kCoords], accHi[kFaceCount][kCoords];
+    for (int f = 0; f < kFaceCount; ++f) {
+        for (int k = 0; k < kCoords; ++k) {
+            accLo[f][k] = _mm512_set1_ps(kInf);
+            accHi[f][k] = _mm512_set1_ps(-kInf);
+        }
+    }
+    for (; i < n; i += 16) {
+        const size_t rest = n - i;
+        const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
+        const float* at = base + i * 8;
+        const __m512 ox = _mm512_mask_i32gather_ps(zero, live, idx, at + 0, 4);
+        const __m512 oy = _mm512_mask_i32gather_ps(zero, live, idx, at + 1, 4);
+        const __m512 oz = _mm512_mask_i32gather_ps(zero, live, idx, at + 2, 4);
+        const __m512 tmin = _mm512_mask_i32gather_ps(zero, live, idx, at + 3, 4);
+        const __m512 dx = _mm512_mask_i32gather_ps(zero, live, idx, at + 4, 4);
+        const __m512 dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
+        const __m512 dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
+        const __m512 tmax = _mm512_mask_i32gather_ps(zero, live, idx, at + 7, 4);
+        const __m512 ax = _mm512_and_ps(dx, absMask);
+        const __m512 ay = _mm512_and_ps(dy, absMask);
+        const __m512 az = _mm512_and_ps(dz, absMask);
+        const __mmask16 isX = _mm512_cmp_ps_mask(ax, ay, _CMP_GE_OQ) &
+                              _mm512_cmp_ps_mask(ax, az, _CMP_GE_OQ);
+        const __mmask16 isY = __mmask16(~isX & _mm512_cmp_ps_mask(ay, az, _CMP_GE_OQ));
+        const __mmask16 isZ = __mmask16(~isX & ~isY);
+        const __m512 da = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, az, ay), ax);
+        const __m512 sd = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dz, dy), dx);
+        const __mmask16 neg = _mm512_cmp_ps_mask(sd, zero, _CMP_LT_OQ);
+        // start = tMin == 0 ? origin : origin + tMin d
+        const __mmask16 t0 = _mm512_cmp_ps_mask(tmin, zero, _CMP_EQ_OQ);
+        const __m512 sx = _mm512_mask_blend_ps(t0, _mm512_add_ps(ox, _mm512_mul_ps(tmin, dx)), ox);
+        const __m512 sy = _mm512_mask_blend_ps(t0, _mm512_add_ps(oy, _mm512_mul_ps(tmin, dy)), oy);
+        const __m512 sz = _mm512_mask_blend_ps(t0, _mm512_add_ps(oz, _mm512_mul_ps(tmin, dz)), oz);
+        const __mmask16 inside =
+            _mm512_cmp_ps_mask(sx, blo[0], _CMP_GE_OQ) & _mm512_cmp_ps_mask(sx, bhi[0], _CMP_LE_OQ) &
+            _mm512_cmp_ps_mask(sy, blo[1], _CMP_GE_OQ) & _mm512_cmp_ps_mask(sy, bhi[1], _CMP_LE_OQ) &
+            _mm512_cmp_ps_mask(sz, blo[2], _CMP_GE_OQ) & _mm512_cmp_ps_mask(sz, bhi[2], _CMP_LE_OQ);
+        const __m512 dsum = _mm512_add_ps(_mm512_add_ps(dx, dy), dz);
+        const __mmask16 fast =
+            __mmask16(live & inside & _mm512_cmp_ps_mask(da, zero, _CMP_GT_OQ) &
+                      _mm512_cmp_ps_mask(_mm512_and_ps(dsum, absMask), fmax, _CMP_LE_OQ) &
+                      _mm512_cmp_ps_mask(tmin, tmax, _CMP_LT_OQ));
+        // Frame: X = s p_a, Y = p_b, Z = p_c with b = a + 1, c = a + 2 (mod 3).
+        const __m512 pa = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, sz, sy), sx);
+        const __m512 x = _mm512_mask_xor_ps(pa, neg, pa, signMask);
+        const __m512 y = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, sx, sz), sy);
+        const __m512 z = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, sy, sx), sz);
+        const __m512 db = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dx, dz), dy);
+        const __m512 dc = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dy, dx), dz);
+        const __m512 inv = _mm512_div_ps(one, _mm512_mask_blend_ps(fast, one, da));
+        const __m512 u = _mm512_mul_ps(db, inv);
+        const __m512 v = _mm512_mul_ps(dc, inv);
+        const __m512 reach = Min16(_mm512_mul_ps(_mm512_sub_ps(tmax, tmin), da), fmax);
+        const __m512 hiA = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, bhi[2], bhi[1]), bhi[0]);
+        const __m512 loA = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, blo[2], blo[1]), blo[0]);
+        const __m512 xEnd = _mm512_mask_xor_ps(hiA, neg, loA, signMask);  // BoxInFace's hi X
+        const __m512 end = Min16(_mm512_add_ps(x, reach), xEnd);
+        const __m512 p[kCoords] = {x, y, z, u, v, end};
+        const __m512i id = _mm512_add_epi32(_mm512_set1_epi32(int(firstId + i)), lane);
+        // Faces 2a + neg; bucket the fast lanes of each face present.
+        const __mmask16 byAxis[3] = {isX, isY, isZ};
+        for (int f = 0; f < kFaceCount; ++f) {
+            const __mmask16 m =
+                __mmask16(fast & byAxis[f >> 1] & ((f & 1) ? neg : __mmask16(~neg)));
+            if (!m) continue;
+            const uint32_t cnt = uint32_t(std::popcount(unsigned(m)));
+            const __mmask16 dst = __mmask16((1u << cnt) - 1u);
+            const uint32_t w = next[f];
+            for (int k = 0; k < kCoords; ++k) {
+                _mm512_mask_storeu_ps(c[k] + w, dst, _mm512_maskz_compress_ps(m, p[k]));
+                accLo[f][k] = _mm512_mask_min_ps(accLo[f][k], m, accLo[f][k], p[k]);
+                accHi[f][k] = _mm512_mask_max_ps(accHi[f][k], m, accHi[f][k], p[k]);
+            }
+            _mm512_mask_storeu_epi32(ids + w, dst, _mm512_maskz_compress_epi32(m, id));
+            next[f] = w + cnt;
+        }
+        unsigned slow = unsigned(live & ~fast);
+        while (slow) {
+            const int j = std::countr_zero(slow);
+            slow &= slow - 1;
+            const Ray& ray = rays[i + size_t(j)];
+            Ray5 r;
+            if (DirectionFace(ray.direction) < kFaceCount && ToRay5Clipped(ray, sceneBox_, r)) {
+                put(r, firstId + uint32_t(i) + uint32_t(j));
+            } else {
+                missed.push_back(firstId + uint32_t(i) + uint32_t(j));
+            }
+        }
+    }
+    for (int f = 0; f < kFaceCount; ++f) {
+        for (int k = 0; k < kCoords; ++k) {
+            faceBounds[f].lo[k] = std::min(faceBounds[f].lo[k], ReduceMin(accLo[f][k]));
+            faceBounds[f].hi[k] = std::max(faceBounds[f].hi[k], ReduceMax(accHi[f][k]));
+        }
+    }
+#endif
+    for (; i < n; ++i) {
+        Ray5 r;
+        if (DirectionFace(rays[i].direction) < kFaceCount && ToRay5(rays[i], sceneBox_, r)) {
+            put(r, firstId + uint32_t(i));
+        } else {
+            missed.push_back(firstId + uint32_t(i));
+        }
+    }
+}
+
 void Hierarchy::Subdivide(LeafBatch& out) {
     counters_ = {};
     out.leaves.clear();
@@ -212,17 +459,14 @@ void Hierarchy::Subdivide(LeafBatch& out) {
     out.candidates.clear();
     out.missed.clear();
     out.nRays = nInserted_;
-    ray5_.resize(nInserted_);
+    // Pass 1 counts the faces, pass 2 maps every ray straight into its face's range of the
+    // structure-of-arrays buffer (no intermediate array) and gathers each face's bounds.
     uint32_t count[kFaceCount + 1] = {};
-    float reach[kFaceCount] = {};
     const bool empty = sceneBox_.Empty();
-    uint32_t id = 0;
-    for (const auto& rays : inserted_) {
-        for (const Ray& ray : rays) {
-            Ray5& r = ray5_[id++];
-            if (empty || !ToRay5(ray, sceneBox_, r)) r.face = kFaceCount;
-            ++count[r.face];
-        }
+    if (empty) {
+        count[kFaceCount] = nInserted_;
+    } else {
+        for (const auto& rays : inserted_) CountFaces(rays, count);
     }
     const uint32_t n = nInserted_ - count[kFaceCount];
     for (int b = 0; b < 2; ++b) {
@@ -234,37 +478,50 @@ void Hierarchy::Subdivide(LeafBatch& out) {
     for (int f = 0; f < kFaceCount; ++f) begin[f + 1] = begin[f] + count[f];
     uint32_t next[kFaceCount];
     std::copy(begin, begin + kFaceCount, next);
+    Bounds6 faceBounds[kFaceCount];
+    for (auto& b : faceBounds) b = EmptyBounds();
     out.missed.reserve(count[kFaceCount]);
-    for (uint32_t i = 0; i < nInserted_; ++i) {
-        const Ray5& r = ray5_[i];
-        if (r.face == kFaceCount) {
-            out.missed.push_back(i);
-            continue;
+    uint32_t firstId = 0;
+    for (const auto& rays : inserted_) {
+        if (empty) {
+            for (uint32_t i = 0; i < rays.size(); ++i) out.missed.push_back(firstId + i);
+        } else {
+            Convert(rays, firstId, next, faceBounds, out.missed);
         }
-        const uint32_t at = next[r.face]++;
-        for (int k = 0; k < kDims; ++k) coord_[0][k][at] = r.p[k];
-        id_[0][at] = i;
-        reach[r.face] = std::max(reach[r.face], r.reach);
+        firstId += uint32_t(rays.size());
     }
-    out.rayIndex.resize(n);
+    // Rays that the slow path found to miss the box leave holes at the ends of their faces'
+    // ranges: close them (rare: only for origins outside the box).
+    uint32_t to = 0;
     for (int f = 0; f < kFaceCount; ++f) {
-        if (count[f] == 0) continue;
-        faceReach_ = reach[f];
-        BuildFace(f, begin[f], begin[f + 1], out);
+        const uint32_t from = begin[f], len = next[f] - begin[f];
+        if (to != from) {
+            for (auto& c : coord_[0]) std::copy(c.begin() + from, c.begin() + from + len, c.begin() + to);
+            std::copy(id_[0].begin() + from, id_[0].begin() + from + len, id_[0].begin() + to);
+        }
+        begin[f] = to;
+        to += len;
     }
-    size_t scratch = (dest_.capacity() + keys_.capacity()) * 4 + ray5_.capacity() * sizeof(Ray5);
-    for (int b = 0; b < 2; ++b) scratch += (id_[b].capacity() + coord_[b][0].capacity() * kDims) * 4;
+    begin[kFaceCount] = to;
+    std::sort(out.missed.begin(), out.missed.end());
+    out.rayIndex.resize(to);
+    for (int f = 0; f < kFaceCount; ++f) {
+        if (begin[f] == begin[f + 1]) continue;
+        BuildFace(f, begin[f], begin[f + 1], faceBounds[f], out);
+    }
+    size_t scratch = (dest_.capacity() + keys_.capacity()) * 4;
+    for (int b = 0; b < 2; ++b) scratch += (id_[b].capacity() + coord_[b][0].capacity() * kCoords) * 4;
     for (const auto& l : levelLists_) scratch += l.Bytes();
     counters_.scratchBytes = std::max(counters_.scratchBytes, scratch);
     inserted_.clear();
     nInserted_ = 0;
 }
 
-void Hierarchy::BuildFace(int face, uint32_t begin, uint32_t end, LeafBatch& out) {
-    std::fill(std::begin(active_), std::end(active_), true);
-    const Box5 tight = Bounds(0, begin, end);
-    // Dimensions that do not vary among the face's rays (the origin of eye rays) are never moved.
-    for (int k = 0; k < kDims; ++k) {
+void Hierarchy::BuildFace(int face, uint32_t begin, uint32_t end, const Bounds6& tight,
+                          LeafBatch& out) {
+    // Coordinates that do not vary among the face's rays (the origin of eye rays, the end of
+    // unbounded rays) are never moved.
+    for (int k = 0; k < kCoords; ++k) {
         active_[k] = tight.lo[k] < tight.hi[k];
         constant_[k] = tight.lo[k];
     }
@@ -272,9 +529,9 @@ void Hierarchy::BuildFace(int face, uint32_t begin, uint32_t end, LeafBatch& out
     Process(FaceRoot(face), begin, end, 0, tight, View(all, all.Size()), false, out);
 }
 
-Box5 Hierarchy::Bounds(int buf, uint32_t begin, uint32_t end) const {
-    Box5 b;
-    for (int k = 0; k < kDims; ++k) {
+Bounds6 Hierarchy::Bounds(int buf, uint32_t begin, uint32_t end) const {
+    Bounds6 b;
+    for (int k = 0; k < kCoords; ++k) {
         if (active_[k]) {
             MinMax(coord_[buf][k].data() + begin, end - begin, b.lo[k], b.hi[k]);
         } else {
@@ -284,15 +541,50 @@ Box5 Hierarchy::Bounds(int buf, uint32_t begin, uint32_t end) const {
     return b;
 }
 
-ListView Hierarchy::Filter(const Box5& tight, const ListView& list, int level) {
+namespace {
+
+constexpr size_t kSampledFilterMin = 4096;  // lists shorter than this are always filtered
+constexpr float kSkipKeep = 0.8f;           // skip the filter when it would keep more
+constexpr size_t kSamples = 64;             // boxes tested for the estimate
+
+// The list up to the node's end (see Filter).
+ListView CutAtEnd(const Bounds6& tight, const ListView& list) {
+    ListView in = list;
+    in.n = size_t(std::upper_bound(in.x0, in.x0 + in.n, tight.hi[kDims]) - in.x0);
+    return in;
+}
+
+// The fraction of kSamples evenly spaced boxes of the list (cut at the end) that the beam keeps.
+float SampledKeepFraction(const Bounds6& tight, const ListView& list) {
+    const ListView in = CutAtEnd(tight, list);
+    if (in.n < kSampledFilterMin) return 0.0f;
+    const BeamTest t = MakeBeamTest(tight.ToBox5(), tight.hi[kDims] - tight.lo[0]);
+    size_t kept = 0, tested = 0;
+    const size_t stride = in.n / kSamples;
+    for (size_t i = stride / 2; i < in.n; i += stride) {
+        kept += BeamMayReach(t, in.x0[i], in.x1[i], in.y0[i], in.y1[i], in.z0[i], in.z1[i]) ? 1 : 0;
+        ++tested;
+    }
+    return float(kept) / float(tested);
+}
+
+}  // namespace
+
+ListView Hierarchy::Filter(const Bounds6& tight, const ListView& list, int level) {
     FaceList& dst = levelLists_[size_t(level)];
-    if (dst.Size() < list.n) dst.Resize(list.n);
-    const size_t kept = FilterList(MakeBeamTest(tight, faceReach_), list, dst);
-    counters_.boxTests += list.n;
+    // No ray of the node gets past X = end, and the list is sorted by near X: cut it there first.
+    const float endHi = tight.hi[kDims];
+    ListView in = list;
+    in.n = size_t(std::upper_bound(in.x0, in.x0 + in.n, endHi) - in.x0);
+    if (dst.Size() < in.n) dst.Resize(in.n);
+    // Every ray's reach is its end minus its start X, so the node's is at most endHi - lo X.
+    const float reach = endHi - tight.lo[0];
+    const size_t kept = FilterList(MakeBeamTest(tight.ToBox5(), reach), in, dst);
+    counters_.boxTests += in.n;
     return View(dst, kept);
 }
 
-void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, const Box5& tight,
+void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, const Bounds6& tight,
                         const ListView& list, bool reuseList, LeafBatch& out) {
     const int depth = nodes_[node].depth;
     const int face = nodes_[node].face;
@@ -313,7 +605,7 @@ void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, co
         const uint32_t start[3] = {begin, begin + count[0], begin + count[0] + count[1]};
         uint32_t next[3] = {start[0], start[1], start[2]};
         for (uint32_t i = begin; i < end; ++i) dest_[i] = next[dest_[i]]++;
-        for (int k = 0; k < kDims; ++k) {
+        for (int k = 0; k < kCoords; ++k) {
             if (!active_[k]) continue;
             for (uint32_t i = begin; i < end; ++i) coord_[other][k][dest_[i]] = coord_[buf][k][i];
         }
@@ -337,32 +629,39 @@ void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, co
         return;
     }
 
-    ListView own = reuseList ? list : Filter(tight, list, depth);
+    // A long list that the node's beam would barely shorten (estimated on a sample) is not
+    // copied: the children filter it instead. Near the roots of wide generations (mirror rays)
+    // filters keep almost everything, and copying lists of 100k+ boxes is what costs there.
+    bool filtered = !reuseList;
+    if (filtered && list.n >= kSampledFilterMin && SampledKeepFraction(tight, list) > kSkipKeep) {
+        filtered = false;
+    }
+    ListView own = filtered ? Filter(tight, list, depth) : CutAtEnd(tight, list);
     int dim = 0;
     uint32_t mid = begin;
-    Box5 leftBox, rightBox;
+    Bounds6 leftBox, rightBox;
     if (ChooseSplit(nodes_[node], tight, end - begin, own, dim)) {
         const float value = SplitValue(dim, buf, begin, end, tight);
         mid = Partition(dim, value, buf, begin, end, leftBox, rightBox);
     }
     if (mid == begin || mid == end) {
-        if (reuseList) own = Filter(tight, list, depth);
-        EmitLeaf(node, begin, end, buf, tight, own, out);
+        if (!filtered) own = Filter(tight, list, depth);
+        EmitLeaf(node, begin, end, buf, own, tight.hi[kDims], out);
         return;
     }
-    const uint32_t left = NewNode(leftBox, face, depth + 1, false);
-    const uint32_t right = NewNode(rightBox, face, depth + 1, false);
+    const uint32_t left = NewNode(leftBox.ToBox5(), face, depth + 1, false);
+    const uint32_t right = NewNode(rightBox.ToBox5(), face, depth + 1, false);
     nodes_[node].child[0] = left;
     nodes_[node].child[1] = right;
-    const bool reuse = (depth + 1) % std::max(params_.splitsPerList, 1) != 0;
+    const bool reuse = filtered && (depth + 1) % std::max(params_.splitsPerList, 1) != 0;
     Process(left, begin, mid, other, leftBox, own, reuse, out);
     Process(right, mid, end, other, rightBox, own, reuse, out);
 }
 
-bool Hierarchy::ChooseSplit(const Node& node, const Box5& tight, uint32_t nRays,
+bool Hierarchy::ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays,
                             const ListView& list, int& dim) const {
     const Params& p = params_;
-    if (nRays <= p.minRays || list.n <= p.minCandidates || node.depth >= p.maxDepth) return false;
+    if (nRays < 2 || list.n <= p.minCandidates || node.depth >= p.maxDepth) return false;
     float best = 0.0f;
     dim = -1;
     for (int k = 0; k < kDims; ++k) {
@@ -390,11 +689,15 @@ bool Hierarchy::ChooseSplit(const Node& node, const Box5& tight, uint32_t nRays,
         }
     }
     const double saved = double(nRays) * listCost * p.splitGain;
-    const double cost = 2.0 * double(list.n) * p.boxTestCost + double(nRays) * p.rayMoveCost;
+    double cost = 2.0 * double(list.n) * p.boxTestCost + double(nRays) * p.rayMoveCost;
+    // Below minRays the split also pays for the leaf it adds: the device runs each leaf as a
+    // work-group, and one that is not full still costs about what a full one's first candidate
+    // block does. So small groups split only for long lists, as long as the cost function says.
+    if (nRays <= p.minRays) cost += double(p.minRays) * 16.0 * p.triangleCost;
     return saved > cost;
 }
 
-float Hierarchy::SplitValue(int dim, int buf, uint32_t begin, uint32_t end, const Box5& tight) {
+float Hierarchy::SplitValue(int dim, int buf, uint32_t begin, uint32_t end, const Bounds6& tight) {
     const float lo = tight.lo[dim], hi = tight.hi[dim];
     if (params_.splitRule == SplitRule::kMedian) {
         const float* x = coord_[buf][dim].data();
@@ -409,12 +712,12 @@ float Hierarchy::SplitValue(int dim, int buf, uint32_t begin, uint32_t end, cons
 }
 
 uint32_t Hierarchy::Partition(int dim, float value, int buf, uint32_t begin, uint32_t end,
-                              Box5& leftBox, Box5& rightBox) {
+                              Bounds6& leftBox, Bounds6& rightBox) {
     const int other = buf ^ 1;
     counters_.rayMoves += end - begin;
     PartitionIo io;
     int mask = 0;
-    for (int k = 0; k < kDims; ++k) {
+    for (int k = 0; k < kCoords; ++k) {
         io.src[k] = coord_[buf][k].data();
         io.dst[k] = coord_[other][k].data();
         mask |= active_[k] ? 1 << k : 0;
@@ -423,28 +726,23 @@ uint32_t Hierarchy::Partition(int dim, float value, int buf, uint32_t begin, uin
     io.dstId = id_[other].data();
     io.key = coord_[buf][dim].data();
     const uint32_t mid = DispatchPartition(mask, io, value, begin, end, leftBox, rightBox);
-    for (int k = 0; k < kDims; ++k) {
+    for (int k = 0; k < kCoords; ++k) {
         if (!active_[k]) leftBox.lo[k] = leftBox.hi[k] = rightBox.lo[k] = rightBox.hi[k] = constant_[k];
     }
     return mid;
 }
 
-void Hierarchy::EmitLeaf(uint32_t node, uint32_t begin, uint32_t end, int buf, const Box5& tight,
-                         const ListView& list, LeafBatch& out) {
+void Hierarchy::EmitLeaf(uint32_t node, uint32_t begin, uint32_t end, int buf,
+                         const ListView& list, float endHi, LeafBatch& out) {
     RcLeaf leaf{};
     // Faces and leaves fill the range in order, so a leaf's rays keep their buffer positions.
     leaf.rayBegin = begin;
     leaf.rayCount = end - begin;
-    float reach = 0.0f;
-    for (uint32_t i = begin; i < end; ++i) {
-        const uint32_t id = id_[buf][i];
-        out.rayIndex[i] = id;
-        reach = std::max(reach, ray5_[id].reach);
-    }
-    // The current nearest-hit bound: no ray of the leaf gets farther along X than tight.hi[0] +
-    // reach, and the list is sorted by near X, so everything after that is cut at once.
-    const float farthest = tight.hi[0] + reach;
-    const size_t n = size_t(std::upper_bound(list.x0, list.x0 + list.n, farthest) - list.x0);
+    std::copy(id_[buf].begin() + begin, id_[buf].begin() + end, out.rayIndex.begin() + begin);
+    // The current nearest-hit bound: no ray of the leaf gets past X = endHi, and the list is
+    // sorted by near X, so everything after that is cut at once (Filter has already cut it when
+    // the leaf filtered its own list).
+    const size_t n = size_t(std::upper_bound(list.x0, list.x0 + list.n, endHi) - list.x0);
     leaf.candBegin = uint32_t(out.candidates.size());
     leaf.candCount = uint32_t(n);
     out.candidates.resize(leaf.candBegin + n);

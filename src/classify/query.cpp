@@ -5,7 +5,8 @@
 namespace rayclass::classify {
 
 uint64_t QueryLeafHost(const scene::Scene& scene, const LeafBatch& batch, const RcLeaf& leaf,
-                       std::span<const Ray> rays, std::span<geometry::Hit<float>> hits) {
+                       std::span<const Ray> rays, std::span<geometry::Hit<float>> hits,
+                       bool anyHit) {
     const int face = int(leaf.face);
     const int axis = FaceAxis(face);
     const RcCandidate* cand = batch.candidates.data() + leaf.candBegin;
@@ -23,6 +24,7 @@ uint64_t QueryLeafHost(const scene::Scene& scene, const LeafBatch& batch, const 
             if (best.Valid() && originX + best.t * speed < cand[c].nearX) break;
             geometry::IntersectPrimitive(scene, cand[c].prim, ray, best);
             ++tests;
+            if (anyHit && best.Valid()) break;
         }
         if (!best.Valid()) best.t = std::numeric_limits<float>::infinity();
         hits[id] = best;
@@ -31,9 +33,11 @@ uint64_t QueryLeafHost(const scene::Scene& scene, const LeafBatch& batch, const 
 }
 
 uint64_t QueryHost(const scene::Scene& scene, const LeafBatch& batch, std::span<const Ray> rays,
-                   std::span<geometry::Hit<float>> hits) {
+                   std::span<geometry::Hit<float>> hits, bool anyHit) {
     uint64_t tests = 0;
-    for (const RcLeaf& leaf : batch.leaves) tests += QueryLeafHost(scene, batch, leaf, rays, hits);
+    for (const RcLeaf& leaf : batch.leaves) {
+        tests += QueryLeafHost(scene, batch, leaf, rays, hits, anyHit);
+    }
     for (uint32_t id : batch.missed) hits[id] = geometry::Hit<float>{};
     return tests;
 }

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <string>
 
+#include <time.h>
+
 #include "rayclass/classify/query.h"
 
 namespace rayclass::classify {
@@ -26,6 +28,14 @@ glm::vec3 GeometricNormal(const scene::Scene& scene, uint32_t prim, const glm::v
     if (prim < scene.QuadricBase()) return p - scene.spheres[prim - scene.SphereBase()].center;
     const scene::Quadric& q = scene.quadrics[prim - scene.QuadricBase()];
     return geometry::QuadricGradient(q.c, p);
+}
+
+// CPU time of the calling thread: unlike the wall clock it does not count time the thread spent
+// preempted, which on these shared 2-core machines is most of the noise.
+double ThreadCpuSeconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
 }  // namespace
@@ -80,9 +90,34 @@ std::vector<Ray> MirrorRays(const scene::Scene& scene, std::span<const Ray> rays
     return out;
 }
 
+std::vector<Ray> ShadowRays(std::span<const Ray> rays, std::span<const geometry::Hit<float>> hits,
+                            const glm::vec3& light, float tMin) {
+    std::vector<Ray> out;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        if (!hits[i].Valid()) continue;
+        const Ray& r = rays[i];
+        const glm::vec3 p = r.origin + hits[i].t * r.direction;
+        const glm::vec3 toLight = light - p;
+        const float dist = glm::length(toLight);
+        if (!(dist > 0.0f)) continue;
+        Ray s;
+        s.origin = p;
+        s.direction = toLight / dist;
+        s.tMin = tMin;
+        s.tMax = dist;
+        out.push_back(s);
+    }
+    return out;
+}
+
+glm::vec3 AnchorLight(const scene::Scene& scene, float f) {
+    const Bounds3f box = scene.Bounds();
+    return box.Center() + glm::vec3(0.0f, f * box.Size().y, 0.0f);
+}
+
 ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
                            const Params& params, int repeats,
-                           std::span<geometry::Hit<float>> hits) {
+                           std::span<geometry::Hit<float>> hits, bool anyHit) {
     ClassifyStats s;
     s.nRays = uint32_t(rays.size());
     s.bruteForceTests = scene.PrimitiveCount();
@@ -90,18 +125,22 @@ ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
     Hierarchy h(scene, params);
     s.setupMs = 1e3 * Seconds(t0, Clock::now());
 
-    std::vector<double> times;
+    std::vector<double> times, cpuTimes;
     LeafBatch batch;
     for (int r = 0; r < std::max(repeats, 1); ++r) {
         // A fresh hierarchy each time, but the batch's arrays are reused, as a renderer would.
         h.Reset();
         const auto a = Clock::now();
+        const double c = ThreadCpuSeconds();
         h.Classify(rays, batch);
+        cpuTimes.push_back(ThreadCpuSeconds() - c);
         times.push_back(Seconds(a, Clock::now()));
     }
     std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
+    std::nth_element(cpuTimes.begin(), cpuTimes.begin() + cpuTimes.size() / 2, cpuTimes.end());
     const double n = std::max<double>(s.nRays, 1.0);
     s.classifyNsPerRay = 1e9 * times[times.size() / 2] / n;
+    s.classifyCpuNsPerRay = 1e9 * cpuTimes[cpuTimes.size() / 2] / n;
 
     s.nMissed = uint32_t(batch.missed.size());
     s.nLeaves = uint32_t(batch.leaves.size());
@@ -123,7 +162,7 @@ ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
         hits = own;
     }
     const auto q = Clock::now();
-    const uint64_t tests = QueryHost(scene, batch, rays, hits);
+    const uint64_t tests = QueryHost(scene, batch, rays, hits, anyHit);
     s.queryNsPerRay = 1e9 * Seconds(q, Clock::now()) / n;
     s.testsPerRay = double(tests) / n;
 

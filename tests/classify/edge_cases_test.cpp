@@ -239,5 +239,49 @@ TEST(EdgeCases, CoincidentPrimitivesBreakTiesByLowerId) {
     }
 }
 
+// Rays with a finite tMax (shadow rays) end inside the scene: their leaves' lists stop at the
+// largest end X, here before the walls at x = 1 and x = 2, and the hits stay exact. Rays in
+// every direction, some starting outside the box, also check the per-face conversion.
+TEST(EdgeCases, BoundedRaysListsStopAtTheirEnd) {
+    const scene::Scene s = Walls();
+    std::vector<Ray> rays;
+    for (int j = 0; j < 40; ++j) {
+        for (int k = 0; k < 40; ++k) {
+            Ray r;
+            r.origin = glm::vec3(-0.5f, -1.9f + 0.095f * float(j), -1.9f + 0.095f * float(k));
+            r.direction = glm::normalize(glm::vec3(1.0f, 0.05f * float(j % 5), -0.03f * float(k % 7)));
+            r.tMax = 0.9f;  // ends before x = 0.5
+            rays.push_back(r);
+        }
+    }
+    const size_t nBounded = rays.size();
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> pos(-3.0f, 3.0f), len(0.1f, 4.0f);
+    std::normal_distribution<float> dir;
+    for (int i = 0; i < 600; ++i) {
+        Ray r;
+        r.origin = glm::vec3(pos(rng), pos(rng), pos(rng));
+        r.direction = glm::vec3(dir(rng), dir(rng), dir(rng));
+        r.tMin = i % 4 == 0 ? 0.05f : 0.0f;
+        r.tMax = len(rng);
+        rays.push_back(r);
+    }
+    ExpectExact(s, rays);
+
+    const std::vector<Ray> bounded(rays.begin(), rays.begin() + long(nBounded));
+    for (const Params& p : {Deep(s), Params::ForScene(s)}) {
+        Hierarchy h(s, p);
+        const LeafBatch batch = h.Classify(bounded);
+        ASSERT_TRUE(batch.missed.empty());
+        for (const RcLeaf& leaf : batch.leaves) {
+            ASSERT_EQ(leaf.face, 0u);
+            for (uint32_t c = 0; c < leaf.candCount; ++c) {
+                EXPECT_LT(batch.candidates[leaf.candBegin + c].nearX, 0.5f)
+                    << "prim " << batch.candidates[leaf.candBegin + c].prim;
+            }
+        }
+    }
+}
+
 }  // namespace
 }  // namespace rayclass::classify

@@ -328,3 +328,42 @@ TEST(Hierarchy, MemoryOfInnerListsIsScratch) {
 
 }  // namespace
 }  // namespace rayclass::classify
+
+namespace rayclass::classify {
+namespace {
+
+// Issue 3 follow-up: a small group of rays (fewer than minRays) with a long list is split when
+// the cost function says so, rather than left as one leaf with the whole list; a small group with
+// a short list is not. Both stay exact.
+TEST(Hierarchy, CostFunctionSplitsSmallGroupsWithLongLists) {
+    const scene::Scene s = RandomScene(51, 6000, 0, 0);
+    std::mt19937 rng(52);
+    std::uniform_real_distribution<float> pos(-1.0f, 1.0f), slope(-0.9f, 0.9f);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 48; ++i) {  // all +X rays, spread over the box: one face, one long list
+        Ray r;
+        r.origin = glm::vec3(-1.1f, pos(rng), pos(rng));
+        r.direction = glm::normalize(glm::vec3(1.0f, slope(rng), slope(rng)));
+        rays.push_back(r);
+    }
+    Params p = Params::ForScene(s);
+    ASSERT_LT(rays.size(), p.minRays);
+    Hierarchy h(s, p);
+    const LeafBatch batch = h.Classify(rays);
+    ExpectEveryRayOnce(batch, uint32_t(rays.size()));
+    EXPECT_GT(batch.leaves.size(), 4u);
+    uint32_t longest = 0;
+    for (const RcLeaf& leaf : batch.leaves) longest = std::max(longest, leaf.candCount);
+    EXPECT_LT(longest, s.PrimitiveCount() / 2) << "leaves " << batch.leaves.size();
+    ExpectSameHits(Query(s, batch, rays), BruteForce(s, rays));
+
+    // A small scene: the lists are short, so the same rays stay one leaf.
+    const scene::Scene small = RandomScene(53, 40, 0, 0);
+    Hierarchy hs(small, Params::ForScene(small));
+    const LeafBatch few = hs.Classify(rays);
+    EXPECT_EQ(few.leaves.size(), 1u);
+    ExpectSameHits(Query(small, few, rays), BruteForce(small, rays));
+}
+
+}  // namespace
+}  // namespace rayclass::classify

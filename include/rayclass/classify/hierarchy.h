@@ -11,8 +11,12 @@
 //
 // Candidate lists hold every primitive whose padded box the node's beam may reach (conservative,
 // never drops a primitive a ray of the node hits), in the order of the box's near X, which the
-// face's presorted array fixes once and filtering keeps. Lists live only while a generation is
-// being subdivided: inner lists are scratch per depth, leaf lists go into the returned LeafBatch.
+// face's presorted array fixes once and filtering keeps. A beam ends where its rays end (their
+// tMax, cut at the scene box), so a node's list is first cut at the largest end X of its rays:
+// shadow rays' lists stop at the light. A node whose beam would keep most of a long list (checked
+// on a sample) passes the list to its children unfiltered instead of copying it. Lists live only
+// while a generation is being subdivided: inner lists are scratch per depth, leaf lists go into
+// the returned LeafBatch.
 //
 // Invariants (checked by tests/classify): every ray that can hit the scene lies in exactly one
 // leaf; a node's interval contains the 5D points of the rays that were routed to it.
@@ -36,6 +40,7 @@ static_assert(sizeof(RcCandidate) == 8);
 constexpr uint32_t kNoNode = 0xFFFFFFFFu;
 
 struct ListView;
+struct Bounds6;  // a Box5 plus the range of the rays' end X (private to the module)
 
 struct Node {
     Box5 box;                  // the node's interval: its rays' bounds when it was made
@@ -118,18 +123,20 @@ public:
     };
 
 private:
-    void BuildFace(int face, uint32_t begin, uint32_t end, LeafBatch& out);
-    void Process(uint32_t node, uint32_t begin, uint32_t end, int buf, const Box5& tight,
+    void Convert(std::span<const Ray> rays, uint32_t firstId, uint32_t* next, Bounds6* faceBounds,
+                 std::vector<rc_uint>& missed);
+    void BuildFace(int face, uint32_t begin, uint32_t end, const Bounds6& tight, LeafBatch& out);
+    void Process(uint32_t node, uint32_t begin, uint32_t end, int buf, const Bounds6& tight,
                  const ListView& list, bool reuseList, LeafBatch& out);
-    void EmitLeaf(uint32_t node, uint32_t begin, uint32_t end, int buf, const Box5& tight,
-                  const ListView& list, LeafBatch& out);
-    ListView Filter(const Box5& tight, const ListView& list, int level);
-    bool ChooseSplit(const Node& node, const Box5& tight, uint32_t nRays, const ListView& list,
+    void EmitLeaf(uint32_t node, uint32_t begin, uint32_t end, int buf, const ListView& list,
+                  float endHi, LeafBatch& out);
+    ListView Filter(const Bounds6& tight, const ListView& list, int level);
+    bool ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays, const ListView& list,
                      int& dim) const;
-    Box5 Bounds(int buf, uint32_t begin, uint32_t end) const;
-    float SplitValue(int dim, int buf, uint32_t begin, uint32_t end, const Box5& tight);
-    uint32_t Partition(int dim, float value, int buf, uint32_t begin, uint32_t end, Box5& left,
-                       Box5& right);
+    Bounds6 Bounds(int buf, uint32_t begin, uint32_t end) const;
+    float SplitValue(int dim, int buf, uint32_t begin, uint32_t end, const Bounds6& tight);
+    uint32_t Partition(int dim, float value, int buf, uint32_t begin, uint32_t end, Bounds6& left,
+                       Bounds6& right);
     uint32_t NewNode(const Box5& box, int face, int depth, bool isRemainder);
 
     const scene::Scene& scene_;
@@ -140,18 +147,18 @@ private:
     FaceList faceLists_[kFaceCount];
     std::vector<FaceList> levelLists_;    // scratch list per filter level
 
-    // The current generation: the inserted rays, each mapped to 5D (face kFaceCount: a miss),
-    // and the 5D rays by face in two ping-pong buffers.
+    // The current generation: the inserted rays, and their 5D points by face in two ping-pong
+    // buffers of structure-of-arrays: X, Y, Z, u, v and the X where the ray ends (its start's X
+    // plus its reach, which cuts beams: shadow rays end at the light).
+    static constexpr int kCoords = kDims + 1;
     std::vector<std::span<const Ray>> inserted_;
     uint32_t nInserted_ = 0;
-    std::vector<Ray5> ray5_;
-    std::vector<float> coord_[2][kDims];
+    std::vector<float> coord_[2][kCoords];
     std::vector<uint32_t> id_[2];
     std::vector<uint32_t> dest_;
     std::vector<float> keys_;
-    bool active_[kDims] = {};  // dimensions that vary in the face being built
-    float constant_[kDims] = {};
-    float faceReach_ = 0.0f;
+    bool active_[kCoords] = {};  // coordinates that vary in the face being built
+    float constant_[kCoords] = {};
     BuildCounters counters_;
 };
 

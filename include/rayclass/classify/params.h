@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "rayclass/scene/scene.h"
 
@@ -28,19 +29,23 @@ struct Params {
     // one-dimension splits, which overlap heavily.
     int splitsPerList = 1;
 
-    // Cost function. A leaf with R rays and candidates of summed intersection cost C (ns per
-    // ray) is split when R > minRays, its list holds more than minCandidates entries, one of its
-    // extents exceeds the minimum hypercube size, and the query time a split is expected to save,
+    // Cost function. A leaf with R >= 2 rays and candidates of summed intersection cost C (ns per
+    // ray) is split when its list holds more than minCandidates entries, one of its extents
+    // exceeds the minimum hypercube size, and the query time a split is expected to save,
     // R * C * splitGain, exceeds the split's own cost, 2 * nCandidates * boxTestCost (two child
-    // lists) + R * rayMoveCost.
+    // lists) + R * rayMoveCost, plus, when R <= minRays, the cost of the extra under-filled leaf
+    // it makes: minRays * 16 * triangleCost (a work-group's first block of 16 candidates). So
+    // groups above minRays split on the cost function alone and smaller ones only for long lists
+    // (with the defaults a 16-ray group needs about 260 candidates, a 2-ray group about 2,400),
+    // instead of a hard gate that left small groups with lists of 100k+ candidates.
     //
     // Per-test costs in ns on one core of these 2-vCPU Xeon (Sapphire Rapids) machines, Release
-    // build, measured 2026-11-22 by bench/intersect_bench (scalar float routines of
+    // build, measured 2026-11-22 by bench/classify/intersect_bench (scalar float routines of
     // geometry/intersect.h through IntersectPrimitive, one ray against 4096 random primitives):
     //   triangle 13.9 ns, sphere 5.2 ns, quadric 12.4 ns; list filter 0.45 ns per box (AVX-512).
     // The ray-move cost, about 1 ns per ray and level, is classify_bench's partition time over
     // its moves. Only the ratios matter to the decision.
-    uint32_t minRays = 64;        // a work-group's worth of rays is the device's unit of work
+    uint32_t minRays = 64;        // a work-group's worth of rays: smaller leaves cost extra
     uint32_t minCandidates = 16;  // the device tests 16 candidates at once: fewer gain nothing
     float triangleCost = 13.9f;
     float sphereCost = 5.2f;
@@ -64,5 +69,15 @@ struct Params {
     // Defaults for `scene`: the padding from its diagonal.
     static Params ForScene(const scene::Scene& scene);
 };
+
+// Sets one parameter by its command-line name (`--classify NAME=VALUE`):
+//   min-rays N, min-candidates N, splits-per-list N (N >= 1), split midpoint|median,
+//   min-origin-fraction F, min-dir-fraction F (0 <= F <= 1), dir-weight W (W > 0).
+// Throws rayclass::UsageError naming the valid names or values when `name` is unknown or `value`
+// does not parse completely or is out of range.
+void SetParam(Params& params, const std::string& name, const std::string& value);
+
+// The names SetParam accepts, comma-separated, for help texts.
+const char* ParamNames();
 
 }  // namespace rayclass::classify

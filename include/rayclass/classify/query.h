@@ -18,13 +18,15 @@ inline geometry::Ray<float> ToGeometryRay(const Ray& r) {
 }
 
 // Queries the rays of leaf `leaf` of `batch`; writes hits[rayIndex] and returns the number of
-// primitive tests made.
+// primitive tests made. With `anyHit` (shadow rays) a ray stops at its first hit in
+// (tMin, tMax), which is then some hit rather than the nearest.
 uint64_t QueryLeafHost(const scene::Scene& scene, const LeafBatch& batch, const RcLeaf& leaf,
-                       std::span<const Ray> rays, std::span<geometry::Hit<float>> hits);
+                       std::span<const Ray> rays, std::span<geometry::Hit<float>> hits,
+                       bool anyHit = false);
 
 // Every ray of the batch: leaves, plus "no hit" for the missed rays. `hits` has batch.nRays
 // entries. Returns the number of primitive tests made.
 uint64_t QueryHost(const scene::Scene& scene, const LeafBatch& batch, std::span<const Ray> rays,
-                   std::span<geometry::Hit<float>> hits);
+                   std::span<geometry::Hit<float>> hits, bool anyHit = false);
 
 }  // namespace rayclass::classify

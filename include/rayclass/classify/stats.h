@@ -1,6 +1,7 @@
 // Statistics of the ray classification for one generation of rays: what `rayclass classify-stats`
-// and bench/classify_bench print. Also the two standard workloads they measure: the eye rays of
-// the anchor camera (design/notes/measured-anchors.md) and one generation of mirror rays.
+// and bench/classify/classify_bench print. Also the two standard workloads they measure: the eye rays of
+// the anchor camera (design/notes/measured-anchors.md), one generation of mirror rays and one of
+// shadow rays.
 #pragma once
 
 #include <cstdint>
@@ -25,6 +26,7 @@ struct ClassifyStats {
     double boxTestsPerRay = 0.0;   // candidate tests while filtering lists
     double rayMovesPerRay = 0.0;   // levels a ray was moved through
     double classifyNsPerRay = 0.0; // Insert + Subdivide, median over the repeats, calling thread only
+    double classifyCpuNsPerRay = 0.0;  // the same in the thread's CPU time (excludes preemption)
     double queryNsPerRay = 0.0;    // scalar host query (reference path, not the device's)
     double setupMs = 0.0;          // per-scene preprocessing: presorted face lists
     size_t hierarchyBytes = 0;     // nodes + face lists + peak scratch
@@ -33,10 +35,11 @@ struct ClassifyStats {
 };
 
 // Classifies `rays` `repeats` times in a fresh hierarchy (the median time counts), queries them
-// once on the host and fills every field. When `hits` is not empty it receives the query's hits.
+// once on the host (any hit with `anyHit`) and fills every field. When `hits` is not empty it
+// receives the query's hits.
 ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
                            const Params& params, int repeats = 3,
-                           std::span<geometry::Hit<float>> hits = {});
+                           std::span<geometry::Hit<float>> hits = {}, bool anyHit = false);
 
 // The anchor camera: eye = box centre - 0.25 size_x (1, 0, 0), looking along +x, up +y, right +z,
 // vertical field of view 60 degrees, pixel centres, row 0 at the top.
@@ -46,6 +49,14 @@ std::vector<Ray> AnchorEyeRays(const scene::Scene& scene, uint32_t width, uint32
 // facing the ray), direction d - 2 (d.n) n normalised, tMin 0.
 std::vector<Ray> MirrorRays(const scene::Scene& scene, std::span<const Ray> rays,
                             std::span<const geometry::Hit<float>> hits);
+
+// One shadow ray per ray that hit, from the hit point P towards the point light `light`:
+// direction normalised, tMin 1e-4 diagonal (the anchors' tnear), tMax |light - P|.
+std::vector<Ray> ShadowRays(std::span<const Ray> rays, std::span<const geometry::Hit<float>> hits,
+                            const glm::vec3& light, float tMin);
+
+// The anchors' shadow light: box centre + f size_y (0, 1, 0) (sibenik f = 0.1).
+glm::vec3 AnchorLight(const scene::Scene& scene, float f = 0.1f);
 
 // The process's peak resident set (VmHWM), in bytes; 0 where /proc is not available.
 size_t PeakRssBytes();
