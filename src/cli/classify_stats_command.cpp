@@ -23,6 +23,7 @@ options:
                           design/notes/measured-anchors.md (default: scene for .json, anchor
                           for .obj)
   --repeat N              classify N times, report the median time (default 3)
+  --classify NAME=VALUE   a cost-function setting (see 'rayclass render --help'), repeatable
   --json                  one JSON object instead of key: value lines
 )";
 
@@ -86,6 +87,7 @@ int ClassifyStatsCommand(const std::vector<std::string>& args, std::ostream& out
     std::string file, camera;
     uint32_t width = 1024, height = 768, repeat = 3;
     bool json = false;
+    std::vector<std::pair<std::string, std::string>> settings;
     for (size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         auto value = [&]() -> const std::string& {
@@ -106,6 +108,13 @@ int ClassifyStatsCommand(const std::vector<std::string>& args, std::ostream& out
             if (camera != "scene" && camera != "anchor") {
                 throw UsageError("--camera must be scene or anchor, not '" + camera + "'");
             }
+        } else if (a == "--classify") {
+            const std::string& setting = value();
+            const auto eq = setting.find('=');
+            if (eq == std::string::npos) {
+                throw UsageError("--classify expects NAME=VALUE, not '" + setting + "'");
+            }
+            settings.emplace_back(setting.substr(0, eq), setting.substr(eq + 1));
         } else if (a == "--json") {
             json = true;
         } else if (!a.empty() && a[0] == '-') {
@@ -123,7 +132,8 @@ int ClassifyStatsCommand(const std::vector<std::string>& args, std::ostream& out
     scene.camera.height = height;
     const std::vector<classify::Ray> eye =
         camera == "anchor" ? classify::AnchorEyeRays(scene, width, height) : SceneEyeRays(scene);
-    const classify::Params params = classify::Params::ForScene(scene);
+    classify::Params params = classify::Params::ForScene(scene);
+    for (const auto& [name, v] : settings) classify::SetParam(params, name, v);
     std::vector<geometry::Hit<float>> hits(eye.size());
     const auto eyeStats = classify::ComputeStats(scene, eye, params, int(repeat), hits);
     const std::vector<classify::Ray> mirror = classify::MirrorRays(scene, eye, hits);

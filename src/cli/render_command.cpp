@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "rayclass/cli/cli.h"
+#include "rayclass/classify/params.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/core/error.h"
 #include "rayclass/image/image.h"
@@ -39,6 +40,9 @@ options:
                           from 'rayclass devices' (default auto)
   --accel A               ray query: classify (5D ray classification, default) or brute
   --kernel K              classified query kernels: auto (default), vertex, fragment, scalar
+  --classify NAME=VALUE   a cost-function setting of the classification (repeatable): min-rays,
+                          min-candidates, splits-per-list, split (midpoint|median),
+                          min-origin-fraction, min-dir-fraction, dir-weight
   --ray-encoding E        ray directions as float (default) or polar16: packed 16-bit polar
                           angles, the thesis's compact form (costs accuracy, see README)
   --reference             render with the double-precision host reference renderer
@@ -123,6 +127,15 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
                 throw UsageError("--accel must be classify or brute, not '" + r.options.accel +
                                  "'");
             }
+        } else if (a == "--classify") {
+            const std::string& setting = value();
+            const auto eq = setting.find('=');
+            if (eq == std::string::npos) {
+                throw UsageError("--classify expects NAME=VALUE, not '" + setting + "'");
+            }
+            classify::Params probe;
+            classify::SetParam(probe, setting.substr(0, eq), setting.substr(eq + 1));
+            r.options.classifyParams.emplace_back(setting.substr(0, eq), setting.substr(eq + 1));
         } else if (a == "--kernel") {
             r.options.kernel = value();
             render::ParseKernelStyle(r.options.kernel);

@@ -199,8 +199,11 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         query = MakeBruteForceQuery(ctx_, program, sceneBuffers);
     } else {
         t0 = Clock::now();
-        query = MakeClassifiedQuery(ctx_, program, sceneBuffers, scene_,
-                                    classify::Params::ForScene(scene_),
+        classify::Params classifyParams = classify::Params::ForScene(scene_);
+        for (const auto& [name, value] : options_.classifyParams) {
+            classify::SetParam(classifyParams, name, value);
+        }
+        query = MakeClassifiedQuery(ctx_, program, sceneBuffers, scene_, classifyParams,
                                     ParseKernelStyle(options_.kernel));
         stats.timeS["classify_setup"] = SecondsSince(t0);
     }

@@ -3,6 +3,8 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace rayclass::render {
 
@@ -13,6 +15,8 @@ struct RenderOptions {
     uint32_t batchRays = 1u << 20;  // rays per kernel launch (bounds device buffers)
     std::string device = "auto";    // OpenCL device: auto, cpu, gpu or an index
     std::string accel = "classify";     // ray query: classify (ray classification) or brute
+    // Cost-function settings of the classification (classify::SetParam names and values).
+    std::vector<std::pair<std::string, std::string>> classifyParams;
     std::string kernel = "auto";        // classified query style: scalar, vertex, fragment, auto
     std::string buildOptions;           // extra OpenCL build options
     std::string rayEncoding = "float";  // ray directions: float or polar16 (cl/encoding.cl)
