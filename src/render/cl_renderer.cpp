@@ -1,6 +1,7 @@
 #include "rayclass/render/cl_renderer.h"
 
 #include "rayclass/classify/params.h"
+#include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
 
 #include <chrono>
@@ -147,7 +148,7 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
         "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
         (extraOptions.empty() ? "" : " " + extraOptions);
     return ctx.BuildProgram(
-        {"camera.cl", "intersect.cl", "shade.cl", "generation.cl", "brute.cl", "classified.cl"},
+        {"camera.cl", "intersect.cl", "shade.cl", "generation.cl", "brute.cl", "classified.cl", "bvh.cl"},
         options);
 }
 
@@ -188,6 +189,10 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     std::unique_ptr<RayQuery> query;
     if (options_.accel == "brute") {
         query = MakeBruteForceQuery(ctx_, program, sceneBuffers);
+    } else if (options_.accel == "bvh") {
+        t0 = Clock::now();
+        query = MakeBvhQuery(ctx_, program, sceneBuffers, scene_);
+        stats.timeS["bvh_build"] = SecondsSince(t0);
     } else {
         t0 = Clock::now();
         query = MakeClassifiedQuery(ctx_, program, sceneBuffers, scene_,
@@ -373,7 +378,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         }
     }
     stats.timeS["host"] = hostSeconds;
-    if (options_.accel != "brute") stats.timeS["host_classify"] = query->HostSeconds();
+    if (options_.accel == "classify") stats.timeS["host_classify"] = query->HostSeconds();
     stats.timeS["render"] = SecondsSince(tStart);
     return img;
 }
