@@ -3,7 +3,7 @@
 //
 //   raybench SCENE --camera NAME --light SPEC [--width W --height H] [--runs N] [--warmup N]
 //            [--methods LIST] [--brute-max-prims N] [--save-rays FILE] [--cl-options S]
-//            [--device D] [--seed S]
+//            [--device D] [--seed S] [--kinds LIST]
 //   raybench --micro [--rays N] [--prims N] [--runs N]
 //
 // The eye rays' hits come from the BVH query (identical to brute force); the secondary sets are
@@ -217,6 +217,7 @@ int main(int argc, char** argv) try {
     std::string camera = "scene", light = "scene", saveRays, clOptions, device = "auto";
     uint32_t width = 1024, height = 768, seed = 1, bruteMaxPrims = 5000;
     int runs = 5, warmup = 1;
+    std::vector<std::string> kinds(std::begin(bench::kKinds), std::end(bench::kKinds));
     std::vector<std::string> methods{"classify/scalar", "classify/vertex", "classify/fragment",
                                      "classify/auto", "bvh", "brute"};
     for (int i = 2; i + 1 < argc; i += 2) {
@@ -228,6 +229,7 @@ int main(int argc, char** argv) try {
         else if (a == "--runs") runs = std::max(1, std::stoi(v));
         else if (a == "--warmup") warmup = std::max(0, std::stoi(v));
         else if (a == "--methods") methods = Split(v);
+        else if (a == "--kinds") kinds = Split(v);
         else if (a == "--brute-max-prims") bruteMaxPrims = uint32_t(std::stoul(v));
         else if (a == "--save-rays") saveRays = v;
         else if (a == "--cl-options") clOptions = v;
@@ -278,7 +280,8 @@ int main(int argc, char** argv) try {
     for (int k = 0; k < bench::kNumKinds; ++k) {
         const auto& set = sets.sets[k];
         const uint32_t n = uint32_t(set.size());
-        if (n == 0) continue;
+        if (n == 0 || std::find(kinds.begin(), kinds.end(), bench::kKinds[k]) == kinds.end())
+            continue;
         const bool shadow = bench::IsShadowKind(k);
         std::vector<RcRay> rays;
         std::vector<RcShadowRay> shadowRays;
