@@ -128,6 +128,13 @@ __kernel void rc_layout_probe(__global uint* out) {
     RC_FIELD(RcTriangleBlock16, count);
     RC_FIELD(RcTriangleBlock16, nearX);
     RC_FIELD(RcTriangleBlock16, pad);
+    RC_STRUCT(RcBvhNode);
+    RC_FIELD(RcBvhNode, boxMin);
+    RC_FIELD(RcBvhNode, boxMax);
+    RC_FIELD(RcBvhNode, first);
+    RC_FIELD(RcBvhNode, count);
+    RC_FIELD(RcBvhNode, axis);
+    RC_FIELD(RcBvhNode, pad);
 
     out[0] = n;
 }

@@ -176,4 +176,19 @@ typedef struct RcTriangleBlock16 {
     rc_uint pad[13];
 } RcTriangleBlock16;
 
+/* A node of the bounding volume hierarchy (--accel bvh; include/rayclass/bvh/bvh.h), flattened in
+ * depth-first order. boxMin/boxMax: the node's box (w unused), padded so that float rounding in
+ * the slab test never loses a primitive the intersection routines would hit. count > 0: a leaf
+ * whose primitives' global ids are primIndex[first, first + count); count == 0: an interior node
+ * whose children are nodes[self + 1] and nodes[first], split along `axis` (0, 1, 2: the child at
+ * self + 1 holds the lower centroids). 48 bytes. */
+typedef struct RcBvhNode {
+    rc_float4 boxMin;
+    rc_float4 boxMax;
+    rc_uint first;
+    rc_uint count;
+    rc_uint axis;
+    rc_uint pad;
+} RcBvhNode;
+
 #endif

@@ -38,7 +38,8 @@ options:
   --min-weight W          secondary rays weaker than W are not spawned (default 0.001)
   --device D              OpenCL device: auto (first GPU, else CPU), gpu, cpu or an index
                           from 'rayclass devices' (default auto)
-  --accel A               ray query: classify (5D ray classification, default) or brute
+  --accel A               ray query: classify (5D ray classification, default), bvh
+                          (binned-SAH BVH, same kernels' routines) or brute
   --kernel K              classified query kernels: auto (default), vertex, fragment, scalar
   --classify NAME=VALUE   a cost-function setting of the classification (repeatable): min-rays,
                           min-candidates, splits-per-list, split (midpoint|median),
@@ -123,9 +124,10 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
             r.options.device = value();
         } else if (a == "--accel") {
             r.options.accel = value();
-            if (r.options.accel != "classify" && r.options.accel != "brute") {
-                throw UsageError("--accel must be classify or brute, not '" + r.options.accel +
-                                 "'");
+            if (r.options.accel != "classify" && r.options.accel != "brute" &&
+                r.options.accel != "bvh") {
+                throw UsageError("--accel must be classify, bvh or brute, not '" +
+                                 r.options.accel + "'");
             }
         } else if (a == "--classify") {
             const std::string& setting = value();

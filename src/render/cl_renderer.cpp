@@ -5,6 +5,7 @@
 #include <future>
 
 #include "rayclass/classify/params.h"
+#include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
 
 namespace rayclass::render {
@@ -147,7 +148,7 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
     const std::string options = "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
                                 (extraOptions.empty() ? "" : " " + extraOptions);
     return ctx.BuildProgram({"camera.cl", "intersect.cl", "encoding.cl", "shade.cl",
-                             "generation.cl", "brute.cl", "classified.cl"},
+                             "generation.cl", "brute.cl", "classified.cl", "bvh.cl"},
                             options);
 }
 
@@ -197,6 +198,10 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     std::unique_ptr<RayQuery> query;
     if (options_.accel == "brute") {
         query = MakeBruteForceQuery(ctx_, program, sceneBuffers);
+    } else if (options_.accel == "bvh") {
+        t0 = Clock::now();
+        query = MakeBvhQuery(ctx_, program, sceneBuffers, scene_);
+        stats.timeS["bvh_build"] = SecondsSince(t0);
     } else {
         t0 = Clock::now();
         classify::Params classifyParams = classify::Params::ForScene(scene_);
@@ -419,7 +424,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         }
     }
     stats.timeS["host"] = hostSeconds;
-    if (options_.accel != "brute") stats.timeS["host_classify"] = query->HostSeconds();
+    if (options_.accel == "classify") stats.timeS["host_classify"] = query->HostSeconds();
     stats.timeS["render"] = SecondsSince(tStart);
     // What neither the kernels' profiling nor the host timers cover: copies between host and
     // device, buffer allocation, launch overhead and waiting.

@@ -327,7 +327,7 @@ TEST_F(CliFailure, FailuresAfterLoadingLeaveNoOutput) {
           "-cl-no-such-option"},
          1,
          "rayclass render: error: building OpenCL program (camera.cl, intersect.cl, encoding.cl, "
-         "shade.cl, generation.cl, brute.cl, classified.cl) with options '-cl-std=CL1.2 "
+         "shade.cl, generation.cl, brute.cl, classified.cl, bvh.cl) with options '-cl-std=CL1.2 "
          "-DRC_LOCAL_SIZE=64 -cl-no-such-option' failed "
          "with CL_INVALID_BUILD_OPTIONS (-43)\nbuild log:\n",
          "x.exr",

@@ -147,6 +147,13 @@ std::vector<Entry> HostLayout() {
     RC_FIELD(RcTriangleBlock16, count);
     RC_FIELD(RcTriangleBlock16, nearX);
     RC_FIELD(RcTriangleBlock16, pad);
+    RC_STRUCT(RcBvhNode);
+    RC_FIELD(RcBvhNode, boxMin);
+    RC_FIELD(RcBvhNode, boxMax);
+    RC_FIELD(RcBvhNode, first);
+    RC_FIELD(RcBvhNode, count);
+    RC_FIELD(RcBvhNode, axis);
+    RC_FIELD(RcBvhNode, pad);
 #undef RC_STRUCT
 #undef RC_FIELD
     return e;

@@ -88,6 +88,18 @@ TEST_P(RenderMatchesReference, WithinBounds) {
         EXPECT_EQ(stats.RaysTotal(), bruteStats.RaysTotal()) << style;
         EXPECT_LT(stats.intersectionTests, bruteStats.intersectionTests) << style;
     }
+    // The BVH query uses the same routines and tie-break: identical too.
+    {
+        options.accel = "bvh";
+        RenderStats stats;
+        const image::Image img = ClRenderer(SharedContext(), scene, options).Render(stats);
+        const image::ImageComparison same = image::Compare(img, brute);
+        EXPECT_EQ(same.idMismatchPixels, 0u) << "bvh";
+        EXPECT_EQ(same.maxAbsError, 0.0) << "bvh";
+        EXPECT_EQ(stats.RaysTotal(), bruteStats.RaysTotal()) << "bvh";
+        EXPECT_EQ(stats.accel, "bvh");
+        EXPECT_LE(stats.intersectionTests, bruteStats.intersectionTests) << "bvh";
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, RenderMatchesReference, testing::ValuesIn(kCases),

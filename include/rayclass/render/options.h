@@ -14,7 +14,7 @@ struct RenderOptions {
     bool aovs = false;              // fill depth, id and normal layers of the first hit
     uint32_t batchRays = 1u << 20;  // rays per kernel launch (bounds device buffers)
     std::string device = "auto";    // OpenCL device: auto, cpu, gpu or an index
-    std::string accel = "classify";     // ray query: classify (ray classification) or brute
+    std::string accel = "classify";     // ray query: classify (ray classification), bvh or brute
     // Cost-function settings of the classification (classify::SetParam names and values).
     std::vector<std::pair<std::string, std::string>> classifyParams;
     std::string kernel = "auto";        // classified query style: scalar, vertex, fragment, auto

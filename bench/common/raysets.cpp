@@ -1,0 +1,190 @@
+#include "raysets.h"
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <random>
+#include <stdexcept>
+
+#include "rayclass/geometry/intersect.h"
+
+namespace rayclass::bench {
+
+scene::Camera NamedCamera(const scene::Scene& scene, const std::string& name, uint32_t width,
+                          uint32_t height) {
+    scene::Camera c = scene.camera;
+    c.width = width;
+    c.height = height;
+    const Bounds3f box = scene.Bounds();
+    if (name == "scene") return c;
+    if (name == "orbit") {
+        const glm::vec3 rel = c.position - c.lookAt;
+        const float a = glm::radians(40.0f), ca = std::cos(a), sa = std::sin(a);
+        c.position = c.lookAt + glm::vec3(ca * rel.x + sa * rel.z, rel.y, -sa * rel.x + ca * rel.z);
+        return c;
+    }
+    if (name == "anchor" || name == "reverse") {
+        const float sx = box.Size().x, sy = box.Size().y;
+        const float s = name == "anchor" ? 1.0f : -1.0f;
+        c.position = box.Center() - s * glm::vec3(0.25f * sx, 0.0f, 0.0f);
+        if (name == "reverse") c.position.y += 0.1f * sy;
+        c.lookAt = c.position + glm::vec3(s, 0.0f, 0.0f);
+        c.up = glm::vec3(0.0f, 1.0f, 0.0f);
+        c.fovYDegrees = 60.0f;
+        return c;
+    }
+    throw std::invalid_argument("unknown camera '" + name +
+                                "' (scene, orbit, anchor or reverse)");
+}
+
+glm::vec3 NamedLight(const scene::Scene& scene, const std::string& spec) {
+    if (spec == "scene") {
+        if (scene.lights.empty()) throw std::invalid_argument("the scene has no light");
+        return scene.lights[0].position;
+    }
+    if (spec.rfind("anchor:", 0) == 0) {
+        const float f = std::stof(spec.substr(7));
+        const Bounds3f box = scene.Bounds();
+        return box.Center() + f * box.Size().y * glm::vec3(0.0f, 1.0f, 0.0f);
+    }
+    throw std::invalid_argument("unknown light '" + spec + "' (scene or anchor:F)");
+}
+
+std::vector<BenchRay> EyeRays(const scene::Camera& camera) {
+    // RcCamera's basis (render/device_scene.cpp's CameraBasis) in double, then the float formula.
+    const glm::dvec3 pos(camera.position), at(camera.lookAt), upHint(camera.up);
+    const glm::dvec3 forward = glm::normalize(at - pos);
+    const glm::dvec3 right = glm::normalize(glm::cross(forward, upHint));
+    const glm::dvec3 up = glm::cross(right, forward);
+    const double tanY = std::tan(glm::radians(double(camera.fovYDegrees)) * 0.5);
+    const double tanX = tanY * double(camera.width) / double(camera.height);
+    const glm::vec3 o(pos), f(forward), r(right), u(up);
+    const float tx = float(tanX), ty = float(tanY);
+    std::vector<BenchRay> rays;
+    rays.reserve(size_t(camera.width) * camera.height);
+    for (uint32_t y = 0; y < camera.height; ++y) {
+        for (uint32_t x = 0; x < camera.width; ++x) {
+            const float sx = (2.0f * (float(x) + 0.5f) / float(camera.width) - 1.0f) * tx;
+            const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(camera.height)) * ty;
+            BenchRay ray;
+            ray.origin = o;
+            ray.tMin = 0.0f;
+            ray.direction = glm::normalize(f + sx * r + sy * u);
+            ray.tMax = INFINITY;
+            rays.push_back(ray);
+        }
+    }
+    return rays;
+}
+
+namespace {
+
+glm::vec3 GeometricNormal(const scene::Scene& scene, uint32_t prim, const glm::vec3& p) {
+    if (prim < scene.SphereBase()) {
+        const auto& v = scene.triangles[prim].p;
+        return glm::cross(v[1] - v[0], v[2] - v[0]);
+    }
+    if (prim < scene.QuadricBase()) return p - scene.spheres[prim - scene.SphereBase()].center;
+    const scene::Quadric& q = scene.quadrics[prim - scene.QuadricBase()];
+    return geometry::QuadricGradient(q.c, p);
+}
+
+}  // namespace
+
+RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
+                    const std::vector<BenchHit>& hits, const glm::vec3& light, uint32_t seed) {
+    RaySets out;
+    out.sets[0] = eye;
+    const float offset = 1e-4f * scene.Bounds().Diagonal();
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> uni(0.0f, 1.0f);
+    constexpr float kIor = 1.5f;
+    for (size_t i = 0; i < eye.size(); ++i) {
+        if (hits[i].prim == 0xFFFFFFFFu) continue;
+        const glm::vec3 d = eye[i].direction;
+        const glm::vec3 p = eye[i].origin + hits[i].t * d;
+        glm::vec3 n = GeometricNormal(scene, hits[i].prim, p);
+        if (!(glm::length(n) > 0.0f)) continue;
+        n = glm::normalize(n);
+        if (glm::dot(n, d) > 0.0f) n = -n;  // facing the eye
+        const glm::vec3 front = p + offset * n, back = p - offset * n;
+        // Shadow: towards the light, from the side facing it.
+        {
+            const glm::vec3 toLight = light - p;
+            const float dist = glm::length(toLight);
+            if (dist > 0.0f) {
+                const glm::vec3 l = toLight / dist;
+                BenchRay s;
+                s.origin = glm::dot(l, n) >= 0.0f ? front : back;
+                s.direction = l;
+                s.tMax = glm::length(light - s.origin);
+                out.sets[1].push_back(s);
+            }
+        }
+        BenchRay m;
+        m.origin = front;
+        m.direction = glm::normalize(d - 2.0f * glm::dot(d, n) * n);
+        m.tMax = INFINITY;
+        out.sets[2].push_back(m);
+        // Refraction into glass (n faces the incoming ray): Snell with eta = 1 / ior.
+        {
+            const float eta = 1.0f / kIor, cosi = -glm::dot(d, n);
+            const float k = 1.0f - eta * eta * (1.0f - cosi * cosi);
+            if (k >= 0.0f) {
+                BenchRay t;
+                t.origin = back;
+                t.direction = glm::normalize(eta * d + (eta * cosi - std::sqrt(k)) * n);
+                t.tMax = INFINITY;
+                out.sets[3].push_back(t);
+            }
+        }
+        // Cosine-distributed about n (Malley's method on an orthonormal basis of n).
+        {
+            const float u1 = uni(rng), u2 = uni(rng);
+            const float r = std::sqrt(u1), phi = 6.28318530718f * u2;
+            const glm::vec3 a = std::abs(n.x) > 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+            const glm::vec3 b1 = glm::normalize(glm::cross(n, a)), b2 = glm::cross(n, b1);
+            const float z = std::sqrt(std::max(0.0f, 1.0f - u1));
+            BenchRay g;
+            g.origin = front;
+            g.direction = glm::normalize(r * std::cos(phi) * b1 + r * std::sin(phi) * b2 + z * n);
+            g.tMax = INFINITY;
+            out.sets[4].push_back(g);
+        }
+    }
+    return out;
+}
+
+void SaveRaySets(const std::filesystem::path& file, const RaySets& sets) {
+    std::ofstream f(file, std::ios::binary);
+    if (!f) throw std::runtime_error("cannot write " + file.string());
+    f.write("RCRAYS1", 8);
+    for (const auto& s : sets.sets) {
+        const uint64_t n = s.size();
+        f.write(reinterpret_cast<const char*>(&n), sizeof n);
+    }
+    for (const auto& s : sets.sets) {
+        f.write(reinterpret_cast<const char*>(s.data()), std::streamsize(s.size() * sizeof(BenchRay)));
+    }
+    if (!f) throw std::runtime_error("error writing " + file.string());
+}
+
+RaySets LoadRaySets(const std::filesystem::path& file) {
+    std::ifstream f(file, std::ios::binary);
+    char magic[8];
+    if (!f.read(magic, 8) || std::memcmp(magic, "RCRAYS1", 8) != 0) {
+        throw std::runtime_error(file.string() + ": not a ray-set file");
+    }
+    RaySets sets;
+    uint64_t counts[kNumKinds];
+    f.read(reinterpret_cast<char*>(counts), sizeof counts);
+    for (int k = 0; k < kNumKinds; ++k) {
+        sets.sets[k].resize(counts[k]);
+        f.read(reinterpret_cast<char*>(sets.sets[k].data()),
+               std::streamsize(counts[k] * sizeof(BenchRay)));
+    }
+    if (!f) throw std::runtime_error(file.string() + ": truncated");
+    return sets;
+}
+
+}  // namespace rayclass::bench

@@ -1,0 +1,374 @@
+// rayclass's side of scripts/bench: times each ray query (classified kernels per style, the BVH,
+// brute force on small scenes) on the ray sets of bench/common/raysets.h, one kind at a time.
+//
+//   raybench SCENE --camera NAME --light SPEC [--width W --height H] [--runs N] [--warmup N]
+//            [--methods LIST] [--brute-max-prims N] [--save-rays FILE] [--cl-options S]
+//            [--device D] [--seed S] [--kinds LIST]
+//   raybench --micro [--rays N] [--prims N] [--runs N]
+//
+// The eye rays' hits come from the BVH query (identical to brute force); the secondary sets are
+// made from them on the host. Every measured run makes a fresh query (the classification's
+// hierarchy is built lazily per render, so its construction is part of the host classification
+// time) and answers the whole set. CSV on stdout, one row per kind x method:
+//   kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,setup_s,
+//   tests_per_ray,hits
+// median_s: wall time of the query stage (host classification + copies + query kernels), the
+// medians of host_s/copy_s/kernel_s split it; shade_s: separate shading kernels the classified
+// styles launch (excluded from median_s; the vertex style's shading is fused into its query
+// kernel and cannot be excluded); setup_s: query construction (BVH build and upload, the
+// classification's presorted lists); mrays_s = rays / median_s; hits: rays that hit / are
+// blocked (equal across methods). The rays of the classified query are read back from the device
+// inside the timed stage, as the renderer does.
+//
+// --micro: peak intersection tests per second of the brute-force kernel (one ray per work-item,
+// scalar loop) for spheres, quadrics and triangles, N random rays against P primitives each.
+//   kind,method,rays,median_s,min_s,max_s,mrays_s,tests_per_s
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "raysets.h"
+#include "rayclass/classify/params.h"
+#include "rayclass/clrt/context.h"
+#include "rayclass/render/bvh_query.h"
+#include "rayclass/render/classified_query.h"
+#include "rayclass/render/device_scene.h"
+#include "rayclass/scene/loader.h"
+
+using namespace rayclass;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double Since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+double Median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::vector<std::string> Split(const std::string& s) {
+    std::vector<std::string> out;
+    std::stringstream ss(s);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+        if (!item.empty()) out.push_back(item);
+    }
+    return out;
+}
+
+template <typename T>
+cl::Buffer Upload(clrt::Context& ctx, const std::vector<T>& v) {
+    std::vector<T> one(1);
+    return clrt::Check("clCreateBuffer", [&] {
+        return cl::Buffer(ctx.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
+                          std::max<size_t>(1, v.size()) * sizeof(T),
+                          v.empty() ? one.data() : const_cast<T*>(v.data()));
+    });
+}
+
+cl::Buffer Device(clrt::Context& ctx, size_t bytes) {
+    return clrt::Check("clCreateBuffer", [&] {
+        return cl::Buffer(ctx.context(), CL_MEM_READ_WRITE, std::max<size_t>(1, bytes));
+    });
+}
+
+RcRenderParams ParamsFor(const scene::Scene& s) {
+    RcRenderParams p{};
+    p.nTriangles = uint32_t(s.triangles.size());
+    p.nSpheres = uint32_t(s.spheres.size());
+    p.nQuadrics = uint32_t(s.quadrics.size());
+    p.nLights = uint32_t(s.lights.size());
+    p.maxDepth = 6;
+    p.minWeight = 1e-3f;
+    p.ambient = {s.ambient.x, s.ambient.y, s.ambient.z, 0.0f};
+    p.background = {s.background.x, s.background.y, s.background.z, 0.0f};
+    return p;
+}
+
+struct Bench {
+    clrt::Context& ctx;
+    const scene::Scene& scene;
+    cl::Program program;
+    render::SceneBuffers buffers;
+
+    Bench(clrt::Context& c, const scene::Scene& s, const std::string& clOptions)
+        : ctx(c),
+          scene(s),
+          program(render::BuildRenderProgram(c, clOptions)),
+          buffers(c, render::DeviceScene(s), ParamsFor(s)) {}
+
+    std::unique_ptr<render::RayQuery> Make(const std::string& method) {
+        if (method == "brute") return render::MakeBruteForceQuery(ctx, program, buffers);
+        if (method == "bvh") return render::MakeBvhQuery(ctx, program, buffers, scene);
+        if (method.rfind("classify/", 0) == 0) {
+            return render::MakeClassifiedQuery(ctx, program, buffers, scene,
+                                               classify::Params::ForScene(scene),
+                                               render::ParseKernelStyle(method.substr(9)));
+        }
+        throw std::invalid_argument("unknown method '" + method + "'");
+    }
+};
+
+RcRay ToRc(const bench::BenchRay& r, uint32_t i, uint32_t kind) {
+    RcRay o{};
+    o.origin = {r.origin.x, r.origin.y, r.origin.z, r.tMin};
+    o.direction = {r.direction.x, r.direction.y, r.direction.z, r.tMax};
+    o.weight = {1.0f, 1.0f, 1.0f, 0.0f};
+    o.pixel = i;
+    o.depth = kind == RC_RAY_EYE ? 0 : 1;
+    o.kind = kind;
+    return o;
+}
+
+RcShadowRay ToShadow(const bench::BenchRay& r) {
+    RcShadowRay s{};
+    s.origin = {r.origin.x, r.origin.y, r.origin.z, r.tMin};
+    s.direction = {r.direction.x, r.direction.y, r.direction.z, r.tMax};
+    s.contribution = {1.0f, 1.0f, 1.0f, 1.0f};
+    return s;
+}
+
+int Micro(int argc, char** argv) {
+    uint32_t nRays = 1u << 18, nPrims = 256;
+    int runs = 5;
+    std::string device = "auto";
+    for (int i = 2; i + 1 < argc; i += 2) {
+        const std::string a = argv[i], v = argv[i + 1];
+        if (a == "--rays") nRays = uint32_t(std::stoul(v));
+        else if (a == "--prims") nPrims = uint32_t(std::stoul(v));
+        else if (a == "--runs") runs = std::max(1, std::stoi(v));
+        else if (a == "--device") device = v;
+        else throw std::invalid_argument("unknown option " + a);
+    }
+    clrt::Context ctx(device);
+    std::printf("kind,method,rays,median_s,min_s,max_s,mrays_s,tests_per_s\n");
+    for (const char* kind : {"sphere", "quadric", "triangle"}) {
+        // Primitives scattered in [-1,1]^3, small enough that most rays miss most of them; rays
+        // from z = -4 towards random points of the box.
+        std::mt19937 rng(3);
+        std::uniform_real_distribution<float> pos(-1.0f, 1.0f), off(-0.1f, 0.1f),
+            rad(0.02f, 0.08f);
+        scene::Scene s;
+        s.lights.push_back({glm::vec3(0, 5, 0), glm::vec3(1)});
+        for (uint32_t p = 0; p < nPrims; ++p) {
+            const glm::vec3 c(pos(rng), pos(rng), pos(rng));
+            if (kind[0] == 's') {
+                s.spheres.push_back({c, rad(rng), 0, 0});
+            } else if (kind[0] == 'q') {
+                scene::Quadric q;  // an ellipsoid x^2/a + y^2/b + z^2/c about c, clipped
+                const float r = rad(rng);
+                q.c = {1, 1, 1, 0, 0, 0, -2 * c.x, -2 * c.y, -2 * c.z,
+                       c.x * c.x + c.y * c.y + c.z * c.z - r * r};
+                q.boxMin = c - glm::vec3(r);
+                q.boxMax = c + glm::vec3(r);
+                s.quadrics.push_back(q);
+            } else {
+                scene::Triangle t;
+                t.p = {c, c + glm::vec3(off(rng), off(rng), off(rng)),
+                       c + glm::vec3(off(rng), off(rng), off(rng))};
+                s.triangles.push_back(t);
+            }
+        }
+        Bench b(ctx, s, "");
+        std::vector<RcRay> rays(nRays);
+        for (uint32_t i = 0; i < nRays; ++i) {
+            bench::BenchRay r;
+            r.origin = glm::vec3(0, 0, -4);
+            r.direction = glm::normalize(glm::vec3(pos(rng), pos(rng), pos(rng)) - r.origin);
+            r.tMax = INFINITY;
+            rays[i] = ToRc(r, i, RC_RAY_EYE);
+        }
+        const cl::Buffer raysBuf = Upload(ctx, rays);
+        const cl::Buffer hits = Device(ctx, nRays * sizeof(RcHit));
+        auto q = b.Make("brute");
+        std::vector<double> times;
+        for (int r = 0; r <= runs; ++r) {  // run 0 is the warm-up
+            render::KernelTimer timer;
+            q->Intersect(raysBuf, nRays, nullptr, hits, {}, timer);
+            if (r > 0) times.push_back(timer.Seconds().begin()->second);
+        }
+        const double med = Median(times);
+        std::sort(times.begin(), times.end());
+        std::printf("%s,brute-scalar,%u,%.6g,%.6g,%.6g,%.4g,%.4g\n", kind, nRays, med,
+                    times.front(), times.back(), nRays / med * 1e-6,
+                    double(nRays) * nPrims / med);
+        std::fflush(stdout);
+    }
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+    if (argc >= 2 && std::string(argv[1]) == "--micro") return Micro(argc, argv);
+    if (argc < 2 || argv[1][0] == '-') {
+        std::fprintf(stderr, "usage: raybench SCENE --camera NAME --light SPEC [options] | "
+                             "raybench --micro [options] (see bench/raybench/raybench.cpp)\n");
+        return 2;
+    }
+    std::string camera = "scene", light = "scene", saveRays, clOptions, device = "auto";
+    uint32_t width = 1024, height = 768, seed = 1, bruteMaxPrims = 5000;
+    int runs = 5, warmup = 1;
+    std::vector<std::string> kinds(std::begin(bench::kKinds), std::end(bench::kKinds));
+    std::vector<std::string> methods{"classify/scalar", "classify/vertex", "classify/fragment",
+                                     "classify/auto", "bvh", "brute"};
+    for (int i = 2; i + 1 < argc; i += 2) {
+        const std::string a = argv[i], v = argv[i + 1];
+        if (a == "--camera") camera = v;
+        else if (a == "--light") light = v;
+        else if (a == "--width") width = uint32_t(std::stoul(v));
+        else if (a == "--height") height = uint32_t(std::stoul(v));
+        else if (a == "--runs") runs = std::max(1, std::stoi(v));
+        else if (a == "--warmup") warmup = std::max(0, std::stoi(v));
+        else if (a == "--methods") methods = Split(v);
+        else if (a == "--kinds") kinds = Split(v);
+        else if (a == "--brute-max-prims") bruteMaxPrims = uint32_t(std::stoul(v));
+        else if (a == "--save-rays") saveRays = v;
+        else if (a == "--cl-options") clOptions = v;
+        else if (a == "--device") device = v;
+        else if (a == "--seed") seed = uint32_t(std::stoul(v));
+        else throw std::invalid_argument("unknown option " + a);
+    }
+
+    auto t0 = Clock::now();
+    const scene::Scene sc = scene::LoadScene(argv[1]);
+    const double loadS = Since(t0);
+    clrt::Context ctx(device);
+    t0 = Clock::now();
+    Bench b(ctx, sc, clOptions);
+    const double buildS = Since(t0);
+    auto& queue = ctx.queue();
+
+    // Eye rays and their hits (BVH), then the secondary sets.
+    const scene::Camera cam = bench::NamedCamera(sc, camera, width, height);
+    const glm::vec3 lightPos = bench::NamedLight(sc, light);
+    const std::vector<bench::BenchRay> eye = bench::EyeRays(cam);
+    std::vector<RcRay> eyeRc(eye.size());
+    for (size_t i = 0; i < eye.size(); ++i) eyeRc[i] = ToRc(eye[i], uint32_t(i), RC_RAY_EYE);
+    std::vector<bench::BenchHit> eyeHits(eye.size());
+    {
+        const cl::Buffer raysBuf = Upload(ctx, eyeRc);
+        const cl::Buffer hits = Device(ctx, eye.size() * sizeof(RcHit));
+        render::KernelTimer timer;
+        b.Make("bvh")->Intersect(raysBuf, uint32_t(eye.size()), nullptr, hits, {}, timer);
+        std::vector<RcHit> h(eye.size());
+        clrt::Check("clEnqueueReadBuffer", [&] {
+            queue.enqueueReadBuffer(hits, CL_TRUE, 0, h.size() * sizeof(RcHit), h.data());
+        });
+        for (size_t i = 0; i < h.size(); ++i) eyeHits[i] = {h[i].t, h[i].prim};
+    }
+    const bench::RaySets sets = bench::MakeRaySets(sc, eye, eyeHits, lightPos, seed);
+    if (!saveRays.empty()) bench::SaveRaySets(saveRays, sets);
+    std::fprintf(stderr,
+                 "raybench: %s, %u primitives, camera %s, load %.3f s, program build %.3f s; "
+                 "rays eye %zu shadow %zu reflection %zu refraction %zu diffuse %zu\n",
+                 argv[1], sc.PrimitiveCount(), camera.c_str(), loadS, buildS,
+                 sets.sets[0].size(), sets.sets[1].size(), sets.sets[2].size(),
+                 sets.sets[3].size(), sets.sets[4].size());
+
+    std::printf("kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,"
+                "setup_s,tests_per_ray,hits\n");
+    const uint32_t nLights = std::max<uint32_t>(1, uint32_t(sc.lights.size()));
+    for (int k = 0; k < bench::kNumKinds; ++k) {
+        const auto& set = sets.sets[k];
+        const uint32_t n = uint32_t(set.size());
+        if (n == 0 || std::find(kinds.begin(), kinds.end(), bench::kKinds[k]) == kinds.end())
+            continue;
+        const bool shadow = bench::IsShadowKind(k);
+        std::vector<RcRay> rays;
+        std::vector<RcShadowRay> shadowRays;
+        cl::Buffer raysBuf;
+        if (shadow) {
+            for (const auto& r : set) shadowRays.push_back(ToShadow(r));
+            raysBuf = Upload(ctx, shadowRays);
+        } else {
+            const uint32_t kind = k == 0 ? RC_RAY_EYE : (k == 3 ? RC_RAY_REFRACTION : RC_RAY_REFLECTION);
+            for (uint32_t i = 0; i < n; ++i) rays.push_back(ToRc(set[i], i, kind));
+            raysBuf = Upload(ctx, rays);
+        }
+        const cl::Buffer out = Device(ctx, size_t(n) * (shadow ? 1 : sizeof(RcHit)));
+        render::ShadeBuffers shade;
+        shade.radiance = Device(ctx, size_t(n) * sizeof(rc_float4));
+        shade.normals = Device(ctx, size_t(n) * sizeof(rc_float4));
+        shade.shadow = Device(ctx, size_t(n) * nLights * sizeof(RcShadowRay));
+        shade.secondary = Device(ctx, 2 * size_t(n) * sizeof(RcRay));
+        shade.spawned = Device(ctx, 2 * size_t(n));
+        std::vector<RcRay> hostRays(n);
+
+        for (const std::string& method : methods) {
+            if (method == "brute" && sc.PrimitiveCount() > bruteMaxPrims) continue;
+            std::vector<double> wall, host, copy, kern, shadeS, setup;
+            uint64_t tests = 0;
+            for (int r = 0; r < warmup + runs; ++r) {
+                const auto ts = Clock::now();
+                auto q = b.Make(method);
+                const double setupS = Since(ts);
+                render::KernelTimer timer;
+                const double host0 = q->HostSeconds();
+                const auto tq = Clock::now();
+                if (shadow) {
+                    tests = q->Occluded(raysBuf, shadowRays, out, timer);
+                } else {
+                    std::unique_ptr<render::PreparedBatch> prepared;
+                    if (q->NeedsHostRays()) {
+                        clrt::Check("clEnqueueReadBuffer", [&] {
+                            queue.enqueueReadBuffer(raysBuf, CL_TRUE, 0, n * sizeof(RcRay),
+                                                    hostRays.data());
+                        });
+                        prepared = q->Prepare(hostRays);
+                    }
+                    tests = q->Intersect(raysBuf, n, prepared.get(), out, shade, timer).tests;
+                }
+                queue.finish();
+                const double w = Since(tq);
+                double ks = 0, ss = 0;
+                for (const auto& [name, s] : timer.Seconds()) {
+                    (name == "rc_shade_ids" || name == "rc_shade_lights" ? ss : ks) += s;
+                }
+                const double hs = q->HostSeconds() - host0;
+                if (r < warmup) continue;
+                wall.push_back(w - ss);
+                host.push_back(hs);
+                kern.push_back(ks);
+                shadeS.push_back(ss);
+                copy.push_back(std::max(0.0, w - ss - hs - ks));
+                setup.push_back(setupS);
+            }
+            // Hits (outside the timing): equal across methods.
+            uint64_t hits = 0;
+            if (shadow) {
+                std::vector<uint8_t> blocked(n);
+                clrt::Check("clEnqueueReadBuffer", [&] {
+                    queue.enqueueReadBuffer(out, CL_TRUE, 0, n, blocked.data());
+                });
+                for (uint8_t x : blocked) hits += x != 0;
+            } else {
+                std::vector<RcHit> h(n);
+                clrt::Check("clEnqueueReadBuffer", [&] {
+                    queue.enqueueReadBuffer(out, CL_TRUE, 0, n * sizeof(RcHit), h.data());
+                });
+                for (const auto& x : h) hits += x.prim != RC_NO_HIT;
+            }
+            const double med = Median(wall);
+            std::printf("%s,%s,%u,%.6g,%.6g,%.6g,%.4g,%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%llu\n",
+                        bench::kKinds[k], method.c_str(), n, med,
+                        *std::min_element(wall.begin(), wall.end()),
+                        *std::max_element(wall.begin(), wall.end()), n / med * 1e-6,
+                        Median(host), Median(copy), Median(kern), Median(shadeS), Median(setup),
+                        double(tests) / n, (unsigned long long)hits);
+            std::fflush(stdout);
+        }
+    }
+    return 0;
+} catch (const std::exception& e) {
+    std::fprintf(stderr, "raybench: %s\n", e.what());
+    return 1;
+}
