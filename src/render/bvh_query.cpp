@@ -1,32 +1,19 @@
 #include "rayclass/render/bvh_query.h"
 
-#include <algorithm>
-#include <numeric>
+#include "rayclass/render/launch.h"
 
 namespace rayclass::render {
 
 namespace {
 
-constexpr size_t kLocalSize = 64;
-
-template <typename T>
-cl::Buffer Upload(clrt::Context& ctx, const std::vector<T>& v) {
-    const size_t bytes = std::max<size_t>(1, v.size()) * sizeof(T);
-    std::vector<T> one(1);
-    return clrt::Check("clCreateBuffer", [&] {
-        return cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes,
-                          v.empty() ? one.data() : const_cast<T*>(v.data()));
-    });
-}
-
 class BvhQuery final : public RayQuery {
-public:
+  public:
     BvhQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene,
              const bvh::Bvh& tree)
         : ctx_(ctx),
           scene_(scene),
-          nodes_(Upload(ctx, tree.nodes)),
-          primIndex_(Upload(ctx, tree.primIndex)),
+          nodes_(UploadVector(ctx, tree.nodes)),
+          primIndex_(UploadVector(ctx, tree.primIndex)),
           intersect_(program, "rc_intersect_bvh"),
           occluded_(program, "rc_occluded_bvh") {}
 
@@ -46,54 +33,25 @@ public:
         return SumTests(n);
     }
 
-private:
+  private:
     void Run(cl::Kernel& kernel, const cl::Buffer& rays, uint32_t n, const cl::Buffer& out,
              KernelTimer& timer) {
         if (n == 0) return;
-        if (testsCapacity_ < n) {
-            testsCapacity_ = n;
-            testsBuffer_ = clrt::Check("clCreateBuffer", [&] {
-                return cl::Buffer(ctx_.context(), CL_MEM_READ_WRITE, n * sizeof(uint32_t));
-            });
-        }
-        clrt::Check("clSetKernelArg(bvh)", [&] {
-            cl_uint i = 0;
-            kernel.setArg(i++, rays);
-            kernel.setArg(i++, n);
-            kernel.setArg(i++, nodes_);
-            kernel.setArg(i++, primIndex_);
-            kernel.setArg(i++, scene_.triangles);
-            kernel.setArg(i++, scene_.spheres);
-            kernel.setArg(i++, scene_.quadrics);
-            kernel.setArg(i++, scene_.params);
-            kernel.setArg(i++, out);
-            kernel.setArg(i++, testsBuffer_);
-        });
-        cl::Event event;
-        clrt::Check("clEnqueueNDRangeKernel", [&] {
-            ctx_.queue().enqueueNDRangeKernel(kernel, cl::NullRange,
-                                              cl::NDRange(clrt::RoundUp(n, kLocalSize)),
-                                              cl::NDRange(kLocalSize), nullptr, &event);
-        });
-        timer.Record(kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(), event);
+        SetArgs(kernel, rays, n, nodes_, primIndex_, scene_.triangles, scene_.spheres,
+                scene_.quadrics, scene_.params, out,
+                testsBuffer_.Reserve(ctx_, n * sizeof(uint32_t)));
+        Launch(ctx_, kernel, n, timer);
     }
 
     uint64_t SumTests(uint32_t n) {
-        if (n == 0) return 0;
-        tests_.resize(n);
-        clrt::Check("clEnqueueReadBuffer", [&] {
-            ctx_.queue().enqueueReadBuffer(testsBuffer_, CL_TRUE, 0, n * sizeof(uint32_t),
-                                           tests_.data());
-        });
-        return std::accumulate(tests_.begin(), tests_.end(), uint64_t(0));
+        return SumCounters(ctx_, testsBuffer_.Reserve(ctx_, n * sizeof(uint32_t)), n, tests_);
     }
 
     clrt::Context& ctx_;
     const SceneBuffers& scene_;
     cl::Buffer nodes_, primIndex_;
     cl::Kernel intersect_, occluded_;
-    cl::Buffer testsBuffer_;
-    uint32_t testsCapacity_ = 0;
+    GrowingBuffer testsBuffer_;
     std::vector<uint32_t> tests_;
 };
 

@@ -7,52 +7,16 @@
 #include "rayclass/classify/params.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
+#include "rayclass/render/launch.h"
 
 namespace rayclass::render {
 
 namespace {
 
-constexpr size_t kLocalSize = 64;
-
 using Clock = std::chrono::steady_clock;
 
 double SecondsSince(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-template <typename T>
-cl::Buffer UploadVector(clrt::Context& ctx, const std::vector<T>& v) {
-    // OpenCL rejects zero-sized buffers: an empty list still gets one element.
-    const size_t bytes = std::max<size_t>(1, v.size()) * sizeof(T);
-    return clrt::Check("clCreateBuffer", [&] {
-        return cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes,
-                          v.empty() ? std::vector<T>(1).data() : const_cast<T*>(v.data()));
-    });
-}
-
-cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes) {
-    return clrt::Check("clCreateBuffer", [&] {
-        return cl::Buffer(ctx.context(), CL_MEM_READ_WRITE, std::max<size_t>(1, bytes));
-    });
-}
-
-void Launch(clrt::Context& ctx, cl::Kernel& kernel, size_t n, KernelTimer& timer) {
-    if (n == 0) return;
-    cl::Event event;
-    clrt::Check("clEnqueueNDRangeKernel", [&] {
-        ctx.queue().enqueueNDRangeKernel(kernel, cl::NullRange,
-                                         cl::NDRange(clrt::RoundUp(n, kLocalSize)),
-                                         cl::NDRange(kLocalSize), nullptr, &event);
-    });
-    timer.Record(kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(), event);
-}
-
-template <typename... Args>
-void SetArgs(cl::Kernel& kernel, const Args&... args) {
-    clrt::Check("clSetKernelArg", [&] {
-        cl_uint i = 0;
-        (kernel.setArg(i++, args), ...);
-    });
 }
 
 class BruteForceQuery final : public RayQuery {
@@ -68,15 +32,8 @@ class BruteForceQuery final : public RayQuery {
     QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch*,
                           const cl::Buffer& hits, const ShadeBuffers&,
                           KernelTimer& timer) override {
-        clrt::Check("clSetKernelArg(rc_intersect_brute)", [&] {
-            intersect_.setArg(0, rays);
-            intersect_.setArg(1, n);
-            intersect_.setArg(2, scene_.triangles);
-            intersect_.setArg(3, scene_.spheres);
-            intersect_.setArg(4, scene_.quadrics);
-            intersect_.setArg(5, scene_.params);
-            intersect_.setArg(6, hits);
-        });
+        SetArgs(intersect_, rays, n, scene_.triangles, scene_.spheres, scene_.quadrics,
+                scene_.params, hits);
         Launch(ctx_, intersect_, n, timer);
         const auto& p = scene_.hostParams;
         return {uint64_t(n) * (p.nTriangles + p.nSpheres + p.nQuadrics), false};
@@ -85,36 +42,18 @@ class BruteForceQuery final : public RayQuery {
     uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
                       const cl::Buffer& blocked, KernelTimer& timer) override {
         const uint32_t n = uint32_t(hostRays.size());
-        if (tests_.size() < n) {
-            tests_.resize(n);
-            testsBuffer_ = DeviceBuffer(ctx_, n * sizeof(uint32_t));
-        }
-        clrt::Check("clSetKernelArg(rc_occluded_brute)", [&] {
-            occluded_.setArg(0, shadowRays);
-            occluded_.setArg(1, n);
-            occluded_.setArg(2, scene_.triangles);
-            occluded_.setArg(3, scene_.spheres);
-            occluded_.setArg(4, scene_.quadrics);
-            occluded_.setArg(5, scene_.params);
-            occluded_.setArg(6, blocked);
-            occluded_.setArg(7, testsBuffer_);
-        });
+        const cl::Buffer& tests = testsBuffer_.Reserve(ctx_, n * sizeof(uint32_t));
+        SetArgs(occluded_, shadowRays, n, scene_.triangles, scene_.spheres, scene_.quadrics,
+                scene_.params, blocked, tests);
         Launch(ctx_, occluded_, n, timer);
-        if (n == 0) return 0;
-        clrt::Check("clEnqueueReadBuffer", [&] {
-            ctx_.queue().enqueueReadBuffer(testsBuffer_, CL_TRUE, 0, n * sizeof(uint32_t),
-                                           tests_.data());
-        });
-        uint64_t total = 0;
-        for (uint32_t i = 0; i < n; ++i) total += tests_[i];
-        return total;
+        return SumCounters(ctx_, tests, n, tests_);
     }
 
   private:
     clrt::Context& ctx_;
     const SceneBuffers& scene_;
     cl::Kernel intersect_, occluded_;
-    cl::Buffer testsBuffer_;
+    GrowingBuffer testsBuffer_;
     std::vector<uint32_t> tests_;
 };
 
@@ -152,8 +91,8 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
                             options);
 }
 
-ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene,
-                       const RenderOptions& options, EyeHitSource* eyeHits)
+ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
+                       EyeHitSource* eyeHits)
     : ctx_(ctx), scene_(scene), options_(options), eyeHits_(eyeHits) {
     if (options_.eyeRays != "kernel" && options_.eyeRays != "raster") {
         throw Error("unknown eye-ray path '" + options_.eyeRays + "' (use raster or kernel)");

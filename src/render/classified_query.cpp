@@ -6,62 +6,13 @@
 
 #include "rayclass/classify/hierarchy.h"
 #include "rayclass/core/error.h"
+#include "rayclass/render/launch.h"
 
 namespace rayclass::render {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// A device buffer that grows to the largest size asked for and is reused after that.
-class GrowingBuffer {
-  public:
-    template <typename T>
-    const cl::Buffer& Upload(clrt::Context& ctx, const std::vector<T>& data) {
-        Reserve(ctx, data.size() * sizeof(T));
-        if (!data.empty()) {
-            clrt::Check("clEnqueueWriteBuffer", [&] {
-                ctx.queue().enqueueWriteBuffer(buffer_, CL_FALSE, 0, data.size() * sizeof(T),
-                                               data.data());
-            });
-        }
-        return buffer_;
-    }
-    const cl::Buffer& Reserve(clrt::Context& ctx, size_t bytes) {
-        if (bytes > capacity_ || capacity_ == 0) {
-            capacity_ = std::max<size_t>(bytes + bytes / 4, 64);
-            buffer_ = clrt::Check("clCreateBuffer", [&] {
-                return cl::Buffer(ctx.context(), CL_MEM_READ_WRITE, capacity_);
-            });
-        }
-        return buffer_;
-    }
-
-  private:
-    cl::Buffer buffer_;
-    size_t capacity_ = 0;
-};
-
-constexpr size_t kLocalSize = 64;
-
-void Launch(clrt::Context& ctx, cl::Kernel& kernel, size_t n, KernelTimer& timer) {
-    if (n == 0) return;
-    cl::Event event;
-    clrt::Check("clEnqueueNDRangeKernel", [&] {
-        ctx.queue().enqueueNDRangeKernel(kernel, cl::NullRange,
-                                         cl::NDRange(clrt::RoundUp(n, kLocalSize)),
-                                         cl::NDRange(kLocalSize), nullptr, &event);
-    });
-    timer.Record(kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(), event);
-}
-
-template <typename... Args>
-void SetArgs(cl::Kernel& kernel, const Args&... args) {
-    clrt::Check("clSetKernelArg", [&] {
-        cl_uint i = 0;
-        (kernel.setArg(i++, args), ...);
-    });
-}
 
 // A classified batch: the leaves and, per leaf, its rays' slots and its kernel style.
 struct ClassifiedBatch final : PreparedBatch {
@@ -216,9 +167,8 @@ class ClassifiedQuery final : public RayQuery {
         }
         // Incoherent rays can have long lists in many leaves: launch the leaves in chunks whose
         // blocks fit one device allocation.
-        const size_t maxBlocks =
-            std::min<size_t>(ctx_.info().maxAllocBytes, size_t(256) << 20) /
-            sizeof(RcTriangleBlock16);
+        const size_t maxBlocks = std::min<size_t>(ctx_.info().maxAllocBytes, size_t(256) << 20) /
+                                 sizeof(RcTriangleBlock16);
         for (size_t next = 0; next < vertexLeaves.size();) {
             const auto t1 = Clock::now();
             vertexSlots_.clear();
@@ -322,15 +272,7 @@ class ClassifiedQuery final : public RayQuery {
     }
 
     uint64_t SumTests(const cl::Buffer& buffer, uint32_t n) {
-        testsHost_.resize(n);
-        if (n == 0) return 0;
-        clrt::Check("clEnqueueReadBuffer", [&] {
-            ctx_.queue().enqueueReadBuffer(buffer, CL_TRUE, 0, n * sizeof(uint32_t),
-                                           testsHost_.data());
-        });
-        uint64_t total = 0;
-        for (uint32_t t : testsHost_) total += t;
-        return total;
+        return SumCounters(ctx_, buffer, n, testsHost_);
     }
 
     clrt::Context& ctx_;

@@ -91,7 +91,7 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
 // OpenGL raster pass. FindHits returns one RcHit per pixel, row-major, row 0 at the top, for the
 // rays rc_generate_eye_rays makes from `camera`.
 class EyeHitSource {
-public:
+  public:
     virtual ~EyeHitSource() = default;
     virtual std::string Name() const = 0;
     virtual std::vector<RcHit> FindHits(const scene::Scene& scene, const CameraBasis& camera,

@@ -14,7 +14,7 @@ struct RenderOptions {
     bool aovs = false;              // fill depth, id and normal layers of the first hit
     uint32_t batchRays = 1u << 20;  // rays per kernel launch (bounds device buffers)
     std::string device = "auto";    // OpenCL device: auto, cpu, gpu or an index
-    std::string accel = "classify";     // ray query: classify (ray classification), bvh or brute
+    std::string accel = "classify";  // ray query: classify (ray classification), bvh or brute
     // Cost-function settings of the classification (classify::SetParam names and values).
     std::vector<std::pair<std::string, std::string>> classifyParams;
     std::string kernel = "auto";        // classified query style: scalar, vertex, fragment, auto
@@ -22,7 +22,7 @@ struct RenderOptions {
     std::string rayEncoding = "float";  // ray directions: float or polar16 (cl/encoding.cl)
     bool progress = true;               // progress line on stderr for renders over a second
     std::string eyeRays = "kernel";     // first hits of eye rays: "kernel" (ray query) or "raster"
-    std::string hull = "auto";          // raster hulls of spheres/quadrics: sphere|box|billboard|auto
+    std::string hull = "auto";  // raster hulls of spheres/quadrics: sphere|box|billboard|auto
 };
 
 }  // namespace rayclass::render

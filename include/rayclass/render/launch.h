@@ -1,0 +1,71 @@
+// Small helpers every query and the renderer use to move data and launch kernels: one fixed
+// local size (PoCL compiles a work-group function per local size), buffers that reject nothing
+// (OpenCL refuses zero-sized ones), and per-kernel device time.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "rayclass/clrt/context.h"
+#include "rayclass/render/cl_renderer.h"
+
+namespace rayclass::render {
+
+// Work-items per work-group in every kernel launch (the kernels' reqd_work_group_size).
+constexpr size_t kLocalSize = 64;
+
+// A read-only buffer holding a copy of `v` (one zeroed element when `v` is empty).
+template <typename T>
+cl::Buffer UploadVector(clrt::Context& ctx, const std::vector<T>& v) {
+    const std::vector<T> one(1);
+    const std::vector<T>& data = v.empty() ? one : v;
+    return clrt::Check("clCreateBuffer", [&] {
+        return cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+                          data.size() * sizeof(T), const_cast<T*>(data.data()));
+    });
+}
+
+// A read-write buffer of at least one byte.
+cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes);
+
+template <typename... Args>
+void SetArgs(cl::Kernel& kernel, const Args&... args) {
+    clrt::Check("clSetKernelArg", [&] {
+        cl_uint i = 0;
+        (kernel.setArg(i++, args), ...);
+    });
+}
+
+// Runs `kernel` over n work-items (rounded up to the local size; kernels bounds-check) and adds
+// its device time to `timer`.
+void Launch(clrt::Context& ctx, cl::Kernel& kernel, size_t n, KernelTimer& timer);
+
+// Reads n uint32 counters back and sums them (`scratch` is reused host memory).
+uint64_t SumCounters(clrt::Context& ctx, const cl::Buffer& counters, uint32_t n,
+                     std::vector<uint32_t>& scratch);
+
+// A device buffer that grows to the largest size asked for and is reused after that.
+class GrowingBuffer {
+  public:
+    const cl::Buffer& Reserve(clrt::Context& ctx, size_t bytes);
+    // Reserves room for `data` and enqueues a non-blocking copy of it (keep `data` alive and
+    // unchanged until the queue has passed the copy).
+    template <typename T>
+    const cl::Buffer& Upload(clrt::Context& ctx, const std::vector<T>& data) {
+        Reserve(ctx, data.size() * sizeof(T));
+        if (!data.empty()) {
+            clrt::Check("clEnqueueWriteBuffer", [&] {
+                ctx.queue().enqueueWriteBuffer(buffer_, CL_FALSE, 0, data.size() * sizeof(T),
+                                               data.data());
+            });
+        }
+        return buffer_;
+    }
+
+  private:
+    cl::Buffer buffer_;
+    size_t capacity_ = 0;
+};
+
+}  // namespace rayclass::render

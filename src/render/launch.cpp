@@ -1,0 +1,42 @@
+#include "rayclass/render/launch.h"
+
+#include <numeric>
+
+namespace rayclass::render {
+
+cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes) {
+    return clrt::Check("clCreateBuffer", [&] {
+        return cl::Buffer(ctx.context(), CL_MEM_READ_WRITE, std::max<size_t>(1, bytes));
+    });
+}
+
+void Launch(clrt::Context& ctx, cl::Kernel& kernel, size_t n, KernelTimer& timer) {
+    if (n == 0) return;
+    cl::Event event;
+    clrt::Check("clEnqueueNDRangeKernel", [&] {
+        ctx.queue().enqueueNDRangeKernel(kernel, cl::NullRange,
+                                         cl::NDRange(clrt::RoundUp(n, kLocalSize)),
+                                         cl::NDRange(kLocalSize), nullptr, &event);
+    });
+    timer.Record(kernel.getInfo<CL_KERNEL_FUNCTION_NAME>(), event);
+}
+
+uint64_t SumCounters(clrt::Context& ctx, const cl::Buffer& counters, uint32_t n,
+                     std::vector<uint32_t>& scratch) {
+    if (n == 0) return 0;
+    scratch.resize(n);
+    clrt::Check("clEnqueueReadBuffer", [&] {
+        ctx.queue().enqueueReadBuffer(counters, CL_TRUE, 0, n * sizeof(uint32_t), scratch.data());
+    });
+    return std::accumulate(scratch.begin(), scratch.end(), uint64_t(0));
+}
+
+const cl::Buffer& GrowingBuffer::Reserve(clrt::Context& ctx, size_t bytes) {
+    if (bytes > capacity_ || capacity_ == 0) {
+        capacity_ = std::max<size_t>(bytes + bytes / 4, 64);
+        buffer_ = DeviceBuffer(ctx, capacity_);
+    }
+    return buffer_;
+}
+
+}  // namespace rayclass::render
