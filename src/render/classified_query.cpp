@@ -33,7 +33,7 @@ class ClassifiedQuery final : public RayQuery {
         : ctx_(ctx),
           scene_(buffers),
           hierarchy_(scene, params),
-          shadowHierarchy_(scene, params),
+          shadowHierarchy_(hierarchy_),  // a copy: the presorted face lists are built once
           style_(style),
           queryScalar_(program, "rc_query_scalar"),
           occludedScalar_(program, "rc_occluded_scalar"),
