@@ -672,7 +672,11 @@ Scene LoadScene(const fs::path& file) {
     }
     const FileText json = ReadFile(file);
     if (!json.problem.empty()) throw SceneError(file.string(), 0, json.problem);
-    return SceneFileReader(file, json.text).Read();
+    return LoadSceneText(json.text, file);
+}
+
+Scene LoadSceneText(std::string_view text, const fs::path& file) {
+    return SceneFileReader(file, text).Read();
 }
 
 }  // namespace rayclass::scene
