@@ -171,7 +171,12 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     stats.nPrimitives = scene_.PrimitiveCount();
 
     auto t0 = Clock::now();
-    const cl::Program program = BuildRenderProgram(ctx_, options_.buildOptions);
+    const bool watertight = options_.triangleTest == "watertight";
+    std::string buildOptions = watertight ? "-DRC_WATERTIGHT=1" : "";
+    if (!options_.buildOptions.empty()) {
+        buildOptions += (buildOptions.empty() ? "" : " ") + options_.buildOptions;
+    }
+    const cl::Program program = BuildRenderProgram(ctx_, buildOptions);
     stats.timeS["program_build"] = SecondsSince(t0);
 
     RcRenderParams params{};
@@ -192,7 +197,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         t0 = Clock::now();
         query = MakeClassifiedQuery(ctx_, program, sceneBuffers, scene_,
                                     classify::Params::ForScene(scene_),
-                                    ParseKernelStyle(options_.kernel));
+                                    watertight ? KernelStyle::kScalar
+                                               : ParseKernelStyle(options_.kernel));
         stats.timeS["classify_setup"] = SecondsSince(t0);
     }
     stats.accel = query->Name();
