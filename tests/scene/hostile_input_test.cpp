@@ -302,6 +302,19 @@ TEST(HostileObj, BareObjWithAFarVertexNamesItsLine) {
     EXPECT_EQ(LoadScene(unused).triangles.size(), 1u);
 }
 
+TEST(HostileScene, ZeroAreaTrianglesAreCollapsedSoNoRayHitsThem) {
+    TempDir dir;
+    dir.Write("z.obj", "v 0 0 0\nv 1 2 3\nv 2 4 6\nv 0 1 0\nf 1 2 3\nf 1 1 4\nf 1 2 4\n");
+    const Scene s = LoadScene(dir.Write("s.json", R"({"objects": [{"type": "mesh",
+        "file": "z.obj"}]})"));
+    ASSERT_EQ(s.triangles.size(), 3u);  // ids are kept
+    for (int i = 0; i < 2; ++i) {
+        EXPECT_EQ(s.triangles[i].p[1], s.triangles[i].p[0]) << i;
+        EXPECT_EQ(s.triangles[i].p[2], s.triangles[i].p[0]) << i;
+    }
+    EXPECT_EQ(s.triangles[2].p[2], glm::vec3(0, 1, 0));
+}
+
 // ---------------------------------------------------------------- huge statements
 
 TEST(HostileObj, HugeStatementsCostMemoryInProportionToTheirText) {
