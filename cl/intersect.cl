@@ -4,6 +4,9 @@
 #include "rc_types.h"
 
 #pragma OPENCL FP_CONTRACT OFF
+#ifdef cl_khr_fp64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
 
 /* dot and cross spelled out in glm's order of operations: the builtins may fuse or reassociate,
  * and the host twins, the vector kernels and this file must round identically. */
@@ -30,6 +33,59 @@ inline int rc_intersect_triangle(float3 o, float3 d, float tmin, float tmax, flo
     *t = RC_DOT3(e2, qv) * invDet;
     return *t > tmin && *t < tmax;
 }
+
+/* Woop, Benthin & Wald 2013, "Watertight Ray/Triangle Intersection": the twin of
+ * IntersectTriangleWatertight in geometry/intersect.h (edge functions in a ray-sheared frame,
+ * recomputed in double where they round to zero and the device has fp64). */
+inline int rc_intersect_triangle_watertight(float3 o, float3 d, float tmin, float tmax, float3 p0,
+                                            float3 p1, float3 p2, float* t, float* u, float* v) {
+    const float dd[3] = {d.x, d.y, d.z};
+    int kz = 0;
+    if (fabs(dd[1]) > fabs(dd[kz])) kz = 1;
+    if (fabs(dd[2]) > fabs(dd[kz])) kz = 2;
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    if (dd[kz] < 0.0f) {
+        const int s = kx;
+        kx = ky;
+        ky = s;
+    }
+    if (dd[kz] == 0.0f) return 0;
+    const float sx = dd[kx] / dd[kz];
+    const float sy = dd[ky] / dd[kz];
+    const float sz = 1.0f / dd[kz];
+    const float3 a3 = p0 - o, b3 = p1 - o, c3 = p2 - o;
+    const float a[3] = {a3.x, a3.y, a3.z}, b[3] = {b3.x, b3.y, b3.z}, c[3] = {c3.x, c3.y, c3.z};
+    const float ax = a[kx] - sx * a[kz], ay = a[ky] - sy * a[kz];
+    const float bx = b[kx] - sx * b[kz], by = b[ky] - sy * b[kz];
+    const float cx = c[kx] - sx * c[kz], cy = c[ky] - sy * c[kz];
+    float e0 = cx * by - cy * bx;
+    float e1 = ax * cy - ay * cx;
+    float e2 = bx * ay - by * ax;
+#ifdef cl_khr_fp64
+    if (e0 == 0.0f || e1 == 0.0f || e2 == 0.0f) {
+        e0 = (float)((double)cx * (double)by - (double)cy * (double)bx);
+        e1 = (float)((double)ax * (double)cy - (double)ay * (double)cx);
+        e2 = (float)((double)bx * (double)ay - (double)by * (double)ax);
+    }
+#endif
+    if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f)) return 0;
+    const float det = e0 + e1 + e2;
+    if (det == 0.0f) return 0;
+    const float az = sz * a[kz], bz = sz * b[kz], cz = sz * c[kz];
+    const float invDet = 1.0f / det;
+    *t = (e0 * az + e1 * bz + e2 * cz) * invDet;
+    *u = e1 * invDet;
+    *v = e2 * invDet;
+    return *t > tmin && *t < tmax;
+}
+
+/* The triangle test of the render program: -DRC_WATERTIGHT=1 (--triangle-test watertight). */
+#ifdef RC_WATERTIGHT
+#define RC_TRIANGLE_TEST rc_intersect_triangle_watertight
+#else
+#define RC_TRIANGLE_TEST rc_intersect_triangle
+#endif
 
 /* Cancellation-free discriminant, Ray Tracing Gems ch. 7. */
 inline int rc_intersect_sphere(float3 o, float3 d, float tmin, float tmax, float4 centerRadius,
@@ -144,8 +200,8 @@ inline int rc_intersect_primitive(uint id, float3 o, float3 d, float tmin, float
     int hit;
     if (id < nTriangles) {
         __global const RcTriangle* tri = triangles + id;
-        hit = rc_intersect_triangle(o, d, tmin, bound, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, &t,
-                                    &u, &v);
+        hit = RC_TRIANGLE_TEST(o, d, tmin, bound, tri->v0.xyz, tri->v1.xyz, tri->v2.xyz, &t, &u,
+                               &v);
     } else if (id < nTriangles + nSpheres) {
         hit = rc_intersect_sphere(o, d, tmin, bound, spheres[id - nTriangles].centerRadius, &t);
     } else {

@@ -46,6 +46,8 @@ options:
                           min-origin-fraction, min-dir-fraction, dir-weight
   --ray-encoding E        ray directions as float (default) or polar16: packed 16-bit polar
                           angles, the thesis's compact form (costs accuracy, see README)
+  --triangle-test T       moller (default) or watertight (Woop et al. 2013; brute, scalar and
+                          --reference paths: classified queries then run the scalar kernels)
   --reference             render with the double-precision host reference renderer
   --stats FILE.json       write ray counts and timings as JSON
   --exposure E            PNG only: scale by 2^E before tone mapping (default 0)
@@ -147,6 +149,12 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
                 throw UsageError("--ray-encoding must be float or polar16, not '" +
                                  r.options.rayEncoding + "'");
             }
+        } else if (a == "--triangle-test") {
+            r.options.triangleTest = value();
+            if (r.options.triangleTest != "moller" && r.options.triangleTest != "watertight") {
+                throw UsageError("--triangle-test must be moller or watertight, not '" +
+                                 r.options.triangleTest + "'");
+            }
         } else if (a == "--reference") {
             r.reference = true;
         } else if (a == "--stats") {
@@ -184,6 +192,11 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
     if (!r.aovs.empty() && ext != ".exr") throw UsageError("--aov needs an .exr output");
     if (!r.statsFile.empty() && Extension(r.statsFile) != ".json") {
         throw UsageError("--stats expects a .json file, not '" + r.statsFile + "'");
+    }
+    if (r.options.triangleTest == "watertight" &&
+        (r.options.kernel == "vertex" || r.options.kernel == "fragment")) {
+        throw UsageError("--triangle-test watertight needs --kernel scalar or auto (the " +
+                         r.options.kernel + " kernels test triangles with Moeller-Trumbore)");
     }
     r.options.aovs = !r.aovs.empty();
     return r;

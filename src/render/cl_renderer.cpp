@@ -119,8 +119,16 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     stats.nPrimitives = scene_.PrimitiveCount();
 
     auto t0 = Clock::now();
-    const cl::Program program = BuildRenderProgram(
-        ctx_, options_.buildOptions + (options_.rayEncoding == "polar16" ? " -DRC_POLAR16" : ""));
+    const bool watertight = options_.triangleTest == "watertight";
+    std::string buildOptions;
+    for (const std::string& option :
+         {std::string(watertight ? "-DRC_WATERTIGHT=1" : ""),
+          std::string(options_.rayEncoding == "polar16" ? "-DRC_POLAR16" : ""),
+          options_.buildOptions}) {
+        if (option.empty()) continue;
+        buildOptions += (buildOptions.empty() ? "" : " ") + option;
+    }
+    const cl::Program program = BuildRenderProgram(ctx_, buildOptions);
     stats.timeS["program_build"] = SecondsSince(t0);
 
     RcRenderParams params{};
@@ -148,7 +156,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
             classify::SetParam(classifyParams, name, value);
         }
         query = MakeClassifiedQuery(ctx_, program, sceneBuffers, scene_, classifyParams,
-                                    ParseKernelStyle(options_.kernel));
+                                    watertight ? KernelStyle::kScalar
+                                               : ParseKernelStyle(options_.kernel));
         stats.timeS["classify_setup"] = SecondsSince(t0);
     }
     stats.accel = query->Name();

@@ -41,12 +41,15 @@ double FresnelDielectric(double cosi, double eta) {
 class Tracer {
   public:
     Tracer(const scene::Scene& scene, const RenderOptions& options)
-        : scene_(scene), options_(options) {}
+        : scene_(scene),
+          options_(options),
+          test_(options.triangleTest == "watertight" ? geometry::TriangleTest::kWatertight
+                                                     : geometry::TriangleTest::kMoller) {}
 
     // Adds the radiance along the ray, times `weight`, to `color`. For eye rays fills the AOVs.
     void Trace(const Ray& ray, const V& weight, uint32_t depth, V& color, Counters& counters,
                image::Image* aovImage, size_t pixel) const {
-        const auto hit = geometry::IntersectBruteForce(scene_, ray);
+        const auto hit = geometry::IntersectBruteForce(scene_, ray, test_);
         counters.tests += scene_.PrimitiveCount();
         if (!hit.Valid()) {
             color += weight * V(scene_.background);
@@ -80,7 +83,7 @@ class Tracer {
             const double dist = glm::length(toLightFromOrigin);
             ++counters.shadow;
             counters.tests += scene_.PrimitiveCount();
-            if (!geometry::Occluded(scene_, Ray{above, toLightFromOrigin / dist, 0.0, dist})) {
+            if (!geometry::Occluded(scene_, Ray{above, toLightFromOrigin / dist, 0.0, dist}, test_)) {
                 color += c;
             }
         }
@@ -167,6 +170,7 @@ class Tracer {
 
     const scene::Scene& scene_;
     const RenderOptions& options_;
+    geometry::TriangleTest test_;
 };
 
 }  // namespace

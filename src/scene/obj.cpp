@@ -332,6 +332,16 @@ std::vector<Material> ParseMtl(std::string_view text, const fs::path& file) {
     return materials;
 }
 
+int StatementLine(std::string_view text, std::string_view keyword, size_t index) {
+    LineReader lines(text);
+    std::string_view line;
+    int number = 0;
+    while (lines.Next(line, number)) {
+        if (NextToken(line) == keyword && index-- == 0) return number;
+    }
+    return 0;
+}
+
 ObjMesh ParseObj(std::string_view text, const fs::path& file) {
     return ObjParser(file).Parse(text);
 }

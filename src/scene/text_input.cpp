@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cfloat>
 #include <charconv>
@@ -30,7 +31,8 @@ std::string SystemProblem(int error) {
 
 FileText ReadFile(const std::filesystem::path& file) {
     FileText result;
-    const FileDescriptor in{::open(file.c_str(), O_RDONLY | O_CLOEXEC)};
+    // O_NONBLOCK: opening a FIFO must not wait for a writer (it is refused below anyway).
+    const FileDescriptor in{::open(file.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK)};
     if (in.fd < 0) {
         result.problem =
             errno == ENOENT || errno == ENOTDIR ? "missing file" : SystemProblem(errno);
@@ -45,11 +47,30 @@ FileText ReadFile(const std::filesystem::path& file) {
         result.problem = "is a directory";
         return result;
     }
-    // st_size is a hint only (0 for some special files): read until EOF, growing as needed.
-    result.text.resize(S_ISREG(info.st_mode) ? size_t(info.st_size) : 0);
+    // Devices, FIFOs and sockets may never end (/dev/zero) or never start (a FIFO without a
+    // writer): only regular files are read.
+    if (!S_ISREG(info.st_mode)) {
+        result.problem = "is not a regular file";
+        return result;
+    }
+    if (uint64_t(info.st_size) > kMaxInputBytes) {
+        result.problem = "file too large (" + std::to_string(info.st_size) + " bytes, at most " +
+                         std::to_string(kMaxInputBytes) + ")";
+        return result;
+    }
+    // st_size is where reading starts; a file that grows meanwhile is read up to the limit.
+    result.text.resize(size_t(info.st_size));
     size_t used = 0;
     for (;;) {
-        if (used == result.text.size()) result.text.resize(used + 65536);
+        if (used == result.text.size()) {
+            if (used >= kMaxInputBytes) {
+                result.text.clear();
+                result.problem = "file too large (more than " + std::to_string(kMaxInputBytes) +
+                                 " bytes)";
+                return result;
+            }
+            result.text.resize(std::min<size_t>(used + 65536, kMaxInputBytes));
+        }
         const ssize_t n = ::read(in.fd, result.text.data() + used, result.text.size() - used);
         if (n < 0) {
             if (errno == EINTR) continue;

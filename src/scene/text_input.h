@@ -1,6 +1,7 @@
 // Helpers shared by the OBJ/MTL and JSON readers (private to the scene module).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -12,7 +13,12 @@ struct FileText {
     std::string problem;  // empty on success, else "missing file", "is a directory", ...
 };
 
-// Reads a whole file; never throws for I/O problems, so each caller can place the error.
+// Largest input file read: line numbers (int) cannot overflow below it.
+inline constexpr uint64_t kMaxInputBytes = (uint64_t(1) << 31) - 1;
+
+// Reads a whole regular file of at most kMaxInputBytes; never throws for I/O problems, so each
+// caller can place the error ("missing file", "is a directory", "is not a regular file",
+// "file too large (...)", "cannot read file (...)").
 FileText ReadFile(const std::filesystem::path& file);
 
 // Splits text into logical lines: a trailing '\' joins the next physical line, '#' starts a

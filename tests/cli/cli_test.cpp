@@ -3,6 +3,7 @@
 // messages, and the files it leaves behind: the outputs of a successful render and nothing else,
 // nothing at all when a command fails, and a previous output untouched by a failed render.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -300,6 +301,40 @@ TEST_F(CliFailure, UnusableScenesExitWith1AndNameTheFile) {
          1,
          "rayclass render: error: scene.txt: unknown scene file extension '.txt' (expected "
          ".json or .obj)\n",
+         "x.exr"},
+    };
+    for (const auto& f : failures) Expect(f, inputs);
+}
+
+TEST_F(CliFailure, HostileInputExitsWith1WithoutHangingOrCrashing) {
+    // Special files (a FIFO blocked open() forever, /dev/zero was read until memory ran out),
+    // binary garbage, coordinates beyond the float-safe range (they used to render infinities).
+    ASSERT_EQ(::mkfifo(Work("fifo.json").c_str(), 0600), 0);
+    fs::create_symlink("/dev/zero", Work("zero.obj"));
+    std::string garbage;
+    for (int i = 0; i < 4096; ++i) garbage.push_back(char((i * 2654435761u) >> 24));
+    WriteText(Work("garbage.obj"), "v 0 0 0\n" + garbage);
+    WriteText(Work("garbage.json"), garbage);
+    WriteText(Work("far.json"), "{\"objects\": [{\"type\": \"sphere\", \"center\": [0, 0, 0],\n"
+                                "\"radius\": 3e38}]}\n");
+    const std::vector<std::string> inputs = {"far.json", "fifo.json", "garbage.json", "garbage.obj",
+                                             "zero.obj"};
+    const std::vector<Failure> failures = {
+        {{"fifo.json", "-o", "x.exr"},
+         1,
+         "rayclass render: error: fifo.json: is not a regular file\n",
+         "x.exr"},
+        {{"zero.obj", "-o", "x.exr"},
+         1,
+         "rayclass render: error: zero.obj: is not a regular file\n",
+         "x.exr"},
+        {{"garbage.obj", "-o", "x.exr"}, 1, "rayclass render: error: garbage.obj:", "x.exr", true},
+        {{"garbage.json", "-o", "x.exr"}, 1, "rayclass render: error: garbage.json:1: ", "x.exr",
+         true},
+        {{"far.json", "-o", "x.exr"},
+         1,
+         "rayclass render: error: far.json:2: object 1: 'radius' is out of range (magnitude "
+         "above 1e+12)\n",
          "x.exr"},
     };
     for (const auto& f : failures) Expect(f, inputs);

@@ -1,7 +1,8 @@
 // Ray-primitive intersection on the host, in float (the same arithmetic as cl/intersect.cl, for
 // tests and host-side queries) and in double (the reference renderer's oracle).
 //
-// Triangles: Moeller & Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection" (1997).
+// Triangles: Moeller & Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection" (1997), the
+// default, or the watertight test of Woop, Benthin & Wald (2013) (--triangle-test watertight).
 // Spheres: the cancellation-free discriminant of Haines et al., "Precision Improvements for
 // Ray/Sphere Intersection", Ray Tracing Gems ch. 7 (2019).
 // Quadrics: the implicit quadratic along the ray with the stable root pair, clipped to a box.
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <utility>
 
 #include <glm/glm.hpp>
@@ -63,6 +65,60 @@ bool IntersectTriangle(const Ray<T>& ray, const glm::vec<3, T>& p0, const glm::v
     t = glm::dot(e2, qv) * invDet;
     return t > ray.tMin && t < ray.tMax;
 }
+
+// Watertight ray/triangle test: Woop, Benthin & Wald, "Watertight Ray/Triangle Intersection",
+// JCGT 2(1) 2013. The vertices are moved into a ray-aligned frame (shear so that the ray runs
+// along +z through the origin) and the three 2D edge functions are evaluated there; a point on a
+// shared edge gets the same edge-function value from both triangles, so no ray slips between
+// them. Edge functions that round to exactly zero are recomputed in double (for T = float).
+// Edges count as inside (a ray through an edge or vertex hits every triangle that shares it);
+// the lower-id tie-break then picks one. u, v: barycentrics of vertices 1 and 2, as above.
+template <typename T>
+bool IntersectTriangleWatertight(const Ray<T>& ray, const glm::vec<3, T>& p0,
+                                 const glm::vec<3, T>& p1, const glm::vec<3, T>& p2, T& t, T& u,
+                                 T& v) {
+    const auto& d = ray.d;
+    int kz = 0;
+    if (std::abs(d.y) > std::abs(d[kz])) kz = 1;
+    if (std::abs(d.z) > std::abs(d[kz])) kz = 2;
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    if (d[kz] < T(0)) std::swap(kx, ky);  // keeps the winding
+    if (d[kz] == T(0)) return false;      // zero direction
+    const T sx = d[kx] / d[kz];
+    const T sy = d[ky] / d[kz];
+    const T sz = T(1) / d[kz];
+    const auto a = p0 - ray.o;
+    const auto b = p1 - ray.o;
+    const auto c = p2 - ray.o;
+    const T ax = a[kx] - sx * a[kz], ay = a[ky] - sy * a[kz];
+    const T bx = b[kx] - sx * b[kz], by = b[ky] - sy * b[kz];
+    const T cx = c[kx] - sx * c[kz], cy = c[ky] - sy * c[kz];
+    T e0 = cx * by - cy * bx;  // weight of p0
+    T e1 = ax * cy - ay * cx;  // weight of p1
+    T e2 = bx * ay - by * ax;  // weight of p2
+    if constexpr (std::is_same_v<T, float>) {
+        if (e0 == 0.0f || e1 == 0.0f || e2 == 0.0f) {
+            e0 = float(double(cx) * double(by) - double(cy) * double(bx));
+            e1 = float(double(ax) * double(cy) - double(ay) * double(cx));
+            e2 = float(double(bx) * double(ay) - double(by) * double(ax));
+        }
+    }
+    if ((e0 < T(0) || e1 < T(0) || e2 < T(0)) && (e0 > T(0) || e1 > T(0) || e2 > T(0))) {
+        return false;
+    }
+    const T det = e0 + e1 + e2;
+    if (det == T(0)) return false;  // ray in the triangle's plane, or a degenerate triangle
+    const T az = sz * a[kz], bz = sz * b[kz], cz = sz * c[kz];
+    const T invDet = T(1) / det;
+    t = (e0 * az + e1 * bz + e2 * cz) * invDet;
+    u = e1 * invDet;
+    v = e2 * invDet;
+    return t > ray.tMin && t < ray.tMax;
+}
+
+// Which triangle test IntersectPrimitive and the kernels use (--triangle-test).
+enum class TriangleTest : uint8_t { kMoller, kWatertight };
 
 template <typename T>
 bool IntersectSphere(const Ray<T>& ray, const glm::vec<3, T>& center, T radius, T& t) {
@@ -150,7 +206,8 @@ std::array<T, 10> QuadricCoefficients(const scene::Quadric& q) {
 // Tests primitive `id` of `scene` and updates `best` when the hit is better (nearer, or equally
 // near with a lower id). Returns whether it updated.
 template <typename T>
-bool IntersectPrimitive(const scene::Scene& scene, uint32_t id, const Ray<T>& ray, Hit<T>& best) {
+bool IntersectPrimitive(const scene::Scene& scene, uint32_t id, const Ray<T>& ray, Hit<T>& best,
+                        TriangleTest test = TriangleTest::kMoller) {
     using V = glm::vec<3, T>;
     // A hit at exactly best.t may still win on its lower id, so the bound is one ulp beyond it.
     Ray<T> r = ray;
@@ -159,7 +216,9 @@ bool IntersectPrimitive(const scene::Scene& scene, uint32_t id, const Ray<T>& ra
     bool hit = false;
     if (id < scene.SphereBase()) {
         const auto& tri = scene.triangles[id];
-        hit = IntersectTriangle(r, V(tri.p[0]), V(tri.p[1]), V(tri.p[2]), t, u, v);
+        hit = test == TriangleTest::kWatertight
+                  ? IntersectTriangleWatertight(r, V(tri.p[0]), V(tri.p[1]), V(tri.p[2]), t, u, v)
+                  : IntersectTriangle(r, V(tri.p[0]), V(tri.p[1]), V(tri.p[2]), t, u, v);
     } else if (id < scene.QuadricBase()) {
         const auto& s = scene.spheres[id - scene.SphereBase()];
         hit = IntersectSphere(r, V(s.center), T(s.radius), t);
@@ -177,21 +236,25 @@ bool IntersectPrimitive(const scene::Scene& scene, uint32_t id, const Ray<T>& ra
 
 // Nearest hit over every primitive: the baseline every acceleration is checked against.
 template <typename T>
-Hit<T> IntersectBruteForce(const scene::Scene& scene, const Ray<T>& ray) {
+Hit<T> IntersectBruteForce(const scene::Scene& scene, const Ray<T>& ray,
+                           TriangleTest test = TriangleTest::kMoller) {
     Hit<T> best;
     best.t = ray.tMax;
-    for (uint32_t id = 0; id < scene.PrimitiveCount(); ++id) IntersectPrimitive(scene, id, ray, best);
+    for (uint32_t id = 0; id < scene.PrimitiveCount(); ++id) {
+        IntersectPrimitive(scene, id, ray, best, test);
+    }
     if (!best.Valid()) best.t = std::numeric_limits<T>::infinity();
     return best;
 }
 
 // Whether anything blocks the segment (tMin, tMax) of the ray: the shadow query.
 template <typename T>
-bool Occluded(const scene::Scene& scene, const Ray<T>& ray) {
+bool Occluded(const scene::Scene& scene, const Ray<T>& ray,
+              TriangleTest test = TriangleTest::kMoller) {
     Hit<T> best;
     best.t = ray.tMax;
     for (uint32_t id = 0; id < scene.PrimitiveCount(); ++id) {
-        if (IntersectPrimitive(scene, id, ray, best)) return true;
+        if (IntersectPrimitive(scene, id, ray, best, test)) return true;
     }
     return false;
 }

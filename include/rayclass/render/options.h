@@ -23,6 +23,11 @@ struct RenderOptions {
     bool progress = true;               // progress line on stderr for renders over a second
     std::string eyeRays = "kernel";     // first hits of eye rays: "kernel" (ray query) or "raster"
     std::string hull = "auto";  // raster hulls of spheres/quadrics: sphere|box|billboard|auto
+    // Ray/triangle test: moller (Moeller-Trumbore, default) or watertight (Woop, Benthin & Wald
+    // 2013). Watertight applies to the brute-force and scalar classified kernels and the reference
+    // renderer; the 16-lane vertex/fragment kernels are Moeller only, so with watertight the
+    // classified query runs the scalar kernels (auto) and --kernel vertex|fragment is an error.
+    std::string triangleTest = "moller";
 };
 
 }  // namespace rayclass::render

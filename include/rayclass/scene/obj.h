@@ -46,6 +46,10 @@ ObjMesh LoadObj(const std::filesystem::path& file);
 // Parses OBJ text; `file` names it in errors and anchors relative mtllib paths.
 ObjMesh ParseObj(std::string_view text, const std::filesystem::path& file);
 
+// 1-based line of the `index`-th (0-based) statement `keyword` of OBJ/MTL `text`, 0 when there
+// is none; for messages about parsed values (it re-reads the text).
+int StatementLine(std::string_view text, std::string_view keyword, size_t index);
+
 // Parses MTL text into materials mapped onto the Whitted model (see docs/scene-format.md).
 std::vector<Material> ParseMtl(std::string_view text, const std::filesystem::path& file);
 

@@ -28,6 +28,11 @@ struct Material {
     glm::vec3 emission{0.0f};  // radiance the surface adds itself
 };
 
+// Largest coordinate magnitude (positions, radii, transformed vertices) a scene may use: the
+// triangle test's cubic products (edge x edge . offset) stay finite in float up to
+// (3.4e38)^(1/3) ~ 7e12. The loaders refuse larger values rather than render infinities.
+inline constexpr float kMaxCoordinate = 1e12f;
+
 struct Triangle {
     std::array<glm::vec3, 3> p;  // vertices, world space
     std::array<glm::vec3, 3> n;  // unit vertex normals, valid when hasNormals
