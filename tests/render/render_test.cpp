@@ -27,6 +27,21 @@ clrt::Context& SharedContext() {
     return ctx;
 }
 
+// A shipped scene (path relative to scenes/) at a test resolution.
+scene::Scene TestScene(const std::string& file, uint32_t width, uint32_t height) {
+    scene::Scene scene = scene::LoadScene(SceneDir() / file);
+    scene.camera.width = width;
+    scene.camera.height = height;
+    return scene;
+}
+
+RenderOptions QuietOptions(bool aovs = false) {
+    RenderOptions options;
+    options.aovs = aovs;
+    options.progress = false;
+    return options;
+}
+
 struct SceneCase {
     std::string file;
     uint32_t width, height;
@@ -49,12 +64,8 @@ class RenderMatchesReference : public testing::TestWithParam<SceneCase> {};
 
 TEST_P(RenderMatchesReference, WithinBounds) {
     const SceneCase& c = GetParam();
-    scene::Scene scene = scene::LoadScene(SceneDir() / c.file);
-    scene.camera.width = c.width;
-    scene.camera.height = c.height;
-    RenderOptions options;
-    options.aovs = true;
-    options.progress = false;
+    scene::Scene scene = TestScene(c.file, c.width, c.height);
+    RenderOptions options = QuietOptions(/*aovs=*/true);
 
     RenderStats refStats;
     const image::Image ref = RenderReference(scene, options, refStats);
@@ -109,11 +120,8 @@ INSTANTIATE_TEST_SUITE_P(Scenes, RenderMatchesReference, testing::ValuesIn(kCase
 
 TEST(ClRenderer, NoRayIsLost) {
     // Classification with several batches per generation: every spawned ray is queried once.
-    scene::Scene scene = scene::LoadScene(SceneDir() / "tests/glass.json");
-    scene.camera.width = 64;
-    scene.camera.height = 48;
-    RenderOptions options;
-    options.progress = false;
+    scene::Scene scene = TestScene("tests/glass.json", 64, 48);
+    RenderOptions options = QuietOptions();
     options.batchRays = 1000;  // several batches per generation
     RenderStats stats;
     ClRenderer(SharedContext(), scene, options).Render(stats);
@@ -137,11 +145,8 @@ TEST(ClRenderer, NoRayIsLost) {
 }
 
 TEST(ClRenderer, BatchSizeDoesNotChangeTheImage) {
-    scene::Scene scene = scene::LoadScene(SceneDir() / "tests/spheres.json");
-    scene.camera.width = 80;
-    scene.camera.height = 60;
-    RenderOptions options;
-    options.progress = false;
+    scene::Scene scene = TestScene("tests/spheres.json", 80, 60);
+    RenderOptions options = QuietOptions();
     RenderStats s1, s2;
     const image::Image whole = ClRenderer(SharedContext(), scene, options).Render(s1);
     options.batchRays = 777;
@@ -172,8 +177,7 @@ TEST(ClRenderer, DepthLimitStopsMirrorsFacingEachOther) {
     scene.camera.width = 8;
     scene.camera.height = 8;
     scene.camera.fovYDegrees = 20.0f;
-    RenderOptions options;
-    options.progress = false;
+    RenderOptions options = QuietOptions();
     options.maxDepth = 5;
     RenderStats clStats, refStats;
     const image::Image cl = ClRenderer(SharedContext(), scene, options).Render(clStats);
@@ -196,12 +200,8 @@ TEST(ClRenderer, Polar16DirectionsCostBoundedAccuracy) {
     // Directions rounded through 16-bit polar angles (5.4e-5 rad, cl/encoding.cl) move hits on
     // far surfaces by about t * 5e-5: visible against the reference, but bounded. Measured at
     // 400x300: rmse 7.9e-3 with polar16 against 3.9e-4 with float directions.
-    scene::Scene scene = scene::LoadScene(SceneDir() / "cornell.json");
-    scene.camera.width = 200;
-    scene.camera.height = 150;
-    RenderOptions options;
-    options.aovs = true;
-    options.progress = false;
+    scene::Scene scene = TestScene("cornell.json", 200, 150);
+    RenderOptions options = QuietOptions(/*aovs=*/true);
     RenderStats refStats, floatStats, polarStats;
     const image::Image ref = RenderReference(scene, options, refStats);
     const image::Image exact = ClRenderer(SharedContext(), scene, options).Render(floatStats);
@@ -224,14 +224,10 @@ TEST(ClRenderer, WatertightTestAgreesAcrossQueriesAndWithTheReference) {
     // --triangle-test watertight reaches the brute-force, BVH and scalar classified kernels and
     // the reference renderer alike: the same hits on every device path, the reference within the
     // usual float-double bounds.
-    scene::Scene scene = scene::LoadScene(SceneDir() / "tests/glass.json");
     // 160x120, the size whose Moeller bounds RenderMatchesReference states (other sizes put a
     // different handful of edge pixels on the float-double boundary).
-    scene.camera.width = 160;
-    scene.camera.height = 120;
-    RenderOptions options;
-    options.aovs = true;
-    options.progress = false;
+    scene::Scene scene = TestScene("tests/glass.json", 160, 120);
+    RenderOptions options = QuietOptions(/*aovs=*/true);
     options.triangleTest = "watertight";
     RenderStats refStats;
     const image::Image ref = RenderReference(scene, options, refStats);
