@@ -91,6 +91,104 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
                             options);
 }
 
+namespace {
+
+std::string KernelBuildOptions(const RenderOptions& options) {
+    std::string out;
+    for (const std::string& option :
+         {std::string(options.triangleTest == "watertight" ? "-DRC_WATERTIGHT=1" : ""),
+          std::string(options.rayEncoding == "polar16" ? "-DRC_POLAR16" : ""),
+          options.buildOptions}) {
+        if (option.empty()) continue;
+        out += (out.empty() ? "" : " ") + option;
+    }
+    return out;
+}
+
+RcRenderParams MakeRenderParams(const scene::Scene& scene, const RenderOptions& options) {
+    RcRenderParams params{};
+    params.nTriangles = uint32_t(scene.triangles.size());
+    params.nSpheres = uint32_t(scene.spheres.size());
+    params.nQuadrics = uint32_t(scene.quadrics.size());
+    params.nLights = uint32_t(scene.lights.size());
+    params.maxDepth = options.maxDepth;
+    params.minWeight = options.minWeight;
+    params.ambient = {scene.ambient.x, scene.ambient.y, scene.ambient.z, 0.0f};
+    params.background = {scene.background.x, scene.background.y, scene.background.z, 0.0f};
+    return params;
+}
+
+// The ray query options.accel names; its construction time goes into stats.
+std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& program,
+                                    const SceneBuffers& buffers, const scene::Scene& scene,
+                                    const RenderOptions& options, RenderStats& stats) {
+    if (options.accel == "brute") return MakeBruteForceQuery(ctx, program, buffers);
+    const auto t0 = Clock::now();
+    if (options.accel == "bvh") {
+        auto query = MakeBvhQuery(ctx, program, buffers, scene);
+        stats.timeS["bvh_build"] = SecondsSince(t0);
+        return query;
+    }
+    classify::Params params = classify::Params::ForScene(scene);
+    for (const auto& [name, value] : options.classifyParams) {
+        classify::SetParam(params, name, value);
+    }
+    // The 16-lane kernels are Moeller-Trumbore only: the watertight test runs the scalar style.
+    const KernelStyle style = options.triangleTest == "watertight"
+                                  ? KernelStyle::kScalar
+                                  : ParseKernelStyle(options.kernel);
+    auto query = MakeClassifiedQuery(ctx, program, buffers, scene, params, style);
+    stats.timeS["classify_setup"] = SecondsSince(t0);
+    return query;
+}
+
+// Kernel times, query time and what no timer covers, once the render is done.
+void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& query,
+                 double hostSeconds, Clock::time_point tStart) {
+    const auto& ks = timer.Seconds();
+    for (const auto& [name, s] : ks) stats.timeS["kernel_" + name] = s;
+    stats.queryTimeS = query.HostSeconds();
+    for (const auto& [name, seconds] : ks) {
+        if (name.starts_with("rc_query") || name.starts_with("rc_occluded") ||
+            name.starts_with("rc_intersect") || name == "rc_gather_blocks") {
+            stats.queryTimeS += seconds;
+        }
+    }
+    stats.timeS["host"] = hostSeconds;
+    if (stats.accel.starts_with("classify")) stats.timeS["host_classify"] = query.HostSeconds();
+    stats.timeS["render"] = SecondsSince(tStart);
+    // What neither the kernels' profiling nor the host timers cover: copies between host and
+    // device, buffer allocation, launch overhead and waiting.
+    double accounted = hostSeconds + query.HostSeconds();
+    for (const char* key : {"program_build", "classify_setup", "bvh_build"}) {
+        if (stats.timeS.count(key)) accounted += stats.timeS[key];
+    }
+    for (const auto& [name, seconds] : ks) accounted += seconds;
+    stats.timeS["transfer_and_other"] = std::max(0.0, stats.timeS["render"] - accounted);
+}
+
+// Copies the live secondary slots `live` (indices into `secondary`, in slot order) to the end
+// of `pages`, which hold `count` rays in pages of `pageRays`; new pages are made as needed.
+void AppendToPages(clrt::Context& ctx, cl::Kernel& compact, const cl::Buffer& secondary,
+                   const cl::Buffer& liveSlots, const std::vector<uint32_t>& live, size_t count,
+                   size_t pageRays, std::vector<cl::Buffer>& pages, KernelTimer& timer) {
+    if (live.empty()) return;
+    clrt::Check("clEnqueueWriteBuffer", [&] {
+        ctx.queue().enqueueWriteBuffer(liveSlots, CL_FALSE, 0, live.size() * sizeof(uint32_t),
+                                       live.data());
+    });
+    for (size_t done = 0; done < live.size();) {
+        const size_t offset = (count + done) % pageRays;
+        if (offset == 0) pages.push_back(DeviceBuffer(ctx, pageRays * sizeof(RcRay)));
+        const uint32_t m = uint32_t(std::min(live.size() - done, pageRays - offset));
+        SetArgs(compact, secondary, liveSlots, uint32_t(done), m, pages.back(), uint32_t(offset));
+        Launch(ctx, compact, m, timer);
+        done += m;
+    }
+}
+
+}  // namespace
+
 ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
                        EyeHitSource* eyeHits)
     : ctx_(ctx), scene_(scene), options_(options), eyeHits_(eyeHits) {
@@ -119,47 +217,14 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     stats.nPrimitives = scene_.PrimitiveCount();
 
     auto t0 = Clock::now();
-    const bool watertight = options_.triangleTest == "watertight";
-    std::string buildOptions;
-    for (const std::string& option :
-         {std::string(watertight ? "-DRC_WATERTIGHT=1" : ""),
-          std::string(options_.rayEncoding == "polar16" ? "-DRC_POLAR16" : ""),
-          options_.buildOptions}) {
-        if (option.empty()) continue;
-        buildOptions += (buildOptions.empty() ? "" : " ") + option;
-    }
-    const cl::Program program = BuildRenderProgram(ctx_, buildOptions);
+    const cl::Program program = BuildRenderProgram(ctx_, KernelBuildOptions(options_));
     stats.timeS["program_build"] = SecondsSince(t0);
 
-    RcRenderParams params{};
-    params.nTriangles = uint32_t(scene_.triangles.size());
-    params.nSpheres = uint32_t(scene_.spheres.size());
-    params.nQuadrics = uint32_t(scene_.quadrics.size());
-    params.nLights = uint32_t(scene_.lights.size());
-    params.maxDepth = options_.maxDepth;
-    params.minWeight = options_.minWeight;
-    params.ambient = {scene_.ambient.x, scene_.ambient.y, scene_.ambient.z, 0.0f};
-    params.background = {scene_.background.x, scene_.background.y, scene_.background.z, 0.0f};
+    const RcRenderParams params = MakeRenderParams(scene_, options_);
     const DeviceScene deviceScene(scene_);
     const SceneBuffers sceneBuffers(ctx_, deviceScene, params);
-    std::unique_ptr<RayQuery> query;
-    if (options_.accel == "brute") {
-        query = MakeBruteForceQuery(ctx_, program, sceneBuffers);
-    } else if (options_.accel == "bvh") {
-        t0 = Clock::now();
-        query = MakeBvhQuery(ctx_, program, sceneBuffers, scene_);
-        stats.timeS["bvh_build"] = SecondsSince(t0);
-    } else {
-        t0 = Clock::now();
-        classify::Params classifyParams = classify::Params::ForScene(scene_);
-        for (const auto& [name, value] : options_.classifyParams) {
-            classify::SetParam(classifyParams, name, value);
-        }
-        query = MakeClassifiedQuery(ctx_, program, sceneBuffers, scene_, classifyParams,
-                                    watertight ? KernelStyle::kScalar
-                                               : ParseKernelStyle(options_.kernel));
-        stats.timeS["classify_setup"] = SecondsSince(t0);
-    }
+    const std::unique_ptr<RayQuery> query =
+        MakeQuery(ctx_, program, sceneBuffers, scene_, options_, stats);
     stats.accel = query->Name();
     stats.eyeRays = eyeHits_ ? eyeHits_->Name() : "kernel";
 
@@ -324,24 +389,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
             }
             hostSeconds += SecondsSince(tHost);
 
-            // Append this batch's secondary rays to the next generation's pages.
-            if (!hostLive.empty()) {
-                clrt::Check("clEnqueueWriteBuffer", [&] {
-                    q.enqueueWriteBuffer(liveSlots, CL_FALSE, 0, hostLive.size() * sizeof(uint32_t),
-                                         hostLive.data());
-                });
-            }
-            size_t done = 0;
-            while (done < hostLive.size()) {
-                const size_t nextCount = nextPixels.size() - hostLive.size() + done;
-                const size_t offset = nextCount % batch;
-                if (offset == 0) nextPages.push_back(DeviceBuffer(ctx_, batch * sizeof(RcRay)));
-                const uint32_t m = uint32_t(std::min(hostLive.size() - done, batch - offset));
-                SetArgs(compactKernel, secondary, liveSlots, uint32_t(done), m, nextPages.back(),
-                        uint32_t(offset));
-                Launch(ctx_, compactKernel, m, timer);
-                done += m;
-            }
+            AppendToPages(ctx_, compactKernel, secondary, liveSlots, hostLive,
+                          nextPixels.size() - hostLive.size(), batch, nextPages, timer);
             gen.rays += n;
 
             if (options_.progress && SecondsSince(lastProgress) > 1.0) {
@@ -362,26 +411,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     }
     if (printedProgress) std::fprintf(stderr, "\n");
 
-    for (const auto& [name, s] : timer.Seconds()) stats.timeS["kernel_" + name] = s;
-    const auto& ks = timer.Seconds();
-    stats.queryTimeS = query->HostSeconds();
-    for (const auto& [name, seconds] : ks) {
-        if (name.starts_with("rc_query") || name.starts_with("rc_occluded") ||
-            name.starts_with("rc_intersect") || name == "rc_gather_blocks") {
-            stats.queryTimeS += seconds;
-        }
-    }
-    stats.timeS["host"] = hostSeconds;
-    if (options_.accel == "classify") stats.timeS["host_classify"] = query->HostSeconds();
-    stats.timeS["render"] = SecondsSince(tStart);
-    // What neither the kernels' profiling nor the host timers cover: copies between host and
-    // device, buffer allocation, launch overhead and waiting.
-    double accounted = hostSeconds + query->HostSeconds();
-    for (const char* key : {"program_build", "classify_setup"}) {
-        if (stats.timeS.count(key)) accounted += stats.timeS[key];
-    }
-    for (const auto& [name, seconds] : ks) accounted += seconds;
-    stats.timeS["transfer_and_other"] = std::max(0.0, stats.timeS["render"] - accounted);
+    FinishStats(stats, timer, *query, hostSeconds, tStart);
     return img;
 }
 
