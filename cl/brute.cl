@@ -13,10 +13,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     if (i >= n) return;
     const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
     const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-    RcHit best;
-    best.t = tmax;
-    best.prim = RC_NO_HIT;
-    best.u = best.v = 0.0f;
+    RcHit best = rc_no_hit(tmax);
     const uint nT = params->nTriangles, nS = params->nSpheres;
     const uint nPrims = nT + nS + params->nQuadrics;
     for (uint id = 0; id < nPrims; ++id)
@@ -37,9 +34,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     if (rays[i].contribution.w == 0.0f) return;
     const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
     const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-    RcHit best;
-    best.t = tmax;
-    best.prim = RC_NO_HIT;
+    RcHit best = rc_no_hit(tmax);
     const uint nT = params->nTriangles, nS = params->nSpheres;
     const uint nPrims = nT + nS + params->nQuadrics;
     uint id = 0;

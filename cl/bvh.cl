@@ -67,10 +67,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     if (i >= n) return;
     const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
     const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-    RcHit best;
-    best.t = tmax;
-    best.prim = RC_NO_HIT;
-    best.u = best.v = 0.0f;
+    RcHit best = rc_no_hit(tmax);
     const uint nT = params->nTriangles, nS = params->nSpheres;
     uint count = 0;
     if (nT + nS + params->nQuadrics > 0)
@@ -94,10 +91,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     if (rays[i].contribution.w == 0.0f) return;
     const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
     const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-    RcHit best;
-    best.t = tmax;
-    best.prim = RC_NO_HIT;
-    best.u = best.v = 0.0f;
+    RcHit best = rc_no_hit(tmax);
     const uint nT = params->nTriangles, nS = params->nSpheres;
     if (nT + nS + params->nQuadrics == 0) return;
     tests[i] = rc_bvh_trace(o, d, tmin, tmax, 1, nodes, primIndex, triangles, spheres, quadrics,

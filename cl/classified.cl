@@ -40,10 +40,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     const float tmin = rays[id].origin.w, tmax = rays[id].direction.w;
     const float originX = rc_face_component(o, leaf.face);
     const float speed = fabs(rc_face_component(d, leaf.face));
-    RcHit best;
-    best.t = tmax;
-    best.prim = RC_NO_HIT;
-    best.u = best.v = 0.0f;
+    RcHit best = rc_no_hit(tmax);
     uint c = 0;
     for (; c < leaf.candCount; ++c) {
         const RcCandidate cand = candidates[leaf.candBegin + c];
@@ -70,9 +67,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const float3 o = rays[id].origin.xyz, d = rays[id].direction.xyz;
     const float tmin = rays[id].origin.w, tmax = rays[id].direction.w;
     const float endX = rc_face_component(o, leaf.face) + tmax * fabs(rc_face_component(d, leaf.face));
-    RcHit best;
-    best.t = tmax;
-    best.prim = RC_NO_HIT;
+    RcHit best = rc_no_hit(tmax);
     uchar hit = 0;
     uint c = 0;
     for (; c < leaf.candCount && !hit; ++c) {
@@ -196,10 +191,7 @@ inline RcHit rc_vertex_nearest(const RcRay* ray, RcLeaf leaf, uint firstBlock,
     const float tmin = ray->origin.w, tmax = ray->direction.w;
     const float originX = rc_face_component(o, leaf.face);
     const float speed = fabs(rc_face_component(d, leaf.face));
-    RcHit best;
-    best.t = tmax;
-    best.prim = RC_NO_HIT;
-    best.u = best.v = 0.0f;
+    RcHit best = rc_no_hit(tmax);
     const uint nBlocks = (leaf.candCount + 15) / 16;
     uint b = 0;
     for (; b < nBlocks; ++b) {
@@ -268,9 +260,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
         hit = any(t < INFINITY);
         for (uint other = blk->otherMask; other != 0 && !hit; other &= other - 1) {
             const uint k = 31 - clz(other & -other);
-            RcHit h;
-            h.t = tmax;
-            h.prim = RC_NO_HIT;
+            RcHit h = rc_no_hit(tmax);
             hit = rc_intersect_primitive(blk->prim[k], o, d, tmin, tmax, triangles, spheres,
                                          quadrics, params->nTriangles, params->nSpheres, &h);
         }

@@ -187,6 +187,15 @@ inline float3 rc_offset_ray_origin(float3 p, float3 n) {
                     rc_offset_component(p.z, n.z));
 }
 
+/* No hit yet on the segment (tmin, tmax): the start of every nearest-hit and any-hit search. */
+inline RcHit rc_no_hit(float tmax) {
+    RcHit h;
+    h.t = tmax;
+    h.prim = RC_NO_HIT;
+    h.u = h.v = 0.0f;
+    return h;
+}
+
 /* Nearest hit of one ray over primitive `id`, with the lower-id tie-break. Returns 1 when it
  * improved *best. */
 inline int rc_intersect_primitive(uint id, float3 o, float3 d, float tmin, float tmax,

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "rayclass/geometry/intersect.h"
+#include "rayclass/render/device_scene.h"
 
 namespace rayclass::bench {
 
@@ -33,8 +34,7 @@ scene::Camera NamedCamera(const scene::Scene& scene, const std::string& name, ui
         c.fovYDegrees = 60.0f;
         return c;
     }
-    throw std::invalid_argument("unknown camera '" + name +
-                                "' (scene, orbit, anchor or reverse)");
+    throw std::invalid_argument("unknown camera '" + name + "' (scene, orbit, anchor or reverse)");
 }
 
 glm::vec3 NamedLight(const scene::Scene& scene, const std::string& spec) {
@@ -51,25 +51,15 @@ glm::vec3 NamedLight(const scene::Scene& scene, const std::string& spec) {
 }
 
 std::vector<BenchRay> EyeRays(const scene::Camera& camera) {
-    // RcCamera's basis (render/device_scene.cpp's CameraBasis) in double, then the float formula.
-    const glm::dvec3 pos(camera.position), at(camera.lookAt), upHint(camera.up);
-    const glm::dvec3 forward = glm::normalize(at - pos);
-    const glm::dvec3 right = glm::normalize(glm::cross(forward, upHint));
-    const glm::dvec3 up = glm::cross(right, forward);
-    const double tanY = std::tan(glm::radians(double(camera.fovYDegrees)) * 0.5);
-    const double tanX = tanY * double(camera.width) / double(camera.height);
-    const glm::vec3 o(pos), f(forward), r(right), u(up);
-    const float tx = float(tanX), ty = float(tanY);
+    const render::CameraBasis basis(camera);
     std::vector<BenchRay> rays;
-    rays.reserve(size_t(camera.width) * camera.height);
-    for (uint32_t y = 0; y < camera.height; ++y) {
-        for (uint32_t x = 0; x < camera.width; ++x) {
-            const float sx = (2.0f * (float(x) + 0.5f) / float(camera.width) - 1.0f) * tx;
-            const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(camera.height)) * ty;
+    rays.reserve(size_t(basis.width) * basis.height);
+    for (uint32_t y = 0; y < basis.height; ++y) {
+        for (uint32_t x = 0; x < basis.width; ++x) {
             BenchRay ray;
-            ray.origin = o;
+            ray.origin = glm::vec3(basis.position);
             ray.tMin = 0.0f;
-            ray.direction = glm::normalize(f + sx * r + sy * u);
+            ray.direction = basis.DirectionFloat(x, y);
             ray.tMax = INFINITY;
             rays.push_back(ray);
         }
@@ -164,7 +154,8 @@ void SaveRaySets(const std::filesystem::path& file, const RaySets& sets) {
         f.write(reinterpret_cast<const char*>(&n), sizeof n);
     }
     for (const auto& s : sets.sets) {
-        f.write(reinterpret_cast<const char*>(s.data()), std::streamsize(s.size() * sizeof(BenchRay)));
+        f.write(reinterpret_cast<const char*>(s.data()),
+                std::streamsize(s.size() * sizeof(BenchRay)));
     }
     if (!f) throw std::runtime_error("error writing " + file.string());
 }

@@ -39,22 +39,13 @@ uint32_t ParseCount(const std::string& option, const std::string& text, uint32_t
 
 std::vector<classify::Ray> SceneEyeRays(const scene::Scene& scene) {
     const render::CameraBasis basis(scene.camera);
-    const RcCamera cam = basis.ToDevice();
-    const glm::vec3 origin(cam.position.x, cam.position.y, cam.position.z);
-    const glm::vec3 forward(cam.forward.x, cam.forward.y, cam.forward.z);
-    const glm::vec3 right(cam.right.x, cam.right.y, cam.right.z);
-    const glm::vec3 up(cam.up.x, cam.up.y, cam.up.z);
     std::vector<classify::Ray> rays;
-    rays.reserve(size_t(cam.width) * cam.height);
-    for (uint32_t y = 0; y < cam.height; ++y) {
-        for (uint32_t x = 0; x < cam.width; ++x) {
-            // The formula of cl/camera.cl, in the same float operations.
-            const float sx = (2.0f * (float(x) + 0.5f) / float(cam.width) - 1.0f) * cam.tanHalfFovX;
-            const float sy =
-                (1.0f - 2.0f * (float(y) + 0.5f) / float(cam.height)) * cam.tanHalfFovY;
+    rays.reserve(size_t(basis.width) * basis.height);
+    for (uint32_t y = 0; y < basis.height; ++y) {
+        for (uint32_t x = 0; x < basis.width; ++x) {
             classify::Ray r;
-            r.origin = origin;
-            r.direction = glm::normalize(forward + sx * right + sy * up);
+            r.origin = glm::vec3(basis.position);
+            r.direction = basis.DirectionFloat(x, y);
             rays.push_back(r);
         }
     }

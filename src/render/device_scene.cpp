@@ -25,6 +25,13 @@ glm::dvec3 CameraBasis::Direction(uint32_t x, uint32_t y) const {
     return glm::normalize(forward + sx * right + sy * up);
 }
 
+glm::vec3 CameraBasis::DirectionFloat(uint32_t x, uint32_t y) const {
+    const glm::vec3 f(forward), r(right), u(up);
+    const float sx = (2.0f * (float(x) + 0.5f) / float(width) - 1.0f) * float(tanHalfFovX);
+    const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(height)) * float(tanHalfFovY);
+    return glm::normalize(f + sx * r + sy * u);
+}
+
 RcCamera CameraBasis::ToDevice() const {
     RcCamera c{};
     c.position = F4(glm::vec3(position));

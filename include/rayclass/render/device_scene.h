@@ -17,6 +17,9 @@ struct CameraBasis {
     explicit CameraBasis(const scene::Camera& camera);
     // The eye ray of pixel (x, y) in double: see RcCamera.
     glm::dvec3 Direction(uint32_t x, uint32_t y) const;
+    // The same ray in float from ToDevice()'s values, the arithmetic of cl/camera.cl, for host
+    // code that must shoot the rays the kernels shoot (statistics, benchmarks).
+    glm::vec3 DirectionFloat(uint32_t x, uint32_t y) const;
     RcCamera ToDevice() const;
 };
 
