@@ -301,7 +301,6 @@ int main(int argc, char** argv) try {
         shade.shadow = Device(ctx, size_t(n) * nLights * sizeof(RcShadowRay));
         shade.secondary = Device(ctx, 2 * size_t(n) * sizeof(RcRay));
         shade.spawned = Device(ctx, 2 * size_t(n));
-        std::vector<RcRay> hostRays(n);
 
         for (const std::string& method : methods) {
             if (method == "brute" && sc.PrimitiveCount() > bruteMaxPrims) continue;
@@ -317,14 +316,8 @@ int main(int argc, char** argv) try {
                 if (shadow) {
                     tests = q->Occluded(raysBuf, shadowRays, out, timer);
                 } else {
-                    std::unique_ptr<render::PreparedBatch> prepared;
-                    if (q->NeedsHostRays()) {
-                        clrt::Check("clEnqueueReadBuffer", [&] {
-                            queue.enqueueReadBuffer(raysBuf, CL_TRUE, 0, n * sizeof(RcRay),
-                                                    hostRays.data());
-                        });
-                        prepared = q->Prepare(hostRays);
-                    }
+                    const std::unique_ptr<render::PreparedBatch> prepared =
+                        q->Prepare(raysBuf, n, queue);
                     tests = q->Intersect(raysBuf, n, prepared.get(), out, shade, timer).tests;
                 }
                 queue.finish();

@@ -167,11 +167,35 @@ void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& q
     stats.timeS["transfer_and_other"] = std::max(0.0, stats.timeS["render"] - accounted);
 }
 
+// Device pages of rays, recycled from generation to generation: a fresh buffer costs its page
+// faults again.
+class PagePool {
+  public:
+    PagePool(clrt::Context& ctx, size_t pageRays) : ctx_(ctx), pageRays_(pageRays) {}
+    size_t PageRays() const { return pageRays_; }
+    cl::Buffer Take() {
+        if (free_.empty()) return DeviceBuffer(ctx_, pageRays_ * sizeof(RcRay));
+        cl::Buffer page = std::move(free_.back());
+        free_.pop_back();
+        return page;
+    }
+    void Give(std::vector<cl::Buffer>& pages) {
+        for (cl::Buffer& page : pages) free_.push_back(std::move(page));
+        pages.clear();
+    }
+
+  private:
+    clrt::Context& ctx_;
+    size_t pageRays_;
+    std::vector<cl::Buffer> free_;
+};
+
 // Copies the live secondary slots `live` (indices into `secondary`, in slot order) to the end
-// of `pages`, which hold `count` rays in pages of `pageRays`; new pages are made as needed.
+// of `pages`, which hold `count` rays; new pages come from `pool`.
 void AppendToPages(clrt::Context& ctx, cl::Kernel& compact, const cl::Buffer& secondary,
                    const cl::Buffer& liveSlots, const std::vector<uint32_t>& live, size_t count,
-                   size_t pageRays, std::vector<cl::Buffer>& pages, KernelTimer& timer) {
+                   PagePool& pool, std::vector<cl::Buffer>& pages, KernelTimer& timer) {
+    const size_t pageRays = pool.PageRays();
     if (live.empty()) return;
     clrt::Check("clEnqueueWriteBuffer", [&] {
         ctx.queue().enqueueWriteBuffer(liveSlots, CL_FALSE, 0, live.size() * sizeof(uint32_t),
@@ -179,7 +203,7 @@ void AppendToPages(clrt::Context& ctx, cl::Kernel& compact, const cl::Buffer& se
     });
     for (size_t done = 0; done < live.size();) {
         const size_t offset = (count + done) % pageRays;
-        if (offset == 0) pages.push_back(DeviceBuffer(ctx, pageRays * sizeof(RcRay)));
+        if (offset == 0) pages.push_back(pool.Take());
         const uint32_t m = uint32_t(std::min(live.size() - done, pageRays - offset));
         SetArgs(compact, secondary, liveSlots, uint32_t(done), m, pages.back(), uint32_t(offset));
         Launch(ctx, compact, m, timer);
@@ -261,6 +285,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     // A generation's rays live on the device in pages of `batch` rays; a batch is one page. The
     // host keeps only each ray's pixel, for accumulating contributions.
     std::vector<cl::Buffer> pages, nextPages;
+    PagePool pool(ctx_, batch);
     std::vector<uint32_t> pixels, nextPixels;
     auto& q = ctx_.queue();
     cl::CommandQueue readQueue = clrt::Check(
@@ -283,13 +308,13 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         const size_t nRays = generation == 0 ? nEye : pixels.size();
         if (nRays == 0) break;
         GenerationStats gen;
-        nextPages.clear();
+        pool.Give(nextPages);
         nextPixels.clear();
         uint64_t nReflection = 0, nRefraction = 0;
         if (generation == 0) {
             for (size_t first = 0; first < nRays; first += batch) {
                 const uint32_t n = uint32_t(std::min(batch, nRays - first));
-                pages.push_back(DeviceBuffer(ctx_, batch * sizeof(RcRay)));
+                pages.push_back(pool.Take());
                 SetArgs(eyeKernel, camBuffer, uint32_t(first), n, pages.back());
                 Launch(ctx_, eyeKernel, n, timer);
             }
@@ -298,20 +323,15 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         // device queries and shades batch k.
         clrt::Check("clFinish", [&] { q.finish(); });
         auto prepare = [&](size_t page) -> std::unique_ptr<PreparedBatch> {
-            if (!query->NeedsHostRays() || (generation == 0 && eyeHits_)) return nullptr;
-            const size_t n = std::min(batch, nRays - page * batch);
-            std::vector<RcRay> host(n);
-            clrt::Check("clEnqueueReadBuffer", [&] {
-                readQueue.enqueueReadBuffer(pages[page], CL_TRUE, 0, n * sizeof(RcRay),
-                                            host.data());
-            });
-            return query->Prepare(host);
+            if (generation == 0 && eyeHits_) return nullptr;
+            return query->Prepare(pages[page], uint32_t(std::min(batch, nRays - page * batch)),
+                                  readQueue);
         };
         std::future<std::unique_ptr<PreparedBatch>> nextPrepared =
             std::async(std::launch::async, prepare, 0);
         for (size_t first = 0, page = 0; first < nRays; first += batch, ++page) {
             const uint32_t n = uint32_t(std::min(batch, nRays - first));
-            const std::unique_ptr<PreparedBatch> prepared = nextPrepared.get();
+            std::unique_ptr<PreparedBatch> prepared = nextPrepared.get();
             if (first + batch < nRays) {
                 nextPrepared = std::async(std::launch::async, prepare, page + 1);
             }
@@ -324,6 +344,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                 });
             } else {
                 found = query->Intersect(rays, n, prepared.get(), hits, shade, timer);
+                query->Recycle(std::move(prepared));
             }
             stats.intersectionTests += found.tests;
             if (!found.shaded) {
@@ -390,7 +411,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
             hostSeconds += SecondsSince(tHost);
 
             AppendToPages(ctx_, compactKernel, secondary, liveSlots, hostLive,
-                          nextPixels.size() - hostLive.size(), batch, nextPages, timer);
+                          nextPixels.size() - hostLive.size(), pool, nextPages, timer);
             gen.rays += n;
 
             if (options_.progress && SecondsSince(lastProgress) > 1.0) {

@@ -1,6 +1,8 @@
 #include "rayclass/render/classified_query.h"
 
 #include <chrono>
+#include <cstddef>
+#include <cstring>
 #include <mutex>
 #include <numeric>
 
@@ -48,18 +50,40 @@ class ClassifiedQuery final : public RayQuery {
           shadeLights_(program, "rc_shade_lights") {}
 
     std::string Name() const override { return std::string("classify/") + KernelStyleName(style_); }
-    bool NeedsHostRays() const override { return true; }
     double HostSeconds() const override {
-        std::lock_guard<std::mutex> lock(hostSecondsMutex_);
+        std::lock_guard<std::mutex> lock(mutex_);
         return hostSeconds_;
     }
 
-    std::unique_ptr<PreparedBatch> Prepare(std::span<const RcRay> hostRays) override {
-        auto out = std::make_unique<ClassifiedBatch>();
-        Classify(
-            hierarchy_, hostRays.size(), [&](size_t i) { return ToClassifyRay(hostRays[i]); },
-            *out);
+    std::unique_ptr<PreparedBatch> Prepare(const cl::Buffer& rays, uint32_t n,
+                                           const cl::CommandQueue& queue) override {
+        std::unique_ptr<ClassifiedBatch> out;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            if (!pool_.empty()) {
+                out = std::move(pool_.back());
+                pool_.pop_back();
+            }
+        }
+        if (!out) out = std::make_unique<ClassifiedBatch>();
+        // An RcRay starts with the fields of a classify::Ray: read just those, strided.
+        static_assert(sizeof(classify::Ray) == offsetof(RcRay, weight));
+        out->rays.resize(n);
+        if (n > 0) {
+            clrt::Check("clEnqueueReadBufferRect", [&] {
+                queue.enqueueReadBufferRect(rays, CL_TRUE, {0, 0, 0}, {0, 0, 0},
+                                            {sizeof(classify::Ray), n, 1}, sizeof(RcRay), 0,
+                                            sizeof(classify::Ray), 0, out->rays.data());
+            });
+        }
+        Classify(hierarchy_, *out);
         return out;
+    }
+
+    void Recycle(std::unique_ptr<PreparedBatch> batch) override {
+        if (!batch) return;
+        std::lock_guard<std::mutex> lock(mutex_);
+        pool_.emplace_back(static_cast<ClassifiedBatch*>(batch.release()));
     }
 
     QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
@@ -83,37 +107,21 @@ class ClassifiedQuery final : public RayQuery {
         for (uint32_t i = 0; i < n; ++i) {
             if (hostRays[i].contribution.w != 0.0f) live_.push_back(i);
         }
-        Classify(
-            shadowHierarchy_, live_.size(),
-            [&](size_t i) {
-                const RcShadowRay& s = hostRays[live_[i]];
-                classify::Ray r;
-                r.origin = glm::vec3(s.origin.x, s.origin.y, s.origin.z);
-                r.tMin = s.origin.w;
-                r.direction = glm::vec3(s.direction.x, s.direction.y, s.direction.z);
-                r.tMax = s.direction.w;
-                return r;
-            },
-            shadowBatch_);
+        shadowBatch_.rays.resize(live_.size());
+        for (size_t i = 0; i < live_.size(); ++i) {
+            static_assert(sizeof(classify::Ray) == offsetof(RcShadowRay, contribution));
+            std::memcpy(static_cast<void*>(&shadowBatch_.rays[i]), &hostRays[live_[i]],
+                        sizeof(classify::Ray));
+        }
+        Classify(shadowHierarchy_, shadowBatch_);
         for (auto& id : shadowBatch_.batch.rayIndex) id = live_[id];
         return Query(shadowBatch_, shadowRays, blocked, nullptr, timer).tests;
     }
 
   private:
-    static classify::Ray ToClassifyRay(const RcRay& ray) {
-        classify::Ray r;
-        r.origin = glm::vec3(ray.origin.x, ray.origin.y, ray.origin.z);
-        r.tMin = ray.origin.w;
-        r.direction = glm::vec3(ray.direction.x, ray.direction.y, ray.direction.z);
-        r.tMax = ray.direction.w;
-        return r;
-    }
-
-    template <typename F>
-    void Classify(classify::Hierarchy& hierarchy, size_t n, F&& ray, ClassifiedBatch& out) {
+    // Classifies cb.rays into cb's leaves and sorts the leaves by kernel style.
+    void Classify(classify::Hierarchy& hierarchy, ClassifiedBatch& out) {
         const auto t0 = Clock::now();
-        out.rays.resize(n);
-        for (size_t i = 0; i < n; ++i) out.rays[i] = ray(i);
         hierarchy.Classify(out.rays, out.batch);
         // Per-slot leaf ids and, per style, the leaves.
         out.rayLeaf.resize(out.batch.rayIndex.size());
@@ -135,7 +143,7 @@ class ClassifiedQuery final : public RayQuery {
     }
 
     void AddHostSeconds(double s) {
-        std::lock_guard<std::mutex> lock(hostSecondsMutex_);
+        std::lock_guard<std::mutex> lock(mutex_);
         hostSeconds_ += s;
     }
 
@@ -224,8 +232,21 @@ class ClassifiedQuery final : public RayQuery {
             tests += SumTests(testsBuf, nSlots);
         }
         if (shadow) return {tests, false};
-        // The rays the vertex kernel did not shade: fragment leaves' rays and the misses.
-        unshaded_.assign(cb.batch.missed.begin(), cb.batch.missed.end());
+        // The rays the vertex kernel did not shade (fragment leaves' rays and the misses), in
+        // slot order: shading then walks the batch's arrays in order, not leaf by leaf.
+        const auto tUnshaded = Clock::now();
+        shadedByVertex_.assign(cb.batch.nRays, 0);
+        for (uint32_t l : cb.vertexLeaves) {
+            const RcLeaf& leaf = cb.batch.leaves[l];
+            for (uint32_t r = 0; r < leaf.rayCount; ++r) {
+                shadedByVertex_[cb.batch.rayIndex[leaf.rayBegin + r]] = 1;
+            }
+        }
+        unshaded_.clear();
+        for (uint32_t i = 0; i < cb.batch.nRays; ++i) {
+            if (!shadedByVertex_[i]) unshaded_.push_back(i);
+        }
+        AddHostSeconds(Seconds(tUnshaded));
         if (!cb.fragmentLeaves.empty()) {
             const auto t1 = Clock::now();
             packetLeaf_.clear();
@@ -236,8 +257,6 @@ class ClassifiedQuery final : public RayQuery {
                     packetLeaf_.push_back(l);
                     packetFirst_.push_back(r);
                 }
-                unshaded_.insert(unshaded_.end(), cb.batch.rayIndex.begin() + leaf.rayBegin,
-                                 cb.batch.rayIndex.begin() + leaf.rayBegin + leaf.rayCount);
             }
             const uint32_t nPackets = uint32_t(packetLeaf_.size());
             const cl::Buffer& packetLeaf = packetLeafBuf_.Upload(ctx_, packetLeaf_);
@@ -290,11 +309,13 @@ class ClassifiedQuery final : public RayQuery {
     ClassifiedBatch shadowBatch_;
     std::vector<uint32_t> live_, allLeaves_, vertexSlots_, vertexRayLeaf_, blockLeaf_, blockFirst_,
         leafFirstBlock_, packetLeaf_, packetFirst_, testsHost_, unshaded_;
+    std::vector<uint8_t> shadedByVertex_;
     GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,
         blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_, packetFirstBuf_,
         fragmentTestsBuf_, unshadedBuf_;
-    mutable std::mutex hostSecondsMutex_;
+    mutable std::mutex mutex_;  // guards hostSeconds_ and pool_
     double hostSeconds_ = 0;
+    std::vector<std::unique_ptr<ClassifiedBatch>> pool_;  // recycled batches
 };
 
 }  // namespace

@@ -54,19 +54,23 @@ struct PreparedBatch {
 };
 
 // How the rays of a batch find their nearest hit and their occluders. The rays are on the
-// device already; hostRays is the same batch on the host, for queries that classify rays there.
+// device already.
 class RayQuery {
   public:
     virtual ~RayQuery() = default;
     virtual std::string Name() const = 0;
-    // Whether Prepare needs the batch's rays on the host.
-    virtual bool NeedsHostRays() const { return false; }
-    // Host work on a batch of rays (called in batch order, from one thread at a time, possibly
-    // concurrently with Intersect or Occluded of an earlier batch). nullptr: nothing to prepare.
-    virtual std::unique_ptr<PreparedBatch> Prepare(std::span<const RcRay> hostRays) {
-        (void)hostRays;
+    // Host work on the batch rays[0, n) (RcRay) before its kernels can run, e.g. classifying the
+    // rays, which it reads back through `queue` (not the queue the kernels run on, so the read
+    // does not wait for them). Called in batch order, from one thread at a time, possibly
+    // concurrently with Intersect or Occluded of an earlier batch. nullptr: nothing to prepare.
+    virtual std::unique_ptr<PreparedBatch> Prepare(const cl::Buffer& rays, uint32_t n,
+                                                   const cl::CommandQueue& queue) {
+        (void)rays, (void)n, (void)queue;
         return nullptr;
     }
+    // Takes a batch back once its Intersect has run, so the next Prepare reuses its memory
+    // (fresh pages cost more than classifying into them).
+    virtual void Recycle(std::unique_ptr<PreparedBatch> batch) { (void)batch; }
     // Host time spent so far (classification, building the batch arrays), summed over threads.
     virtual double HostSeconds() const { return 0.0; }
     // Nearest hit of rays[0, n) (RcRay) into hits (RcHit). Query styles whose kernels shade
