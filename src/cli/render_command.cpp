@@ -51,7 +51,7 @@ options:
   --reference             render with the double-precision host reference renderer
   --stats FILE.json       write ray counts and timings as JSON
   --exposure E            PNG only: scale by 2^E before tone mapping (default 0)
-  --batch-rays N          rays per kernel launch (default 1048576)
+  --batch-rays N          rays per kernel launch (default 262144)
   --cl-options STRING     extra OpenCL build options (e.g. -cl-fast-relaxed-math)
   --eye-rays P            first hits of the eye rays: raster (OpenGL hull projection, headless
                           EGL) or kernel (the OpenCL ray query); default raster when an OpenGL

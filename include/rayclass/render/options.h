@@ -12,7 +12,10 @@ struct RenderOptions {
     uint32_t maxDepth = 6;          // deepest secondary ray spawned (eye rays have depth 0)
     float minWeight = 1e-3f;        // adaptive depth control: weaker secondary rays are not spawned
     bool aovs = false;              // fill depth, id and normal layers of the first hit
-    uint32_t batchRays = 1u << 20;  // rays per kernel launch (bounds device buffers)
+    // Rays per batch: bounds the device buffers, and several batches per generation let the host
+    // classify one while the device answers another. On Sibenik with mirror rays 2^18 took
+    // half the page faults of 2^20 (104k against 177k) for the same CPU time.
+    uint32_t batchRays = 1u << 18;
     std::string device = "auto";    // OpenCL device: auto, cpu, gpu or an index
     std::string accel = "classify";  // ray query: classify (ray classification), bvh or brute
     // Cost-function settings of the classification (classify::SetParam names and values).
