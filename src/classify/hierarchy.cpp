@@ -184,6 +184,7 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
     }
     std::vector<uint32_t> order(nPrims);
     std::vector<Box5> inFace(nPrims);
+    auto lists = std::make_shared<std::array<FaceList, kFaceCount>>();
     for (int face = 0; face < kFaceCount; ++face) {
         const Box5 root = BoxInFace(face, sceneBox_);
         NewNode(root, face, 0, false);
@@ -194,7 +195,7 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
         std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
             return inFace[a].lo[0] < inFace[b].lo[0] || (inFace[a].lo[0] == inFace[b].lo[0] && a < b);
         });
-        FaceList& l = faceLists_[face];
+        FaceList& l = (*lists)[face];
         l.Resize(nPrims);
         for (uint32_t i = 0; i < nPrims; ++i) {
             const Box5& b = inFace[order[i]];
@@ -207,6 +208,7 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
             l.prim[i] = order[i];
         }
     }
+    faceLists_ = std::move(lists);
     levelLists_.resize(size_t(params_.maxDepth) + 2);
 }
 
@@ -525,7 +527,7 @@ void Hierarchy::BuildFace(int face, uint32_t begin, uint32_t end, const Bounds6&
         active_[k] = tight.lo[k] < tight.hi[k];
         constant_[k] = tight.lo[k];
     }
-    const FaceList& all = faceLists_[face];
+    const FaceList& all = (*faceLists_)[face];
     Process(FaceRoot(face), begin, end, 0, tight, View(all, all.Size()), false, out);
 }
 
@@ -773,7 +775,7 @@ uint32_t Hierarchy::Route(const Ray5& r) const {
 
 size_t Hierarchy::MemoryBytes() const {
     size_t bytes = nodes_.capacity() * sizeof(Node);
-    for (const auto& l : faceLists_) bytes += l.Bytes();
+    for (const auto& l : *faceLists_) bytes += l.Bytes();
     return bytes + counters_.scratchBytes;
 }
 

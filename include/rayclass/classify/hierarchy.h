@@ -24,6 +24,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -110,7 +111,7 @@ public:
     const BuildCounters& Counters() const { return counters_; }
     const Params& GetParams() const { return params_; }
     const Bounds3f& SceneBox() const { return sceneBox_; }
-    // Bytes held now: nodes, presorted face arrays and reusable scratch.
+    // Bytes held now: nodes, presorted face arrays (shared with copies) and reusable scratch.
     size_t MemoryBytes() const;
 
     // Presorted per-face boxes (structure of arrays, padded, in the face frame, sorted by x0).
@@ -144,7 +145,8 @@ private:
     Bounds3f sceneBox_;
     std::array<float, kDims> rootExtent_[kFaceCount];
     std::vector<Node> nodes_;
-    FaceList faceLists_[kFaceCount];
+    // Read-only once built: copies of a hierarchy share them.
+    std::shared_ptr<const std::array<FaceList, kFaceCount>> faceLists_;
     std::vector<FaceList> levelLists_;    // scratch list per filter level
 
     // The current generation: the inserted rays, and their 5D points by face in two ping-pong
