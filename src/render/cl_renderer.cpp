@@ -179,8 +179,12 @@ class PagePool {
         free_.pop_back();
         return page;
     }
+    void Give(cl::Buffer& page) {
+        if (page()) free_.push_back(std::move(page));
+        page = cl::Buffer();
+    }
     void Give(std::vector<cl::Buffer>& pages) {
-        for (cl::Buffer& page : pages) free_.push_back(std::move(page));
+        for (cl::Buffer& page : pages) Give(page);
         pages.clear();
     }
 
@@ -412,6 +416,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
 
             AppendToPages(ctx_, compactKernel, secondary, liveSlots, hostLive,
                           nextPixels.size() - hostLive.size(), pool, nextPages, timer);
+            // The batch's rays are answered and shaded: the next generation can fill their page.
+            pool.Give(pages[page]);
             gen.rays += n;
 
             if (options_.progress && SecondsSince(lastProgress) > 1.0) {
