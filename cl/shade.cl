@@ -98,6 +98,16 @@ inline int rc_worth_spawning(float3 w, uint depth, __constant const RcRenderPara
         __global RcRay *secondary, __global uchar *spawned
 #define RC_SHADE_OUT_ARGS radiance, normals, shadowRays, secondary, spawned
 
+/* An empty shadow slot: no contribution and no direction, so a host classifying every slot
+ * finds it missing the scene at once. */
+RC_SHADE_INLINE void rc_no_shadow(__global RcShadowRay* shadowRays, uint slot) {
+    RcShadowRay none;
+    none.origin = (float4)(0.0f);
+    none.direction = (float4)(0.0f);
+    none.contribution = (float4)(0.0f);
+    shadowRays[slot] = none;
+}
+
 /* Light l's contribution at the hit of ray i, into shadow slot i * nLights + l (an empty slot
  * when the light is behind the surface or adds nothing). */
 RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcSurface* s,
@@ -111,7 +121,7 @@ RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcSu
     const float3 ldir = toLight / sqrt(dist2);
     const float cosl = dot(s->ns, ldir);
     if (cosl <= 0.0f || dot(s->ng, ldir) <= 0.0f) {
-        shadowRays[slot].contribution = (float4)(0.0f);
+        rc_no_shadow(shadowRays, slot);
         return;
     }
     const float3 ks = m->ks.xyz;
@@ -124,7 +134,7 @@ RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcSu
     }
     const float3 c = ray->weight.xyz * lights[l].intensity.xyz / dist2 * brdf;
     if (fmax(c.x, fmax(c.y, c.z)) <= 0.0f) {
-        shadowRays[slot].contribution = (float4)(0.0f);
+        rc_no_shadow(shadowRays, slot);
         return;
     }
     const float3 above = rc_offset_ray_origin(s->p, s->ng);
@@ -150,7 +160,7 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, RcHit hit, int withL
         normals[i] = (float4)(0.0f);
         if (withLights) {
             for (uint l = 0; l < nLights; ++l)
-                shadowRays[i * nLights + l].contribution = (float4)(0.0f);
+                rc_no_shadow(shadowRays, i * nLights + l);
         }
         return;
     }
@@ -248,7 +258,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
     const uint i = ids[j / nLights], l = j % nLights;
     const RcHit hit = hits[i];
     if (hit.prim == RC_NO_HIT) {
-        shadowRays[i * nLights + l].contribution = (float4)(0.0f);
+        rc_no_shadow(shadowRays, i * nLights + l);
         return;
     }
     const RcRay ray = rays[i];

@@ -120,7 +120,7 @@ typedef struct RcHit {
 typedef struct RcShadowRay {
     rc_float4 origin;
     rc_float4 direction;
-    rc_float4 contribution; /* rgb; w = 1 when the ray is live, 0 for an empty slot */
+    rc_float4 contribution; /* rgb; w = 1 when the ray is live; an empty slot is all zeros */
 } RcShadowRay;
 
 /* Scalar parameters of a render passed to every kernel. 64 bytes. */

@@ -229,7 +229,7 @@ uint32_t Hierarchy::NewNode(const Box5& box, int face, int depth, bool isRemaind
     return uint32_t(nodes_.size() - 1);
 }
 
-void Hierarchy::Insert(std::span<const Ray> rays) {
+void Hierarchy::Insert(RayView rays) {
     inserted_.push_back(rays);
     nInserted_ += uint32_t(rays.size());
 }
@@ -263,11 +263,10 @@ Bounds6 EmptyBounds() {
 
 #if defined(__AVX512F__)
 // Counts the rays of each face (kFaceCount: no usable direction), 16 at a time.
-void CountFaces(std::span<const Ray> rays, uint32_t* count) {
-    const float* base = reinterpret_cast<const float*>(rays.data());
+void CountFaces(RayView rays, uint32_t* count) {
     const __m512i idx = _mm512_mullo_epi32(_mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10,
                                                              11, 12, 13, 14, 15),
-                                           _mm512_set1_epi32(8));
+                                           _mm512_set1_epi32(int(rays.Stride() / 4)));
     const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
     const __m512 fmax = _mm512_set1_ps(kFloatMax);
     const __m512 zero = _mm512_setzero_ps();
@@ -275,7 +274,7 @@ void CountFaces(std::span<const Ray> rays, uint32_t* count) {
     for (size_t i = 0; i < n; i += 16) {
         const size_t rest = n - i;
         const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
-        const float* at = base + i * 8;
+        const float* at = rays.Floats(i);
         const __m512 dx = _mm512_mask_i32gather_ps(zero, live, idx, at + 4, 4);
         const __m512 dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
         const __m512 dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
@@ -303,14 +302,14 @@ void CountFaces(std::span<const Ray> rays, uint32_t* count) {
     }
 }
 #else
-void CountFaces(std::span<const Ray> rays, uint32_t* count) {
-    for (const Ray& r : rays) ++count[DirectionFace(r.direction)];
+void CountFaces(RayView rays, uint32_t* count) {
+    for (size_t i = 0; i < rays.size(); ++i) ++count[DirectionFace(rays[i].direction)];
 }
 #endif
 
 }  // namespace
 
-void Hierarchy::Convert(std::span<const Ray> rays, uint32_t firstId, uint32_t* next,
+void Hierarchy::Convert(RayView rays, uint32_t firstId, uint32_t* next,
                         Bounds6* faceBounds, std::vector<rc_uint>& missed) {
     float* c[kCoords];
     for (int k = 0; k < kCoords; ++k) c[k] = coord_[0][k].data();
@@ -333,10 +332,9 @@ void Hierarchy::Convert(std::span<const Ray> rays, uint32_t firstId, uint32_t* n
 #if defined(__AVX512F__)
     // The fast path of ToRay5 for 16 rays at a time, with the same float operations so the points
     // are bit-identical; lanes that need the slow path take the scalar one.
-    const float* base = reinterpret_cast<const float*>(rays.data());
     const __m512i idx = _mm512_mullo_epi32(_mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10,
                                                              11, 12, 13, 14, 15),
-                                           _mm512_set1_epi32(8));
+                                           _mm512_set1_epi32(int(rays.Stride() / 4)));
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
     const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
@@ -357,7 +355,7 @@ void Hierarchy::Convert(std::span<const Ray> rays, uint32_t firstId, uint32_t* n
     for (; i < n; i += 16) {
         const size_t rest = n - i;
         const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
-        const float* at = base + i * 8;
+        const float* at = rays.Floats(i);
         const __m512 ox = _mm512_mask_i32gather_ps(zero, live, idx, at + 0, 4);
         const __m512 oy = _mm512_mask_i32gather_ps(zero, live, idx, at + 1, 4);
         const __m512 oz = _mm512_mask_i32gather_ps(zero, live, idx, at + 2, 4);
@@ -428,7 +426,7 @@ void Hierarchy::Convert(std::span<const Ray> rays, uint32_t firstId, uint32_t* n
         while (slow) {
             const int j = std::countr_zero(slow);
             slow &= slow - 1;
-            const Ray& ray = rays[i + size_t(j)];
+            const Ray ray = rays[i + size_t(j)];
             Ray5 r;
             if (DirectionFace(ray.direction) < kFaceCount && ToRay5Clipped(ray, sceneBox_, r)) {
                 put(r, firstId + uint32_t(i) + uint32_t(j));
@@ -446,7 +444,8 @@ void Hierarchy::Convert(std::span<const Ray> rays, uint32_t firstId, uint32_t* n
 #endif
     for (; i < n; ++i) {
         Ray5 r;
-        if (DirectionFace(rays[i].direction) < kFaceCount && ToRay5(rays[i], sceneBox_, r)) {
+        const Ray ray = rays[i];
+        if (DirectionFace(ray.direction) < kFaceCount && ToRay5(ray, sceneBox_, r)) {
             put(r, firstId + uint32_t(i));
         } else {
             missed.push_back(firstId + uint32_t(i));

@@ -21,7 +21,6 @@ using Clock = std::chrono::steady_clock;
 // A classified batch: the leaves and, per leaf, its rays' slots and its kernel style.
 struct ClassifiedBatch final : PreparedBatch {
     classify::LeafBatch batch;
-    std::vector<classify::Ray> rays;
     std::vector<uint32_t> rayLeaf;         // per slot of batch.rayIndex: its leaf
     std::vector<uint32_t> vertexLeaves;    // leaves the vertex-style kernel answers
     std::vector<uint32_t> fragmentLeaves;  // leaves the fragment-style kernel answers
@@ -42,16 +41,15 @@ class ParallelClassifier {
     ParallelClassifier(const classify::Hierarchy& hierarchy, KernelStyle style, unsigned parts)
         : parts_(std::max(1u, parts), hierarchy), scratch_(parts_.size() - 1), style_(style) {}
 
-    void Classify(ClassifiedBatch& out) {
-        const size_t n = out.rays.size();
+    void Classify(classify::RayView rays, ClassifiedBatch& out) {
+        const size_t n = rays.size();
         const size_t nParts = std::clamp<size_t>(n / kMinPartRays, 1, parts_.size());
         std::vector<std::future<void>> others;
         for (size_t p = 1; p < nParts; ++p) {
-            others.push_back(std::async(std::launch::async, [&, p] {
-                ClassifyPart(p, nParts, out.rays, scratch_[p - 1]);
-            }));
+            others.push_back(std::async(
+                std::launch::async, [&, p] { ClassifyPart(p, nParts, rays, scratch_[p - 1]); }));
         }
-        ClassifyPart(0, nParts, out.rays, out.batch);
+        ClassifyPart(0, nParts, rays, out.batch);
         Styles(parts_[0], out.batch, 0, out);
         for (size_t p = 1; p < nParts; ++p) {
             others[p - 1].get();
@@ -71,11 +69,9 @@ class ParallelClassifier {
 
     static size_t PartBegin(size_t p, size_t nParts, size_t n) { return n * p / nParts; }
 
-    void ClassifyPart(size_t p, size_t nParts, std::span<const classify::Ray> rays,
-                      classify::LeafBatch& batch) {
+    void ClassifyPart(size_t p, size_t nParts, classify::RayView rays, classify::LeafBatch& batch) {
         const size_t begin = PartBegin(p, nParts, rays.size());
-        parts_[p].Classify(rays.subspan(begin, PartBegin(p + 1, nParts, rays.size()) - begin),
-                           batch);
+        parts_[p].Classify(rays.Sub(begin, PartBegin(p + 1, nParts, rays.size()) - begin), batch);
     }
 
     // Sorts leaves [first, end) of out.batch by kernel style.
@@ -159,17 +155,21 @@ class ClassifiedQuery final : public RayQuery {
             }
         }
         if (!out) out = std::make_unique<ClassifiedBatch>();
-        // An RcRay starts with the fields of a classify::Ray: read just those, strided.
+        // Classified in place: an RcRay starts with the fields of a classify::Ray, and mapping
+        // costs no copy on a device that shares host memory.
         static_assert(sizeof(classify::Ray) == offsetof(RcRay, weight));
-        out->rays.resize(n);
         if (n > 0) {
-            clrt::Check("clEnqueueReadBufferRect", [&] {
-                queue.enqueueReadBufferRect(rays, CL_TRUE, {0, 0, 0}, {0, 0, 0},
-                                            {sizeof(classify::Ray), n, 1}, sizeof(RcRay), 0,
-                                            sizeof(classify::Ray), 0, out->rays.data());
+            void* mapped = clrt::Check("clEnqueueMapBuffer", [&] {
+                return queue.enqueueMapBuffer(rays, CL_TRUE, CL_MAP_READ, 0, n * sizeof(RcRay));
             });
+            Classify(*rays_, classify::RayView(mapped, n, sizeof(RcRay)), *out);
+            clrt::Check("clEnqueueUnmapMemObject", [&] {
+                queue.enqueueUnmapMemObject(rays, mapped);
+                queue.finish();
+            });
+        } else {
+            Classify(*rays_, classify::RayView(), *out);
         }
-        Classify(*rays_, *out);
         return out;
     }
 
@@ -195,27 +195,18 @@ class ClassifiedQuery final : public RayQuery {
         if (n == 0) return 0;
         clrt::Check("clEnqueueFillBuffer",
                     [&] { ctx_.queue().enqueueFillBuffer(blocked, uint8_t(0), 0, n); });
-        // Only live slots are classified; their batch indices map back to slots.
-        live_.clear();
-        for (uint32_t i = 0; i < n; ++i) {
-            if (hostRays[i].contribution.w != 0.0f) live_.push_back(i);
-        }
-        shadowBatch_.rays.resize(live_.size());
-        for (size_t i = 0; i < live_.size(); ++i) {
-            static_assert(sizeof(classify::Ray) == offsetof(RcShadowRay, contribution));
-            std::memcpy(static_cast<void*>(&shadowBatch_.rays[i]), &hostRays[live_[i]],
-                        sizeof(classify::Ray));
-        }
-        Classify(*shadows_, shadowBatch_);
-        for (auto& id : shadowBatch_.batch.rayIndex) id = live_[id];
+        // Every slot: empty ones have no direction and miss at once.
+        static_assert(sizeof(classify::Ray) == offsetof(RcShadowRay, contribution));
+        Classify(*shadows_, classify::RayView(hostRays.data(), n, sizeof(RcShadowRay)),
+                 shadowBatch_);
         return Query(shadowBatch_, shadowRays, blocked, nullptr, timer).tests;
     }
 
   private:
-    // Classifies out.rays into out's leaves and sorts the leaves by kernel style.
-    void Classify(ParallelClassifier& classifier, ClassifiedBatch& out) {
+    // Classifies `rays` into out's leaves and sorts the leaves by kernel style.
+    void Classify(ParallelClassifier& classifier, classify::RayView rays, ClassifiedBatch& out) {
         const auto t0 = Clock::now();
-        classifier.Classify(out);
+        classifier.Classify(rays, out);
         AddHostSeconds(Seconds(t0));
     }
 
@@ -385,7 +376,7 @@ class ClassifiedQuery final : public RayQuery {
     cl::Kernel queryScalar_, occludedScalar_, gather_, queryVertexShade_, occludedVertex_,
         queryFragment_, shadeIds_, shadeLights_;
     ClassifiedBatch shadowBatch_;
-    std::vector<uint32_t> live_, allLeaves_, vertexSlots_, vertexRayLeaf_, blockLeaf_, blockFirst_,
+    std::vector<uint32_t> allLeaves_, vertexSlots_, vertexRayLeaf_, blockLeaf_, blockFirst_,
         leafFirstBlock_, packetLeaf_, packetFirst_, testsHost_, unshaded_;
     std::vector<uint8_t> shadedByVertex_;
     GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <set>
 
@@ -313,6 +314,32 @@ TEST(Hierarchy, InsertAppendsRaysOfOneGeneration) {
     const LeafBatch batch = h.Subdivide();
     ExpectEveryRayOnce(batch, uint32_t(both.size()));
     ExpectSameHits(Query(s, batch, both), BruteForce(s, both));
+}
+
+// The renderer classifies rays in place inside RcRay and RcShadowRay records: a strided view
+// must give exactly the leaves of the packed rays (the vector path and the scalar tail alike).
+TEST(Hierarchy, StridedViewsClassifyLikePackedRays) {
+    const scene::Scene s = RandomScene(65, 200, 4, 2);
+    auto rays = RandomRays(66, 1003);
+    rays[5].direction = glm::vec3(0.0f);  // an empty shadow slot: no direction
+    Hierarchy packed(s, DeepParams(s));
+    const LeafBatch expected = packed.Classify(rays);
+    for (const size_t floats : {12u, 16u}) {
+        std::vector<float> records(rays.size() * floats, -7.0f);
+        for (size_t i = 0; i < rays.size(); ++i) {
+            std::memcpy(&records[i * floats], &rays[i], sizeof(Ray));
+        }
+        Hierarchy strided(s, DeepParams(s));
+        const LeafBatch got =
+            strided.Classify(RayView(records.data(), rays.size(), floats * sizeof(float)));
+        EXPECT_EQ(got.rayIndex, expected.rayIndex) << floats;
+        EXPECT_EQ(got.missed, expected.missed) << floats;
+        ASSERT_EQ(got.leaves.size(), expected.leaves.size()) << floats;
+        for (size_t l = 0; l < got.leaves.size(); ++l) {
+            EXPECT_EQ(got.leaves[l].rayBegin, expected.leaves[l].rayBegin);
+            EXPECT_EQ(got.leaves[l].candCount, expected.leaves[l].candCount);
+        }
+    }
 }
 
 TEST(Hierarchy, MemoryOfInnerListsIsScratch) {

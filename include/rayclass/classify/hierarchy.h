@@ -77,7 +77,7 @@ public:
     // Adds rays to the current generation. Several calls append; the generation's ray indices are
     // positions in the concatenation of all rays inserted since the last Subdivide(). The rays
     // are read by Subdivide(), so they must stay alive until it returns.
-    void Insert(std::span<const Ray> rays);
+    void Insert(RayView rays);
 
     // Routes the generation's rays through the hierarchy, splits where the cost function says so
     // and writes the generation's leaves into `out` (its arrays are reused, so a caller that keeps
@@ -91,11 +91,11 @@ public:
     }
 
     // Insert then Subdivide.
-    void Classify(std::span<const Ray> rays, LeafBatch& out) {
+    void Classify(RayView rays, LeafBatch& out) {
         Insert(rays);
         Subdivide(out);
     }
-    LeafBatch Classify(std::span<const Ray> rays) {
+    LeafBatch Classify(RayView rays) {
         Insert(rays);
         return Subdivide();
     }
@@ -124,7 +124,7 @@ public:
     };
 
 private:
-    void Convert(std::span<const Ray> rays, uint32_t firstId, uint32_t* next, Bounds6* faceBounds,
+    void Convert(RayView rays, uint32_t firstId, uint32_t* next, Bounds6* faceBounds,
                  std::vector<rc_uint>& missed);
     void BuildFace(int face, uint32_t begin, uint32_t end, const Bounds6& tight, LeafBatch& out);
     void Process(uint32_t node, uint32_t begin, uint32_t end, int buf, const Bounds6& tight,
@@ -153,7 +153,7 @@ private:
     // buffers of structure-of-arrays: X, Y, Z, u, v and the X where the ray ends (its start's X
     // plus its reach, which cuts beams: shadow rays end at the light).
     static constexpr int kCoords = kDims + 1;
-    std::vector<std::span<const Ray>> inserted_;
+    std::vector<RayView> inserted_;
     uint32_t nInserted_ = 0;
     std::vector<float> coord_[2][kCoords];
     std::vector<uint32_t> id_[2];

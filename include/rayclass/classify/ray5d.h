@@ -14,7 +14,11 @@
 
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <span>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -32,6 +36,37 @@ struct Ray {
     float tMin = 0.0f;
     glm::vec3 direction{0.0f, 0.0f, 1.0f};
     float tMax = 3.402823466e38f;
+};
+
+// Rays read in place from larger records that begin with a Ray's fields (RcRay, RcShadowRay, a
+// mapped device buffer of them): `stride` bytes from one ray to the next, a multiple of 4.
+class RayView {
+  public:
+    RayView() = default;
+    // Arrays of Rays convert implicitly: they are views of stride sizeof(Ray).
+    RayView(std::span<const Ray> rays)
+        : data_(reinterpret_cast<const std::byte*>(rays.data())), size_(rays.size()) {}
+    RayView(const std::vector<Ray>& rays) : RayView(std::span<const Ray>(rays)) {}
+    RayView(const void* data, size_t size, size_t stride)
+        : data_(static_cast<const std::byte*>(data)), size_(size), stride_(stride) {}
+    size_t size() const { return size_; }
+    size_t Stride() const { return stride_; }
+    const float* Floats(size_t i) const {
+        return reinterpret_cast<const float*>(data_ + i * stride_);
+    }
+    Ray operator[](size_t i) const {
+        Ray r;
+        std::memcpy(static_cast<void*>(&r), data_ + i * stride_, sizeof(Ray));
+        return r;
+    }
+    RayView Sub(size_t begin, size_t count) const {
+        return RayView(data_ + begin * stride_, count, stride_);
+    }
+
+  private:
+    const std::byte* data_ = nullptr;
+    size_t size_ = 0;
+    size_t stride_ = sizeof(Ray);
 };
 
 // An axis-aligned interval in the 5 coordinates of one face's frame.
