@@ -1,18 +1,18 @@
 #include <unistd.h>
 
 #include <charconv>
-#include <memory>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <set>
 #include <sstream>
 
-#include "rayclass/cli/cli.h"
 #include "rayclass/classify/params.h"
+#include "rayclass/cli/cli.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/core/error.h"
 #include "rayclass/image/image.h"
@@ -58,6 +58,11 @@ options:
                           context can be made, else kernel with a notice
   --hull H                raster hulls of spheres and quadrics: sphere, box, billboard or auto
                           (spheres by sphere, quadrics by box; default auto)
+  --depth-bits B          raster depth buffer: 32 (float, default), 24 or 16 (fixed point)
+  --depth-scale S         raster depth per world unit, in [1e-30, 1e+30], or auto (default: the
+                          largest power of two keeping the scene's distances below 1, which
+                          float depth compares exactly); settings that can lose hits or swap
+                          the ids of close surfaces get a warning
   -q, --quiet             no progress line
 )";
 
@@ -70,6 +75,8 @@ struct RenderArgs {
     std::string statsFile;
     float exposure = 0.0f;
     std::string eyeRays;  // empty: raster when a GL context can be made
+    int depthBits = 32;
+    double depthScale = 0;  // 0: automatic
     render::RenderOptions options;
 };
 
@@ -128,8 +135,8 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
             r.options.accel = value();
             if (r.options.accel != "classify" && r.options.accel != "brute" &&
                 r.options.accel != "bvh") {
-                throw UsageError("--accel must be classify, bvh or brute, not '" +
-                                 r.options.accel + "'");
+                throw UsageError("--accel must be classify, bvh or brute, not '" + r.options.accel +
+                                 "'");
             }
         } else if (a == "--classify") {
             const std::string& setting = value();
@@ -173,6 +180,15 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
         } else if (a == "--hull") {
             r.options.hull = value();
             raster::ParseHull(r.options.hull);  // throws UsageError on an unknown name
+        } else if (a == "--depth-bits") {
+            const std::string& bits = value();
+            if (bits != "16" && bits != "24" && bits != "32") {
+                throw UsageError("--depth-bits must be 16, 24 or 32, not '" + bits + "'");
+            }
+            r.depthBits = std::stoi(bits);
+        } else if (a == "--depth-scale") {
+            const std::string& scale = value();
+            r.depthScale = scale == "auto" ? 0.0 : ParseNumber<double>(a, scale, 1e-30, 1e30);
         } else if (a == "-q" || a == "--quiet") {
             r.options.progress = false;
         } else if (!a.empty() && a[0] == '-') {
@@ -272,6 +288,12 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
             if (gl) {
                 raster::RasterOptions rasterOptions;
                 rasterOptions.hull = raster::ParseHull(options.hull);
+                rasterOptions.depthBits = r.depthBits;
+                rasterOptions.depthScale = r.depthScale;
+                for (const std::string& warning :
+                     raster::DepthWarnings(scene, scene.camera.position, rasterOptions)) {
+                    err << "rayclass: warning: " << warning << "\n";
+                }
                 eyeHits = std::make_unique<raster::RasterEyeHits>(*gl, rasterOptions);
                 options.eyeRays = "raster";
             } else if (r.eyeRays == "raster") {

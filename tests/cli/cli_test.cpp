@@ -77,11 +77,13 @@ class Cli : public ::testing::Test {
 
     fs::path Work(const std::string& name = "") const { return root_ / "work" / name; }
 
-    Result Run(const std::vector<std::string>& args) const {
+    // `shellPrefix` runs in the same shell before the binary (e.g. ulimit settings).
+    Result Run(const std::vector<std::string>& args, const std::string& shellPrefix = "") const {
         // Built by appending: operator+ with short literals trips a false -Wrestrict in GCC 12
         // (bug 105329).
         std::string command = "cd ";
-        command.append(ShellQuoted(Work().string())).append(" && ").append(ShellQuoted(Binary()));
+        command.append(ShellQuoted(Work().string())).append(" && ").append(shellPrefix);
+        command.append(ShellQuoted(Binary()));
         for (const auto& a : args) command.append(" ").append(ShellQuoted(a));
         command.append(" >").append(ShellQuoted((root_ / "stdout").string()));
         command.append(" 2>").append(ShellQuoted((root_ / "stderr").string()));
@@ -315,8 +317,9 @@ TEST_F(CliFailure, HostileInputExitsWith1WithoutHangingOrCrashing) {
     for (int i = 0; i < 4096; ++i) garbage.push_back(char((i * 2654435761u) >> 24));
     WriteText(Work("garbage.obj"), "v 0 0 0\n" + garbage);
     WriteText(Work("garbage.json"), garbage);
-    WriteText(Work("far.json"), "{\"objects\": [{\"type\": \"sphere\", \"center\": [0, 0, 0],\n"
-                                "\"radius\": 3e38}]}\n");
+    WriteText(Work("far.json"),
+              "{\"objects\": [{\"type\": \"sphere\", \"center\": [0, 0, 0],\n"
+              "\"radius\": 3e38}]}\n");
     const std::vector<std::string> inputs = {"far.json", "fifo.json", "garbage.json", "garbage.obj",
                                              "zero.obj"};
     const std::vector<Failure> failures = {
@@ -329,7 +332,10 @@ TEST_F(CliFailure, HostileInputExitsWith1WithoutHangingOrCrashing) {
          "rayclass render: error: zero.obj: is not a regular file\n",
          "x.exr"},
         {{"garbage.obj", "-o", "x.exr"}, 1, "rayclass render: error: garbage.obj:", "x.exr", true},
-        {{"garbage.json", "-o", "x.exr"}, 1, "rayclass render: error: garbage.json:1: ", "x.exr",
+        {{"garbage.json", "-o", "x.exr"},
+         1,
+         "rayclass render: error: garbage.json:1: ",
+         "x.exr",
          true},
         {{"far.json", "-o", "x.exr"},
          1,
@@ -386,6 +392,33 @@ TEST_F(CliFailure, FailuresAfterLoadingLeaveNoOutput) {
             "rayclass render: error: s.json: cannot write\n",
             "x.exr"},
            {"s.json"});
+}
+
+TEST_F(CliFailure, FullDiskExitsWith1AndKeepsThePreviousOutput) {
+    // A full disk, simulated by a file-size limit: with SIGXFSZ ignored, write() fails with EFBIG
+    // once a file would grow past it (1 or 2 KiB: ulimit -f counts 512- or 1024-byte blocks), as
+    // it fails with ENOSPC on a full disk. The host reference renderer writes no kernel cache.
+    const std::string limit = "trap '' XFSZ; ulimit -f 2; ";
+    for (const std::string name : {"x.exr", "x.png"}) {
+        const std::vector<std::string> args = {"render", Cornell(),  "--reference", "--width",
+                                               "64",     "--height", "48",          "-q",
+                                               "-o",     name};
+        Result r = Run(args, limit);
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_EQ(r.err, "rayclass render: error: " + name + ": cannot write: File too large\n");
+        EXPECT_EQ(Entries(), std::vector<std::string>{}) << "a failed render left files behind";
+        const std::string previous = "the previous " + name + "\n";
+        WriteText(Work(name), previous);
+        r = Run(args, limit);
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_EQ(ReadText(Work(name)), previous) << "the previous output changed";
+        EXPECT_EQ(Entries(), std::vector<std::string>{name}) << "a temporary was left behind";
+        // Without the limit the same render succeeds: the limit was what failed it.
+        r = Run(args);
+        EXPECT_EQ(r.status, 0) << r.err;
+        EXPECT_GT(fs::file_size(Work(name)), 2048u) << "the image must exceed the limit";
+        fs::remove(Work(name));
+    }
 }
 
 uint64_t Sum(const nlohmann::json& generations, const char* key) {
