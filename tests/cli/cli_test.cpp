@@ -134,7 +134,8 @@ TEST_F(Cli, RenderHelpDescribesEveryOption) {
     EXPECT_EQ(r.out.rfind("usage: rayclass render SCENE -o OUT.{exr,png} [options]\n", 0), 0u);
     for (const char* option :
          {"-o, --output", "--width", "--height", "--aov", "--max-depth", "--min-weight", "--device",
-          "--reference", "--stats", "--exposure", "--batch-rays", "--cl-options", "-q, --quiet"}) {
+          "--reference", "--stats", "--exposure", "--batch-rays", "--cl-options", "--depth-bits",
+          "--depth-scale", "-q, --quiet"}) {
         EXPECT_NE(r.out.find(option), std::string::npos) << option;
     }
     EXPECT_EQ(r.err, "");

@@ -424,9 +424,9 @@ size_t PeakRssBytes() {
     return size_t(usage.ru_maxrss) * 1024;
 }
 
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__)  // GCC, which scripts/sanitize uses
 #define RC_UNDER_ASAN 1
-#elif defined(__has_feature)
+#elif defined(__has_feature)  // clang
 #if __has_feature(address_sanitizer)
 #define RC_UNDER_ASAN 1
 #endif
@@ -434,48 +434,86 @@ size_t PeakRssBytes() {
 
 // 10^7 incoherent rays in one generation, through a scene small enough (32 primitives) that brute
 // force can check every ray on the host: the hierarchy's scratch then grows with the rays alone.
-// The primitives are large, so that many rays hit and the lists are long.
+// The primitives are large, so that many rays hit and the lists are long. Then the same rays
+// through leaves whose lists are the whole scene (a cost function that never splits).
+// Measured 26 s in Release on the shared 2-core machine (load 3.5).
 TEST(Stability, ClassificationStaysExactAndBoundedForTenMillionIncoherentRays) {
 #ifdef RC_UNDER_ASAN
-    // 10^7 rays take about 3 minutes under ASan; the 10^5-ray test above covers the same code.
-    GTEST_SKIP() << "10^7 rays are too slow under AddressSanitizer";
+    // Measured under scripts/sanitize: 117 s (Release: 26 s) and 1.47 GiB peak RSS, tripling
+    // the sanitizer run; the 10^5-ray test above runs the same code under ASan.
+    GTEST_SKIP() << "10^7 rays take 2 minutes under AddressSanitizer";
 #endif
     using Clock = std::chrono::steady_clock;
-    const auto t0 = Clock::now();
+    const auto seconds = [](Clock::time_point a, Clock::time_point b) {
+        return std::chrono::duration<double>(b - a).count();
+    };
     const scene::Scene s = RandomScene(24, 8, 41, 8.0f);
+    const uint32_t nPrims = s.PrimitiveCount();
+    auto t = Clock::now();
     const std::vector<classify::Ray> rays = RandomRays(10'000'000, 43);
-    const auto t1 = Clock::now();
-    classify::Hierarchy h(s, classify::Params::ForScene(s));
-    const classify::LeafBatch batch = h.Classify(rays);
-    const auto t2 = Clock::now();
-    // Bytes the classification holds: nodes, face lists, reusable ray scratch and the leaves.
-    const size_t memory = h.MemoryBytes() + batch.leaves.capacity() * sizeof(RcLeaf) +
-                          batch.rayIndex.capacity() * 4 + batch.missed.capacity() * 4 +
-                          batch.candidates.capacity() * sizeof(RcCandidate);
-    std::vector<Hit<float>> hits(rays.size());
-    classify::QueryHost(s, batch, rays, hits);
-    const auto t3 = Clock::now();
+    std::printf("[stability] classify 1e7: rays made in %.1f s\n", seconds(t, Clock::now()));
+
+    // Classifies and queries every ray; the hierarchy is gone when it returns.
+    const auto classifyAndQuery = [&](const classify::Params& params, size_t* memory,
+                                      size_t* maxList) {
+        const auto t0 = Clock::now();
+        classify::Hierarchy h(s, params);
+        const classify::LeafBatch batch = h.Classify(rays);
+        const auto t1 = Clock::now();
+        // Bytes the classification holds: nodes, face lists, reusable ray scratch, the leaves.
+        *memory = h.MemoryBytes() + batch.leaves.capacity() * sizeof(RcLeaf) +
+                  batch.rayIndex.capacity() * 4 + batch.missed.capacity() * 4 +
+                  batch.candidates.capacity() * sizeof(RcCandidate);
+        *maxList = 0;
+        for (const RcLeaf& leaf : batch.leaves) {
+            *maxList = std::max<size_t>(*maxList, leaf.candCount);
+        }
+        std::vector<Hit<float>> hits(rays.size());
+        classify::QueryHost(s, batch, rays, hits);
+        std::printf(
+            "[stability] classify 1e7: %zu leaves, longest list %zu of %u, memory %zu "
+            "bytes (%.1f per ray); classify %.1f s, query %.1f s\n",
+            batch.leaves.size(), *maxList, nPrims, *memory, double(*memory) / double(rays.size()),
+            seconds(t0, t1), seconds(t1, Clock::now()));
+        return hits;
+    };
+
+    size_t memory = 0, maxList = 0;
+    const std::vector<Hit<float>> hits =
+        classifyAndQuery(classify::Params::ForScene(s), &memory, &maxList);
+    t = Clock::now();
     size_t bad = 0, hitCount = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
         const Hit<float> truth = geometry::IntersectBruteForce(s, classify::ToGeometryRay(rays[i]));
         bad += truth.prim != hits[i].prim || (truth.Valid() && truth.t != hits[i].t);
         hitCount += truth.Valid();
     }
-    const auto t4 = Clock::now();
-    const auto seconds = [](Clock::time_point a, Clock::time_point b) {
-        return std::chrono::duration<double>(b - a).count();
-    };
     std::printf(
-        "[stability] classify 1e7: %zu rays (%zu hit), %u prims, %zu leaves, memory %zu "
-        "bytes (%.1f per ray), peak RSS %zu MiB; rays %.1f s, classify %.1f s, query %.1f "
-        "s, brute force %.1f s\n",
-        rays.size(), hitCount, s.PrimitiveCount(), batch.leaves.size(), memory,
-        double(memory) / double(rays.size()), PeakRssBytes() >> 20, seconds(t0, t1),
-        seconds(t1, t2), seconds(t2, t3), seconds(t3, t4));
+        "[stability] classify 1e7: %zu rays, %zu hit, %zu differ from brute force (%.1f "
+        "s)\n",
+        rays.size(), hitCount, bad, seconds(t, Clock::now()));
     EXPECT_EQ(bad, 0u) << "of " << rays.size();
-    EXPECT_GT(hitCount, rays.size() / 20) << "the rays should hit the scene often";
-    EXPECT_LE(memory, rays.size() * 96);
-    EXPECT_LE(PeakRssBytes(), size_t(2) << 30);
+    EXPECT_GT(hitCount, rays.size() / 5) << "the rays should hit the scene often";
+    // Bound: per ray, two ping-pong buffers of six coordinates and an id (56 bytes), a
+    // destination (4) and the leaves' ray index (4) dominate; measured 64.5 bytes per ray. 80
+    // bytes keeps a 24 % margin and fails if anything else starts to grow per ray.
+    EXPECT_LE(memory, rays.size() * 80);
+
+    classify::Params never = classify::Params::ForScene(s);
+    never.minRays = 1u << 30;
+    const std::vector<Hit<float>> whole = classifyAndQuery(never, &memory, &maxList);
+    EXPECT_EQ(maxList, nPrims);
+    EXPECT_LE(memory, rays.size() * 80);
+    bad = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        bad += whole[i].prim != hits[i].prim || (hits[i].Valid() && whole[i].t != hits[i].t);
+    }
+    EXPECT_EQ(bad, 0u) << "whole-scene leaves differ from the checked answers";
+
+    // Rays 32 bytes, two hit arrays of 16 bytes and the classification per ray: 1.2 GiB
+    // measured.
+    std::printf("[stability] classify 1e7: peak RSS %zu MiB\n", PeakRssBytes() >> 20);
+    EXPECT_LE(PeakRssBytes(), size_t(3) << 29) << "1.5 GiB";
 }
 
 }  // namespace
