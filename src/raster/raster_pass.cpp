@@ -79,10 +79,16 @@ std::string Short(double value) {
     return text.str();
 }
 
+bool IsPowerOfTwo(double value) {
+    int exponent = 0;
+    return std::frexp(value, &exponent) == 0.5;
+}
+
 // A power of two as 2^k (exact), anything else as Short.
 std::string ScaleText(double scale) {
+    if (!IsPowerOfTwo(scale)) return Short(scale);
     int exponent = 0;
-    if (std::frexp(scale, &exponent) != 0.5) return Short(scale);
+    std::frexp(scale, &exponent);
     return "2^" + std::to_string(exponent - 1);
 }
 
@@ -106,13 +112,10 @@ std::vector<std::string> DepthWarnings(const scene::Scene& scene, const glm::vec
                                " (over 2^-20 of the scene's depth range " + Short(range) +
                                "): surfaces closer than a step may swap ids");
         }
-    } else {
-        int exponent = 0;
-        if (std::frexp(scale, &exponent) != 0.5) {
-            warnings.push_back("depth scale " + Short(scale) +
-                               " is not a power of two: float depth rounds distances, so "
-                               "surfaces within a float step may swap ids");
-        }
+    } else if (!IsPowerOfTwo(scale)) {
+        warnings.push_back("depth scale " + Short(scale) +
+                           " is not a power of two: float depth rounds distances, so surfaces "
+                           "within a float step may swap ids");
     }
     return warnings;
 }
