@@ -239,12 +239,17 @@ class PendingTextFile {
         std::remove(tmp_.c_str());
     }
 
-    void Commit(const std::string& text) {
+    // Writes `text` to the temporary and closes it. Called before the image is written, so that a
+    // full disk fails the command while the previous image is still in place.
+    void Write(const std::string& text) {
         out_ << text;
         out_.close();
-        if (!out_ || std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-            throw Error(path_ + ": cannot write");
-        }
+        if (!out_) throw Error(path_ + ": cannot write");
+    }
+
+    // Renames the written temporary over the target.
+    void Commit() {
+        if (std::rename(tmp_.c_str(), path_.c_str()) != 0) throw Error(path_ + ": cannot write");
         committed_ = true;
     }
 
@@ -310,13 +315,14 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
     if (!r.aovs.count("id")) img.id.clear();
     if (!r.aovs.count("normal")) img.normal.clear();
 
+    // The total stops before the image is written: the stats are on disk first (see Write).
+    stats.timeS["scene_load"] = loadSeconds;
+    stats.timeS["total"] = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (statsFile) statsFile->Write(stats.ToJson().dump(2) + "\n");
     image::WriteOptions writeOptions;
     writeOptions.exposure = r.exposure;
     image::WriteImage(img, r.output, writeOptions);
-
-    stats.timeS["scene_load"] = loadSeconds;
-    stats.timeS["total"] = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (statsFile) statsFile->Commit(stats.ToJson().dump(2) + "\n");
+    if (statsFile) statsFile->Commit();
     if (r.options.progress) {
         err << "rayclass: " << r.output << " (" << img.width << "x" << img.height << ", "
             << stats.RaysTotal() << " rays, " << stats.timeS["total"] << " s)\n";

@@ -77,15 +77,18 @@ class Cli : public ::testing::Test {
 
     fs::path Work(const std::string& name = "") const { return root_ / "work" / name; }
 
-    // `shellPrefix` runs in the same shell before the binary (e.g. ulimit settings).
-    Result Run(const std::vector<std::string>& args, const std::string& shellPrefix = "") const {
+    // `shellPrefix` runs in the same shell before the binary (e.g. ulimit settings); `stdoutPath`
+    // replaces the captured stdout (Result::out stays empty).
+    Result Run(const std::vector<std::string>& args, const std::string& shellPrefix = "",
+               const std::string& stdoutPath = "") const {
         // Built by appending: operator+ with short literals trips a false -Wrestrict in GCC 12
         // (bug 105329).
         std::string command = "cd ";
         command.append(ShellQuoted(Work().string())).append(" && ").append(shellPrefix);
         command.append(ShellQuoted(Binary()));
         for (const auto& a : args) command.append(" ").append(ShellQuoted(a));
-        command.append(" >").append(ShellQuoted((root_ / "stdout").string()));
+        const std::string out = stdoutPath.empty() ? (root_ / "stdout").string() : stdoutPath;
+        command.append(" >").append(ShellQuoted(out));
         command.append(" 2>").append(ShellQuoted((root_ / "stderr").string()));
         command.append(" </dev/null");
         const int raw = std::system(command.c_str());
@@ -114,6 +117,22 @@ TEST_F(Cli, VersionPrintsTheProjectVersion) {
     EXPECT_EQ(r.status, 0);
     EXPECT_EQ(r.out, "rayclass " RAYCLASS_VERSION "\n");
     EXPECT_EQ(r.err, "");
+}
+
+TEST_F(Cli, FullStandardOutputIsAnError) {
+    // /dev/full fails every write with ENOSPC, as a file on a full disk does: results printed on
+    // stdout (here compare --json) are lost, so the command must not exit 0.
+    image::Image a(2, 1);
+    a.rgb = {glm::vec3(1.0f), glm::vec3(0.5f)};
+    image::WriteImage(a, Work("a.exr"));
+    for (const std::vector<std::string>& args : {std::vector<std::string>{"--version"},
+                                                 {"render", "--help"},
+                                                 {"compare", "a.exr", "a.exr", "--json"}}) {
+        const Result r = Run(args, "", "/dev/full");
+        EXPECT_EQ(r.status, 1) << args[0];
+        EXPECT_EQ(r.err,
+                  "rayclass " + args[0] + ": error: standard output: No space left on device\n");
+    }
 }
 
 TEST_F(Cli, HelpListsTheCommandsOnStdout) {
@@ -420,6 +439,24 @@ TEST_F(CliFailure, FullDiskExitsWith1AndKeepsThePreviousOutput) {
         EXPECT_GT(fs::file_size(Work(name)), 2048u) << "the image must exceed the limit";
         fs::remove(Work(name));
     }
+}
+
+TEST_F(CliFailure, FullDiskWhileWritingTheStatsKeepsThePreviousImage) {
+    // A 1x1 PNG (about 70 bytes) fits under a 200-byte limit (prlimit counts bytes); the stats
+    // (about 450 bytes) do not. The image must not replace the previous one.
+    const std::vector<std::string> args = {"render", Cornell(),  "--reference", "--width",
+                                           "1",      "--height", "1",           "-q",
+                                           "-o",     "x.png",    "--stats",     "s.json"};
+    WriteText(Work("x.png"), "the previous x.png\n");
+    Result r = Run(args, "trap '' XFSZ; prlimit --fsize=200 ");
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_EQ(r.err, "rayclass render: error: s.json: cannot write\n");
+    EXPECT_EQ(ReadText(Work("x.png")), "the previous x.png\n") << "the previous image changed";
+    EXPECT_EQ(Entries(), std::vector<std::string>{"x.png"}) << "a temporary was left behind";
+    r = Run(args);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_LT(fs::file_size(Work("x.png")), 200u);
+    EXPECT_GT(fs::file_size(Work("s.json")), 200u);
 }
 
 uint64_t Sum(const nlohmann::json& generations, const char* key) {
