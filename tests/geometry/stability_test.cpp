@@ -436,7 +436,7 @@ size_t PeakRssBytes() {
 // force can check every ray on the host: the hierarchy's scratch then grows with the rays alone.
 // The primitives are large, so that many rays hit and the lists are long. Then the same rays
 // through leaves whose lists are the whole scene (a cost function that never splits).
-// Measured 24-26 s in Release on the shared 2-core machine at load 3.5-4.
+// Measured 24-26 s in Release on the shared 2-core machine at load 1.5-4.
 TEST(Stability, ClassificationStaysExactAndBoundedForTenMillionIncoherentRays) {
 #ifdef RC_UNDER_ASAN
     // Measured under scripts/sanitize: 117 s (Release: 26 s) and 1.47 GiB peak RSS, tripling
