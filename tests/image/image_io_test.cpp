@@ -14,6 +14,7 @@
 #include <csignal>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <random>
 
@@ -302,8 +303,8 @@ TEST_F(ImageIoTest, FullDiskIsReportedAndKeepsThePreviousFile) {
         const uintmax_t size = fs::file_size(Path(name));
         const std::string previous = std::string("the previous ") + name + "\n";
         std::ofstream(Path(name), std::ios::binary) << previous;
-        // Nothing fits; the limit falls inside the data; only the last byte is missing (it is
-        // still in the stdio buffer when the codec returns, so only fclose sees the failure).
+        // Nothing fits; the limit falls inside the data; only the last byte is missing (the
+        // tail is still buffered when the codec returns: for the PNG only fclose fails).
         for (const rlim_t limit : {rlim_t(0), rlim_t(size / 3), rlim_t(size - 1)}) {
             EXPECT_EQ(WriteWithFileSizeLimit(image, Path(name), limit),
                       Path(name).string() + ": cannot write: File too large")
