@@ -1,5 +1,7 @@
 #include "rayclass/cli/cli.h"
 
+#include <cerrno>
+#include <cstring>
 #include <iostream>
 
 #include "rayclass/cli/compare_command.h"
@@ -24,14 +26,9 @@ commands:
 
 }  // namespace
 
-int Main(int argc, char** argv) {
-    std::vector<std::string> args(argv + 1, argv + argc);
-    if (args.empty()) {
-        std::cerr << kUsage;
-        return 2;
-    }
-    const std::string command = args.front();
-    const std::vector<std::string> rest(args.begin() + 1, args.end());
+namespace {
+
+int Dispatch(const std::string& command, const std::vector<std::string>& rest) {
     try {
         if (command == "--help" || command == "-h" || command == "help") {
             std::cout << kUsage;
@@ -54,6 +51,28 @@ int Main(int argc, char** argv) {
         std::cerr << "rayclass " << command << ": error: " << e.what() << "\n";
         return 1;
     }
+}
+
+}  // namespace
+
+int Main(int argc, char** argv) {
+    std::vector<std::string> args(argv + 1, argv + argc);
+    if (args.empty()) {
+        std::cerr << kUsage;
+        return 2;
+    }
+    const std::string command = args.front();
+    const int status = Dispatch(command, std::vector<std::string>(args.begin() + 1, args.end()));
+    // What a command prints on stdout is output too (compare --json, classify-stats --json, often
+    // redirected to a file): a full disk there must not exit 0. Buffered text fails only here.
+    errno = 0;
+    if (!std::cout.flush()) {
+        std::cerr << "rayclass " << command
+                  << ": error: standard output: " << std::strerror(errno != 0 ? errno : EIO)
+                  << "\n";
+        return 1;
+    }
+    return status;
 }
 
 }  // namespace rayclass::cli

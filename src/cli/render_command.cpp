@@ -1,18 +1,18 @@
 #include <unistd.h>
 
 #include <charconv>
-#include <memory>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <set>
 #include <sstream>
 
-#include "rayclass/cli/cli.h"
 #include "rayclass/classify/params.h"
+#include "rayclass/cli/cli.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/core/error.h"
 #include "rayclass/image/image.h"
@@ -58,6 +58,11 @@ options:
                           context can be made, else kernel with a notice
   --hull H                raster hulls of spheres and quadrics: sphere, box, billboard or auto
                           (spheres by sphere, quadrics by box; default auto)
+  --depth-bits B          raster depth buffer: 32 (float, default), 24 or 16 (fixed point)
+  --depth-scale S         raster depth per world unit, in [1e-30, 1e+30], or auto (default: the
+                          largest power of two keeping the scene's distances below 1, which
+                          float depth compares exactly); settings that can lose hits or swap
+                          the ids of close surfaces get a warning
   -q, --quiet             no progress line
 )";
 
@@ -70,6 +75,8 @@ struct RenderArgs {
     std::string statsFile;
     float exposure = 0.0f;
     std::string eyeRays;  // empty: raster when a GL context can be made
+    int depthBits = 32;
+    double depthScale = 0;  // 0: automatic
     render::RenderOptions options;
 };
 
@@ -128,8 +135,8 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
             r.options.accel = value();
             if (r.options.accel != "classify" && r.options.accel != "brute" &&
                 r.options.accel != "bvh") {
-                throw UsageError("--accel must be classify, bvh or brute, not '" +
-                                 r.options.accel + "'");
+                throw UsageError("--accel must be classify, bvh or brute, not '" + r.options.accel +
+                                 "'");
             }
         } else if (a == "--classify") {
             const std::string& setting = value();
@@ -173,6 +180,15 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
         } else if (a == "--hull") {
             r.options.hull = value();
             raster::ParseHull(r.options.hull);  // throws UsageError on an unknown name
+        } else if (a == "--depth-bits") {
+            const std::string& bits = value();
+            if (bits != "16" && bits != "24" && bits != "32") {
+                throw UsageError("--depth-bits must be 16, 24 or 32, not '" + bits + "'");
+            }
+            r.depthBits = std::stoi(bits);
+        } else if (a == "--depth-scale") {
+            const std::string& scale = value();
+            r.depthScale = scale == "auto" ? 0.0 : ParseNumber<double>(a, scale, 1e-30, 1e30);
         } else if (a == "-q" || a == "--quiet") {
             r.options.progress = false;
         } else if (!a.empty() && a[0] == '-') {
@@ -223,12 +239,17 @@ class PendingTextFile {
         std::remove(tmp_.c_str());
     }
 
-    void Commit(const std::string& text) {
+    // Writes `text` to the temporary and closes it. Called before the image is written, so that a
+    // full disk fails the command while the previous image is still in place.
+    void Write(const std::string& text) {
         out_ << text;
         out_.close();
-        if (!out_ || std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-            throw Error(path_ + ": cannot write");
-        }
+        if (!out_) throw Error(path_ + ": cannot write");
+    }
+
+    // Renames the written temporary over the target.
+    void Commit() {
+        if (std::rename(tmp_.c_str(), path_.c_str()) != 0) throw Error(path_ + ": cannot write");
         committed_ = true;
     }
 
@@ -272,6 +293,12 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
             if (gl) {
                 raster::RasterOptions rasterOptions;
                 rasterOptions.hull = raster::ParseHull(options.hull);
+                rasterOptions.depthBits = r.depthBits;
+                rasterOptions.depthScale = r.depthScale;
+                for (const std::string& warning :
+                     raster::DepthWarnings(scene, scene.camera.position, rasterOptions)) {
+                    err << "rayclass: warning: " << warning << "\n";
+                }
                 eyeHits = std::make_unique<raster::RasterEyeHits>(*gl, rasterOptions);
                 options.eyeRays = "raster";
             } else if (r.eyeRays == "raster") {
@@ -288,13 +315,14 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
     if (!r.aovs.count("id")) img.id.clear();
     if (!r.aovs.count("normal")) img.normal.clear();
 
+    // The total stops before the image is written: the stats are on disk first (see Write).
+    stats.timeS["scene_load"] = loadSeconds;
+    stats.timeS["total"] = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (statsFile) statsFile->Write(stats.ToJson().dump(2) + "\n");
     image::WriteOptions writeOptions;
     writeOptions.exposure = r.exposure;
     image::WriteImage(img, r.output, writeOptions);
-
-    stats.timeS["scene_load"] = loadSeconds;
-    stats.timeS["total"] = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (statsFile) statsFile->Commit(stats.ToJson().dump(2) + "\n");
+    if (statsFile) statsFile->Commit();
     if (r.options.progress) {
         err << "rayclass: " << r.output << " (" << img.width << "x" << img.height << ", "
             << stats.RaysTotal() << " rays, " << stats.timeS["total"] << " s)\n";

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <numeric>
+#include <sstream>
 
 #include "rayclass/core/error.h"
 #include "shaders.h"
@@ -50,7 +52,73 @@ GlTexture MakeTexture(GLenum format, uint32_t width, uint32_t height) {
     return tex;
 }
 
+// Distance from `eye` to the farthest corner of `bounds` (0 when it is empty).
+double FarthestDistance(const Bounds3f& bounds, const glm::dvec3& eye) {
+    double maxDist = 0;
+    if (bounds.Empty()) return maxDist;
+    for (int c = 0; c < 8; ++c) {
+        const glm::dvec3 p((c & 1) ? bounds.hi.x : bounds.lo.x, (c & 2) ? bounds.hi.y : bounds.lo.y,
+                           (c & 4) ? bounds.hi.z : bounds.lo.z);
+        maxDist = std::max(maxDist, glm::length(p - eye));
+    }
+    return maxDist;
+}
+
+// The explicit scale, or 2^-k with every corner of the scene bounds nearer than 2^k (with a
+// margin for float distances a little beyond the bounds).
+double ResolveDepthScale(const RasterOptions& options, double maxDist) {
+    if (options.depthScale > 0) return options.depthScale;
+    int k = 0;
+    std::frexp(std::max(maxDist * 1.001, 1e-30), &k);  // maxDist * 1.001 < 2^k
+    return std::ldexp(1.0, -k);
+}
+
+std::string Short(double value) {
+    std::ostringstream text;
+    text << std::setprecision(3) << value;
+    return text.str();
+}
+
+bool IsPowerOfTwo(double value) {
+    int exponent = 0;
+    return std::frexp(value, &exponent) == 0.5;
+}
+
+// A power of two as 2^k (exact), anything else as Short.
+std::string ScaleText(double scale) {
+    if (!IsPowerOfTwo(scale)) return Short(scale);
+    int exponent = 0;
+    std::frexp(scale, &exponent);
+    return "2^" + std::to_string(exponent - 1);
+}
+
 }  // namespace
+
+std::vector<std::string> DepthWarnings(const scene::Scene& scene, const glm::vec3& eye,
+                                       const RasterOptions& options) {
+    const double range = FarthestDistance(scene.Bounds(), glm::dvec3(eye));
+    const double scale = ResolveDepthScale(options, range);
+    std::vector<std::string> warnings;
+    if (scale * range >= 1) {
+        warnings.push_back("depth scale " + ScaleText(scale) + " loses hits farther than " +
+                           Short(1 / scale) + " from the eye (the scene reaches " + Short(range) +
+                           ")");
+    }
+    if (options.depthBits < 32) {
+        const double step = 1 / (scale * (std::ldexp(1.0, options.depthBits) - 1));
+        if (step > std::ldexp(range, -20)) {
+            warnings.push_back(std::to_string(options.depthBits) + "-bit depth steps are " +
+                               Short(step) + " world units at depth scale " + ScaleText(scale) +
+                               " (over 2^-20 of the scene's depth range " + Short(range) +
+                               "): surfaces closer than a step may swap ids");
+        }
+    } else if (!IsPowerOfTwo(scale)) {
+        warnings.push_back("depth scale " + Short(scale) +
+                           " is not a power of two: float depth rounds distances, so surfaces "
+                           "within a float step may swap ids");
+    }
+    return warnings;
+}
 
 Hull ParseHull(const std::string& name) {
     if (name == "sphere") return Hull::Sphere;
@@ -62,10 +130,14 @@ Hull ParseHull(const std::string& name) {
 
 const char* HullName(Hull hull) {
     switch (hull) {
-        case Hull::Sphere: return "sphere";
-        case Hull::Box: return "box";
-        case Hull::Billboard: return "billboard";
-        default: return "auto";
+        case Hull::Sphere:
+            return "sphere";
+        case Hull::Box:
+            return "box";
+        case Hull::Billboard:
+            return "billboard";
+        default:
+            return "auto";
     }
 }
 
@@ -207,24 +279,8 @@ std::vector<RcHit> RasterPass::Render(const RcCamera& camera, RasterStats* stats
     EnsureFramebuffer(width, height);
     const glm::dvec3 eye(camera.position.x, camera.position.y, camera.position.z);
 
-    // Depth scale: 2^-k with every corner of the scene bounds nearer than 2^k (with a margin for
-    // float distances a little beyond the bounds).
-    double maxDist = 0;
-    if (!bounds_.Empty()) {
-        for (int c = 0; c < 8; ++c) {
-            const glm::dvec3 p((c & 1) ? bounds_.hi.x : bounds_.lo.x,
-                               (c & 2) ? bounds_.hi.y : bounds_.lo.y,
-                               (c & 4) ? bounds_.hi.z : bounds_.lo.z);
-            maxDist = std::max(maxDist, glm::length(p - eye));
-        }
-    }
-    if (options_.depthScale > 0) {
-        depthScale_ = options_.depthScale;
-    } else {
-        int k = 0;
-        std::frexp(std::max(maxDist * 1.001, 1e-30), &k);  // maxDist * 1.001 < 2^k
-        depthScale_ = std::ldexp(1.0, -k);
-    }
+    const double maxDist = FarthestDistance(bounds_, eye);
+    depthScale_ = ResolveDepthScale(options_, maxDist);
     const double diagonal = bounds_.Empty() ? 0.0 : double(bounds_.Diagonal());
     const float zNear = float(std::max(1e-4 * std::max(diagonal, maxDist), 1e-12));
     if (options_.slabs > 1) PrepareSlabs(camera);
@@ -242,7 +298,8 @@ std::vector<RcHit> RasterPass::Render(const RcCamera& camera, RasterStats* stats
         if (!p) continue;
         auto loc = [&](const char* n) { return glGetUniformLocation(p, n); };
         glProgramUniform3f(p, loc("uEye"), camera.position.x, camera.position.y, camera.position.z);
-        glProgramUniform3f(p, loc("uForward"), camera.forward.x, camera.forward.y, camera.forward.z);
+        glProgramUniform3f(p, loc("uForward"), camera.forward.x, camera.forward.y,
+                           camera.forward.z);
         glProgramUniform3f(p, loc("uRight"), camera.right.x, camera.right.y, camera.right.z);
         glProgramUniform3f(p, loc("uUp"), camera.up.x, camera.up.y, camera.up.z);
         glProgramUniform2f(p, loc("uTanHalfFov"), camera.tanHalfFovX, camera.tanHalfFovY);
@@ -313,7 +370,8 @@ std::vector<RcHit> RasterPass::Render(const RcCamera& camera, RasterStats* stats
     std::vector<GLfloat> uv(2 * nPixels);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
     glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glReadPixels(0, 0, GLsizei(width), GLsizei(height), GL_RED_INTEGER, GL_UNSIGNED_INT, ids.data());
+    glReadPixels(0, 0, GLsizei(width), GLsizei(height), GL_RED_INTEGER, GL_UNSIGNED_INT,
+                 ids.data());
     glReadBuffer(GL_COLOR_ATTACHMENT1);
     glReadPixels(0, 0, GLsizei(width), GLsizei(height), GL_RED, GL_FLOAT, dist.data());
     glReadBuffer(GL_COLOR_ATTACHMENT2);

@@ -77,13 +77,18 @@ class Cli : public ::testing::Test {
 
     fs::path Work(const std::string& name = "") const { return root_ / "work" / name; }
 
-    Result Run(const std::vector<std::string>& args) const {
+    // `shellPrefix` runs in the same shell before the binary (e.g. ulimit settings); `stdoutPath`
+    // replaces the captured stdout (Result::out stays empty).
+    Result Run(const std::vector<std::string>& args, const std::string& shellPrefix = "",
+               const std::string& stdoutPath = "") const {
         // Built by appending: operator+ with short literals trips a false -Wrestrict in GCC 12
         // (bug 105329).
         std::string command = "cd ";
-        command.append(ShellQuoted(Work().string())).append(" && ").append(ShellQuoted(Binary()));
+        command.append(ShellQuoted(Work().string())).append(" && ").append(shellPrefix);
+        command.append(ShellQuoted(Binary()));
         for (const auto& a : args) command.append(" ").append(ShellQuoted(a));
-        command.append(" >").append(ShellQuoted((root_ / "stdout").string()));
+        const std::string out = stdoutPath.empty() ? (root_ / "stdout").string() : stdoutPath;
+        command.append(" >").append(ShellQuoted(out));
         command.append(" 2>").append(ShellQuoted((root_ / "stderr").string()));
         command.append(" </dev/null");
         const int raw = std::system(command.c_str());
@@ -114,6 +119,22 @@ TEST_F(Cli, VersionPrintsTheProjectVersion) {
     EXPECT_EQ(r.err, "");
 }
 
+TEST_F(Cli, FullStandardOutputIsAnError) {
+    // /dev/full fails every write with ENOSPC, as a file on a full disk does: results printed on
+    // stdout (here compare --json) are lost, so the command must not exit 0.
+    image::Image a(2, 1);
+    a.rgb = {glm::vec3(1.0f), glm::vec3(0.5f)};
+    image::WriteImage(a, Work("a.exr"));
+    for (const std::vector<std::string>& args : {std::vector<std::string>{"--version"},
+                                                 {"render", "--help"},
+                                                 {"compare", "a.exr", "a.exr", "--json"}}) {
+        const Result r = Run(args, "", "/dev/full");
+        EXPECT_EQ(r.status, 1) << args[0];
+        EXPECT_EQ(r.err,
+                  "rayclass " + args[0] + ": error: standard output: No space left on device\n");
+    }
+}
+
 TEST_F(Cli, HelpListsTheCommandsOnStdout) {
     for (const std::string flag : {"--help", "-h", "help"}) {
         const Result r = Run({flag});
@@ -132,7 +153,8 @@ TEST_F(Cli, RenderHelpDescribesEveryOption) {
     EXPECT_EQ(r.out.rfind("usage: rayclass render SCENE -o OUT.{exr,png} [options]\n", 0), 0u);
     for (const char* option :
          {"-o, --output", "--width", "--height", "--aov", "--max-depth", "--min-weight", "--device",
-          "--reference", "--stats", "--exposure", "--batch-rays", "--cl-options", "-q, --quiet"}) {
+          "--reference", "--stats", "--exposure", "--batch-rays", "--cl-options", "--depth-bits",
+          "--depth-scale", "-q, --quiet"}) {
         EXPECT_NE(r.out.find(option), std::string::npos) << option;
     }
     EXPECT_EQ(r.err, "");
@@ -315,8 +337,9 @@ TEST_F(CliFailure, HostileInputExitsWith1WithoutHangingOrCrashing) {
     for (int i = 0; i < 4096; ++i) garbage.push_back(char((i * 2654435761u) >> 24));
     WriteText(Work("garbage.obj"), "v 0 0 0\n" + garbage);
     WriteText(Work("garbage.json"), garbage);
-    WriteText(Work("far.json"), "{\"objects\": [{\"type\": \"sphere\", \"center\": [0, 0, 0],\n"
-                                "\"radius\": 3e38}]}\n");
+    WriteText(Work("far.json"),
+              "{\"objects\": [{\"type\": \"sphere\", \"center\": [0, 0, 0],\n"
+              "\"radius\": 3e38}]}\n");
     const std::vector<std::string> inputs = {"far.json", "fifo.json", "garbage.json", "garbage.obj",
                                              "zero.obj"};
     const std::vector<Failure> failures = {
@@ -329,7 +352,10 @@ TEST_F(CliFailure, HostileInputExitsWith1WithoutHangingOrCrashing) {
          "rayclass render: error: zero.obj: is not a regular file\n",
          "x.exr"},
         {{"garbage.obj", "-o", "x.exr"}, 1, "rayclass render: error: garbage.obj:", "x.exr", true},
-        {{"garbage.json", "-o", "x.exr"}, 1, "rayclass render: error: garbage.json:1: ", "x.exr",
+        {{"garbage.json", "-o", "x.exr"},
+         1,
+         "rayclass render: error: garbage.json:1: ",
+         "x.exr",
          true},
         {{"far.json", "-o", "x.exr"},
          1,
@@ -386,6 +412,51 @@ TEST_F(CliFailure, FailuresAfterLoadingLeaveNoOutput) {
             "rayclass render: error: s.json: cannot write\n",
             "x.exr"},
            {"s.json"});
+}
+
+TEST_F(CliFailure, FullDiskExitsWith1AndKeepsThePreviousOutput) {
+    // A full disk, simulated by a file-size limit: with SIGXFSZ ignored, write() fails with EFBIG
+    // once a file would grow past it (1 or 2 KiB: ulimit -f counts 512- or 1024-byte blocks), as
+    // it fails with ENOSPC on a full disk. The host reference renderer writes no kernel cache.
+    const std::string limit = "trap '' XFSZ; ulimit -f 2; ";
+    for (const std::string name : {"x.exr", "x.png"}) {
+        const std::vector<std::string> args = {"render", Cornell(),  "--reference", "--width",
+                                               "64",     "--height", "48",          "-q",
+                                               "-o",     name};
+        Result r = Run(args, limit);
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_EQ(r.err, "rayclass render: error: " + name + ": cannot write: File too large\n");
+        EXPECT_EQ(Entries(), std::vector<std::string>{}) << "a failed render left files behind";
+        const std::string previous = "the previous " + name + "\n";
+        WriteText(Work(name), previous);
+        r = Run(args, limit);
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_EQ(ReadText(Work(name)), previous) << "the previous output changed";
+        EXPECT_EQ(Entries(), std::vector<std::string>{name}) << "a temporary was left behind";
+        // Without the limit the same render succeeds: the limit was what failed it.
+        r = Run(args);
+        EXPECT_EQ(r.status, 0) << r.err;
+        EXPECT_GT(fs::file_size(Work(name)), 2048u) << "the image must exceed the limit";
+        fs::remove(Work(name));
+    }
+}
+
+TEST_F(CliFailure, FullDiskWhileWritingTheStatsKeepsThePreviousImage) {
+    // A 1x1 PNG (about 70 bytes) fits under a 200-byte limit (prlimit counts bytes); the stats
+    // (about 450 bytes) do not. The image must not replace the previous one.
+    const std::vector<std::string> args = {"render", Cornell(),  "--reference", "--width",
+                                           "1",      "--height", "1",           "-q",
+                                           "-o",     "x.png",    "--stats",     "s.json"};
+    WriteText(Work("x.png"), "the previous x.png\n");
+    Result r = Run(args, "trap '' XFSZ; prlimit --fsize=200 ");
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_EQ(r.err, "rayclass render: error: s.json: cannot write\n");
+    EXPECT_EQ(ReadText(Work("x.png")), "the previous x.png\n") << "the previous image changed";
+    EXPECT_EQ(Entries(), std::vector<std::string>{"x.png"}) << "a temporary was left behind";
+    r = Run(args);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_LT(fs::file_size(Work("x.png")), 200u);
+    EXPECT_GT(fs::file_size(Work("s.json")), 200u);
 }
 
 uint64_t Sum(const nlohmann::json& generations, const char* key) {

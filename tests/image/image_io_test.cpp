@@ -6,11 +6,17 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <png.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <limits>
+#include <random>
 
 #include "image/test_dir.h"
 #include "rayclass/core/error.h"
@@ -31,6 +37,11 @@ class ImageIoTest : public testing::TestDir {};
 template <typename T>
 bool SameBits(const std::vector<T>& a, const std::vector<T>& b) {
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+std::string ReadTextFile(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 Image AllLayers() {
@@ -232,6 +243,81 @@ TEST_F(ImageIoTest, FailedRenameKeepsTheTargetAndRemovesTheTemporary) {
     }
     EXPECT_TRUE(fs::is_regular_file(Path("x.png") / "keep"));
     EXPECT_THAT(Entries(), ElementsAre("x.png"));
+}
+
+// Writes `image` to `out` in a child process whose files may not grow beyond `limit` bytes
+// (RLIMIT_FSIZE with SIGXFSZ ignored: write() fails with EFBIG at the limit, as it fails with
+// ENOSPC on a full disk) and returns WriteImage's error message, or "" when it succeeded.
+std::string WriteWithFileSizeLimit(const Image& image, const fs::path& out, rlim_t limit) {
+    int fds[2];
+    if (pipe(fds) != 0) {
+        ADD_FAILURE() << "pipe: " << std::strerror(errno);
+        return "";
+    }
+    const pid_t pid = fork();
+    if (pid == 0) {
+        close(fds[0]);
+        std::signal(SIGXFSZ, SIG_IGN);
+        const rlimit rl{limit, limit};
+        std::string message = setrlimit(RLIMIT_FSIZE, &rl) == 0 ? "" : "setrlimit failed";
+        if (message.empty()) {
+            try {
+                WriteImage(image, out);
+            } catch (const std::exception& e) {
+                message = e.what();
+            }
+        }
+        const bool sent = write(fds[1], message.data(), message.size()) == ssize_t(message.size());
+        _exit(sent ? 0 : 1);
+    }
+    close(fds[1]);
+    std::string message;
+    char buffer[512];
+    for (ssize_t n; (n = read(fds[0], buffer, sizeof buffer)) > 0;)
+        message.append(buffer, size_t(n));
+    close(fds[0]);
+    int status = 0;
+    EXPECT_EQ(waitpid(pid, &status, 0), pid);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "child status " << status;
+    return message;
+}
+
+TEST_F(ImageIoTest, FullDiskIsReportedAndKeepsThePreviousFile) {
+    // Incompressible pixels, so both files are far larger than the stdio buffer and the first
+    // limit; every layer, so the EXR writes several chunks.
+    Image image(96, 64);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    image.depth.resize(image.PixelCount());
+    image.id.resize(image.PixelCount());
+    image.normal.resize(image.PixelCount());
+    for (size_t i = 0; i < image.PixelCount(); ++i) {
+        image.rgb[i] = glm::vec3(u(rng), u(rng), u(rng));
+        image.depth[i] = u(rng);
+        image.id[i] = uint32_t(rng());
+        image.normal[i] = glm::vec3(u(rng), u(rng), u(rng));
+    }
+    for (const char* name : {"x.exr", "x.png"}) {
+        // The size of the complete file, to place the limits.
+        WriteImage(image, Path(name));
+        const uintmax_t size = fs::file_size(Path(name));
+        const std::string previous = std::string("the previous ") + name + "\n";
+        std::ofstream(Path(name), std::ios::binary) << previous;
+        // Nothing fits; the limit falls inside the data; only the last byte is missing (the
+        // tail is still buffered when the codec returns: for the PNG only fclose fails).
+        for (const rlim_t limit : {rlim_t(0), rlim_t(size / 3), rlim_t(size - 1)}) {
+            EXPECT_EQ(WriteWithFileSizeLimit(image, Path(name), limit),
+                      Path(name).string() + ": cannot write: File too large")
+                << name << " (" << size << " bytes) with the limit at " << limit;
+            EXPECT_TRUE(ReadTextFile(Path(name)) == previous)
+                << name << ", limit " << limit << ": the previous file changed";
+            EXPECT_THAT(Entries(), ElementsAre(name)) << "a temporary was left behind";
+        }
+        // The same child writes the file when the limit allows it.
+        EXPECT_EQ(WriteWithFileSizeLimit(image, Path(name), rlim_t(size)), "") << name;
+        EXPECT_EQ(fs::file_size(Path(name)), size) << name;
+        fs::remove(Path(name));
+    }
 }
 
 TEST_F(ImageIoTest, LayerSizeMismatchIsRejectedBeforeWriting) {

@@ -1,5 +1,5 @@
-// The command line: --eye-rays and --hull, and the fallback to the kernel when no OpenGL
-// context can be made (forced by pointing glvnd at no EGL vendor).
+// The command line: --eye-rays, --hull, --depth-bits and --depth-scale, and the fallback to the
+// kernel when no OpenGL context can be made (forced by pointing glvnd at no EGL vendor).
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -21,7 +21,8 @@ struct CliRun {
 };
 
 CliRun RunRayclass(const std::string& env, const std::string& args) {
-    const auto dir = std::filesystem::temp_directory_path() / ("rc_raster_cli_" + std::to_string(getpid()));
+    const auto dir =
+        std::filesystem::temp_directory_path() / ("rc_raster_cli_" + std::to_string(getpid()));
     std::filesystem::create_directories(dir);
     const std::string errFile = (dir / "err.txt").string();
     const std::string cmd = env + " '" + std::string(std::getenv("RAYCLASS_BINARY")) + "' " + args +
@@ -36,14 +37,16 @@ CliRun RunRayclass(const std::string& env, const std::string& args) {
 std::string Scene() { return (SceneDir() / "tests/spheres.json").string(); }
 
 std::string Out(const char* name) {
-    return (std::filesystem::temp_directory_path() / ("rc_raster_cli_" + std::to_string(getpid())) / name).string();
+    return (std::filesystem::temp_directory_path() / ("rc_raster_cli_" + std::to_string(getpid())) /
+            name)
+        .string();
 }
 
 TEST(RasterCli, DefaultUsesRasterWhenGlWorks) {
     RC_REQUIRE_GL();
     const std::string stats = Out("stats.json");
     const CliRun r = RunRayclass("", "render '" + Scene() + "' -o '" + Out("a.png") +
-                                      "' --width 40 --height 30 -q --stats '" + stats + "'");
+                                         "' --width 40 --height 30 -q --stats '" + stats + "'");
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(r.err, "");
     std::ifstream in(stats);
@@ -53,9 +56,9 @@ TEST(RasterCli, DefaultUsesRasterWhenGlWorks) {
 }
 
 TEST(RasterCli, FallsBackToKernelWithOneNotice) {
-    const CliRun r = RunRayclass("__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json",
-                              "render '" + Scene() + "' -o '" + Out("b.png") +
-                                  "' --width 40 --height 30 -q");
+    const CliRun r =
+        RunRayclass("__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json",
+                    "render '" + Scene() + "' -o '" + Out("b.png") + "' --width 40 --height 30 -q");
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.err.find("no OpenGL context, eye rays by kernel"), std::string::npos) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -63,22 +66,64 @@ TEST(RasterCli, FallsBackToKernelWithOneNotice) {
 
 TEST(RasterCli, ExplicitRasterWithoutGlFails) {
     const CliRun r = RunRayclass("__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json",
-                              "render '" + Scene() + "' -o '" + Out("c.png") +
-                                  "' --width 40 --height 30 -q --eye-rays raster");
+                                 "render '" + Scene() + "' -o '" + Out("c.png") +
+                                     "' --width 40 --height 30 -q --eye-rays raster");
     EXPECT_EQ(r.status, 1) << r.err;
     EXPECT_NE(r.err.find("OpenGL context"), std::string::npos) << r.err;
 }
 
 TEST(RasterCli, BadOptionsAreUsageErrors) {
-    EXPECT_EQ(RunRayclass("", "render '" + Scene() + "' -o '" + Out("d.png") + "' --hull cone").status, 2);
-    EXPECT_EQ(RunRayclass("", "render '" + Scene() + "' -o '" + Out("d.png") + "' --eye-rays gpu").status, 2);
+    EXPECT_EQ(
+        RunRayclass("", "render '" + Scene() + "' -o '" + Out("d.png") + "' --hull cone").status,
+        2);
+    EXPECT_EQ(
+        RunRayclass("", "render '" + Scene() + "' -o '" + Out("d.png") + "' --eye-rays gpu").status,
+        2);
+}
+
+TEST(RasterCli, UnsafeDepthSettingsGetOneWarningLine) {
+    RC_REQUIRE_GL();
+    const CliRun r = RunRayclass("", "render '" + Scene() + "' -o '" + Out("f.png") +
+                                         "' --width 40 --height 30 -q --depth-bits 16");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err,
+              "rayclass: warning: 16-bit depth steps are 0.000488 world units at depth "
+              "scale 2^-5 (over 2^-20 of the scene's depth range 21.7): surfaces closer "
+              "than a step may swap ids\n");
+    // The automatic scale given explicitly is as safe as the default.
+    const CliRun safe = RunRayclass("", "render '" + Scene() + "' -o '" + Out("g.png") +
+                                            "' --width 40 --height 30 -q --depth-bits 32 "
+                                            "--depth-scale 0.03125");
+    ASSERT_EQ(safe.status, 0) << safe.err;
+    EXPECT_EQ(safe.err, "");
+}
+
+TEST(RasterCli, BadDepthOptionsAreUsageErrors) {
+    const std::string base = "render '" + Scene() + "' -o '" + Out("h.png") + "' ";
+    const std::pair<const char*, const char*> cases[] = {
+        {"--depth-bits 8", "rayclass render: --depth-bits must be 16, 24 or 32, not '8'\n"},
+        {"--depth-bits 32.0", "rayclass render: --depth-bits must be 16, 24 or 32, not '32.0'\n"},
+        {"--depth-scale 0",
+         "rayclass render: --depth-scale expects a number in [1e-30, 1e+30], not '0'\n"},
+        {"--depth-scale -1",
+         "rayclass render: --depth-scale expects a number in [1e-30, 1e+30], not '-1'\n"},
+        {"--depth-scale inf",
+         "rayclass render: --depth-scale expects a number in [1e-30, 1e+30], not 'inf'\n"},
+        {"--depth-scale", "rayclass render: --depth-scale needs a value\n"},
+    };
+    for (const auto& [args, message] : cases) {
+        const CliRun r = RunRayclass("", base + args);
+        EXPECT_EQ(r.status, 2) << args;
+        EXPECT_EQ(r.err, message) << args;
+    }
 }
 
 TEST(RasterCli, EveryHullRenders) {
     RC_REQUIRE_GL();
     for (const char* hull : {"sphere", "box", "billboard", "auto"}) {
-        const CliRun r = RunRayclass("", "render '" + Scene() + "' -o '" + Out("e.png") +
-                                          "' --width 40 --height 30 -q --eye-rays raster --hull " + hull);
+        const CliRun r =
+            RunRayclass("", "render '" + Scene() + "' -o '" + Out("e.png") +
+                                "' --width 40 --height 30 -q --eye-rays raster --hull " + hull);
         EXPECT_EQ(r.status, 0) << hull << ": " << r.err;
     }
 }

@@ -51,17 +51,31 @@ struct RasterOptions {
     double depthScale = 0;
     // Count fragment-shader invocations and exact hits with atomic counters (costs time).
     bool countFragments = false;
-    // Front-to-back slabs (1 = none): primitives sorted by their nearest possible distance and drawn
-    // in `slabs` groups; between groups the depth is copied to a texture and a fragment whose
+    // Front-to-back slabs (1 = none): primitives sorted by their nearest possible distance and
+    // drawn in `slabs` groups; between groups the depth is copied to a texture and a fragment whose
     // hull cannot come nearer than the current hit skips its exact test.
     uint32_t slabs = 1;
 };
 
+// The depth-buffer settings of `options` that can give pixels a wrong nearest hit on `scene`
+// seen from `eye`, one message per reason, without a prefix (empty: safe). With D the scene's
+// depth range (the distance from the eye to the farthest corner of the scene bounds), s the depth
+// scale (0: the automatic one above) and b the depth bits, a setting is unsafe when
+//  - s * D >= 1: hits farther than 1 / s are lost (their depth clamps to the cleared 1);
+//  - b is 16 or 24 and one depth step, 1 / (s * (2^b - 1)) world units, exceeds D * 2^-20 (about
+//    8 to 16 float ulps of the farthest distance; the automatic scale's 24-bit step is at most
+//    D * 2^-23): surfaces nearer to each other than a step along a ray may swap ids;
+//  - b is 32 and s is not a power of two: t * s rounds, so distances no longer compare exactly
+//    and surfaces within a float step may swap ids.
+// The defaults (32-bit float depth, automatic scale) are safe on every scene.
+std::vector<std::string> DepthWarnings(const scene::Scene& scene, const glm::vec3& eye,
+                                       const RasterOptions& options);
+
 struct RasterStats {
-    double uploadS = 0;    // camera uniforms, clearing
-    double drawS = 0;      // every draw call until glFinish
-    double readbackS = 0;  // glReadPixels of ids, distances and barycentrics
-    double totalS = 0;     // the whole Render call
+    double uploadS = 0;      // camera uniforms, clearing
+    double drawS = 0;        // every draw call until glFinish
+    double readbackS = 0;    // glReadPixels of ids, distances and barycentrics
+    double totalS = 0;       // the whole Render call
     uint64_t fragments = 0;  // fragment-shader invocations (countFragments)
     uint64_t tested = 0;     // fragments that ran the exact test (not skipped by slabs)
     uint64_t exactHits = 0;  // fragments whose exact test hit
@@ -69,7 +83,7 @@ struct RasterStats {
 };
 
 class RasterPass {
-public:
+  public:
     // Uploads the scene's primitives to `gl`'s context (current on this thread).
     RasterPass(GlContext& gl, const scene::Scene& scene, const RasterOptions& options = {});
     ~RasterPass();
@@ -86,7 +100,7 @@ public:
     double DepthScale() const { return depthScale_; }
     const RasterOptions& Options() const { return options_; }
 
-private:
+  private:
     enum Kind { kTriangles = 0, kSpheres = 1, kQuadrics = 2 };
     GLuint Program(Kind kind, Hull hull, bool slabPass);
     void EnsureFramebuffer(uint32_t width, uint32_t height);
@@ -114,13 +128,13 @@ private:
 
 // The renderer's generation-0 hook: hits of the eye rays from a RasterPass.
 class RasterEyeHits final : public render::EyeHitSource {
-public:
+  public:
     RasterEyeHits(GlContext& gl, const RasterOptions& options) : gl_(gl), options_(options) {}
     std::string Name() const override { return "raster"; }
     std::vector<RcHit> FindHits(const scene::Scene& scene, const render::CameraBasis& camera,
                                 render::RenderStats& stats) override;
 
-private:
+  private:
     GlContext& gl_;
     RasterOptions options_;
 };
