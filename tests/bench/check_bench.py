@@ -48,8 +48,8 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
     for k in ("eye", "shadow", "reflection", "refraction", "diffuse"):
         if k not in kinds:
             failures.append("results.csv has no rows for ray kind " + k)
-    if not {r["method"] for r in results if r["threads"] == "1"} >= {"classify/auto", "bvh"}:
-        failures.append("results.csv has no 1-thread rows for classify/auto and bvh")
+    if not {r["method"] for r in results if r["threads"] == "1"} >= {"classify/fragment", "bvh"}:
+        failures.append("results.csv has no 1-thread rows for classify/fragment and bvh")
 
     def load(name):
         with open(os.path.join(out, name), newline="") as f:
