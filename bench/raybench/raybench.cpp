@@ -179,16 +179,11 @@ int Micro(int argc, char** argv) {
     std::string device = "auto";
     for (int i = 2; i + 1 < argc; i += 2) {
         const std::string a = argv[i], v = argv[i + 1];
-        if (a == "--rays")
-            nRays = uint32_t(std::stoul(v));
-        else if (a == "--prims")
-            nPrims = uint32_t(std::stoul(v));
-        else if (a == "--runs")
-            runs = std::max(1, std::stoi(v));
-        else if (a == "--device")
-            device = v;
-        else
-            throw std::invalid_argument("unknown option " + a);
+        if (a == "--rays") nRays = uint32_t(std::stoul(v));
+        else if (a == "--prims") nPrims = uint32_t(std::stoul(v));
+        else if (a == "--runs") runs = std::max(1, std::stoi(v));
+        else if (a == "--device") device = v;
+        else throw std::invalid_argument("unknown option " + a);
     }
     if (nPrims % 16 != 0) throw std::invalid_argument("--prims must be a multiple of 16");
     clrt::Context ctx(device);
@@ -204,7 +199,8 @@ int Micro(int argc, char** argv) {
         // Primitives scattered in [-1,1]^3, small enough that most rays miss most of them; rays
         // from z = -4 towards random points of the box.
         std::mt19937 rng(3);
-        std::uniform_real_distribution<float> pos(-1.0f, 1.0f), off(-0.1f, 0.1f), rad(0.02f, 0.08f);
+        std::uniform_real_distribution<float> pos(-1.0f, 1.0f), off(-0.1f, 0.1f),
+            rad(0.02f, 0.08f);
         scene::Scene s;
         s.lights.push_back({glm::vec3(0, 5, 0), glm::vec3(1)});
         for (uint32_t p = 0; p < nPrims; ++p) {
@@ -214,8 +210,8 @@ int Micro(int argc, char** argv) {
             } else if (kind[0] == 'q') {
                 scene::Quadric q;  // an ellipsoid x^2/a + y^2/b + z^2/c about c, clipped
                 const float r = rad(rng);
-                q.c = {1, 1,        1,        0,        0,
-                       0, -2 * c.x, -2 * c.y, -2 * c.z, c.x * c.x + c.y * c.y + c.z * c.z - r * r};
+                q.c = {1, 1, 1, 0, 0, 0, -2 * c.x, -2 * c.y, -2 * c.z,
+                       c.x * c.x + c.y * c.y + c.z * c.z - r * r};
                 q.boxMin = c - glm::vec3(r);
                 q.boxMax = c + glm::vec3(r);
                 s.quadrics.push_back(q);
@@ -301,9 +297,8 @@ int Micro(int argc, char** argv) {
 int main(int argc, char** argv) try {
     if (argc >= 2 && std::string(argv[1]) == "--micro") return Micro(argc, argv);
     if (argc < 2 || argv[1][0] == '-') {
-        std::fprintf(stderr,
-                     "usage: raybench SCENE --camera NAME --light SPEC [options] | "
-                     "raybench --micro [options] (see bench/raybench/raybench.cpp)\n");
+        std::fprintf(stderr, "usage: raybench SCENE --camera NAME --light SPEC [options] | "
+                             "raybench --micro [options] (see bench/raybench/raybench.cpp)\n");
         return 2;
     }
     std::string camera = "scene", light = "scene", saveRays, clOptions, device = "auto";
@@ -311,36 +306,23 @@ int main(int argc, char** argv) try {
     int runs = 5, warmup = 1;
     std::vector<std::string> kinds(std::begin(bench::kKinds), std::end(bench::kKinds));
     std::vector<std::pair<std::string, std::string>> classifyParams;
-    std::vector<std::string> methods{
-        "classify/scalar", "classify/vertex", "classify/fragment", "classify/auto", "bvh", "brute"};
+    std::vector<std::string> methods{"classify/scalar", "classify/vertex", "classify/fragment",
+                                     "classify/auto", "bvh", "brute"};
     for (int i = 2; i + 1 < argc; i += 2) {
         const std::string a = argv[i], v = argv[i + 1];
-        if (a == "--camera")
-            camera = v;
-        else if (a == "--light")
-            light = v;
-        else if (a == "--width")
-            width = uint32_t(std::stoul(v));
-        else if (a == "--height")
-            height = uint32_t(std::stoul(v));
-        else if (a == "--runs")
-            runs = std::max(1, std::stoi(v));
-        else if (a == "--warmup")
-            warmup = std::max(0, std::stoi(v));
-        else if (a == "--methods")
-            methods = Split(v);
-        else if (a == "--kinds")
-            kinds = Split(v);
-        else if (a == "--brute-max-prims")
-            bruteMaxPrims = uint32_t(std::stoul(v));
-        else if (a == "--save-rays")
-            saveRays = v;
-        else if (a == "--cl-options")
-            clOptions = v;
-        else if (a == "--device")
-            device = v;
-        else if (a == "--seed")
-            seed = uint32_t(std::stoul(v));
+        if (a == "--camera") camera = v;
+        else if (a == "--light") light = v;
+        else if (a == "--width") width = uint32_t(std::stoul(v));
+        else if (a == "--height") height = uint32_t(std::stoul(v));
+        else if (a == "--runs") runs = std::max(1, std::stoi(v));
+        else if (a == "--warmup") warmup = std::max(0, std::stoi(v));
+        else if (a == "--methods") methods = Split(v);
+        else if (a == "--kinds") kinds = Split(v);
+        else if (a == "--brute-max-prims") bruteMaxPrims = uint32_t(std::stoul(v));
+        else if (a == "--save-rays") saveRays = v;
+        else if (a == "--cl-options") clOptions = v;
+        else if (a == "--device") device = v;
+        else if (a == "--seed") seed = uint32_t(std::stoul(v));
         else if (a == "--classify" && v.find('=') != std::string::npos)
             classifyParams.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
         else
@@ -380,13 +362,12 @@ int main(int argc, char** argv) try {
     std::fprintf(stderr,
                  "raybench: %s, %u primitives, camera %s, load %.3f s, program build %.3f s; "
                  "rays eye %zu shadow %zu reflection %zu refraction %zu diffuse %zu\n",
-                 argv[1], sc.PrimitiveCount(), camera.c_str(), loadS, buildS, sets.sets[0].size(),
-                 sets.sets[1].size(), sets.sets[2].size(), sets.sets[3].size(),
-                 sets.sets[4].size());
+                 argv[1], sc.PrimitiveCount(), camera.c_str(), loadS, buildS,
+                 sets.sets[0].size(), sets.sets[1].size(), sets.sets[2].size(),
+                 sets.sets[3].size(), sets.sets[4].size());
 
-    std::printf(
-        "kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,"
-        "setup_s,tests_per_ray,hits\n");
+    std::printf("kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,"
+                "setup_s,tests_per_ray,hits\n");
     const uint32_t nLights = std::max<uint32_t>(1, uint32_t(sc.lights.size()));
     for (int k = 0; k < bench::kNumKinds; ++k) {
         const auto& set = sets.sets[k];
@@ -401,8 +382,7 @@ int main(int argc, char** argv) try {
             for (const auto& r : set) shadowRays.push_back(ToShadow(r));
             raysBuf = Upload(ctx, shadowRays);
         } else {
-            const uint32_t kind =
-                k == 0 ? RC_RAY_EYE : (k == 3 ? RC_RAY_REFRACTION : RC_RAY_REFLECTION);
+            const uint32_t kind = k == 0 ? RC_RAY_EYE : (k == 3 ? RC_RAY_REFRACTION : RC_RAY_REFLECTION);
             for (uint32_t i = 0; i < n; ++i) rays.push_back(ToRc(set[i], i, kind));
             raysBuf = Upload(ctx, rays);
         }
@@ -458,8 +438,9 @@ int main(int argc, char** argv) try {
             uint64_t hits = 0;
             if (shadow) {
                 std::vector<uint8_t> blocked(n);
-                clrt::Check("clEnqueueReadBuffer",
-                            [&] { queue.enqueueReadBuffer(out, CL_TRUE, 0, n, blocked.data()); });
+                clrt::Check("clEnqueueReadBuffer", [&] {
+                    queue.enqueueReadBuffer(out, CL_TRUE, 0, n, blocked.data());
+                });
                 for (uint8_t x : blocked) hits += x != 0;
             } else {
                 std::vector<RcHit> h(n);
@@ -472,8 +453,8 @@ int main(int argc, char** argv) try {
             std::printf("%s,%s,%u,%.6g,%.6g,%.6g,%.4g,%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%llu\n",
                         bench::kKinds[k], method.c_str(), n, med,
                         *std::min_element(wall.begin(), wall.end()),
-                        *std::max_element(wall.begin(), wall.end()), n / med * 1e-6, Median(host),
-                        Median(copy), Median(kern), Median(shadeS), Median(setup),
+                        *std::max_element(wall.begin(), wall.end()), n / med * 1e-6,
+                        Median(host), Median(copy), Median(kern), Median(shadeS), Median(setup),
                         double(tests) / n, (unsigned long long)hits);
             std::fflush(stdout);
         }
