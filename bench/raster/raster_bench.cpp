@@ -5,6 +5,20 @@
 // SCENE: a scene file, or spheres:N for N random spheres. Default: scenes/cornell.json,
 // spheres:1000, spheres:10000, spheres:100000, ../shared/scenes/conference.obj (when present).
 // Environment as in the tests: POCL_MAX_PTHREAD_COUNT=2 is set unless given.
+//
+//   build/bench/raster_bench --experiments [--width W] [--height H] [--runs N]
+//                            [--hull-counts N,N,...] [--depth-scene FILE]...
+// The founding thesis's raster experiments (scripts/bench, charts 3 and 4), as CSV on stdout:
+//   experiment,scene,prims,hull,slabs,depth_bits,x,pass_ms,draw_ms,frags_per_px,tested_per_px,
+//   id_mismatch_fraction,reference_ms
+// against the BVH eye-ray query's hits (reference_ms: its kernel time), best of N runs:
+//   depth     each --depth-scene (default cornell.json) with RasterOptions.depthBits 16/24/32 and
+//             depthScale = x times the derived scale (x > 1 loses the far hits)
+//   hulls     x random spheres per --hull-counts, hull sphere/box/billboard
+//   rotation  2000 ellipsoids 4:1:1, long axis rotated by x degrees about the view axis, hull
+//             sphere/box/billboard (box and billboard follow the clip box, which grows)
+//   layers    x screen-filling squares (2 triangles each) one behind the other, 1 and 4 slabs
+// Exit status 3 when no OpenGL context can be made.
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -12,11 +26,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "rayclass/clrt/context.h"
 #include "rayclass/raster/raster_pass.h"
+#include "rayclass/render/bvh_query.h"
 #include "rayclass/render/cl_renderer.h"
 #include "rayclass/scene/loader.h"
 
@@ -31,7 +47,8 @@ scene::Scene RandomSpheres(uint32_t n) {
     // Volume fraction about 5%: radius from n spheres filling 0.05 of the 20^3 cube.
     const float r = std::cbrt(0.05f * 8000.0f / (4.18879f * float(n)));
     std::uniform_real_distribution<float> rad(0.5f * r, 1.5f * r);
-    for (uint32_t i = 0; i < n; ++i) s.spheres.push_back({{pos(rng), pos(rng), pos(rng)}, rad(rng)});
+    for (uint32_t i = 0; i < n; ++i)
+        s.spheres.push_back({{pos(rng), pos(rng), pos(rng)}, rad(rng)});
     s.camera.position = {0, 0, 30};
     s.camera.lookAt = {0, 0, 0};
     s.camera.fovYDegrees = 45;
@@ -39,14 +56,15 @@ scene::Scene RandomSpheres(uint32_t n) {
 }
 
 std::vector<RcHit> KernelHits(clrt::Context& ctx, const cl::Program& program,
-                              const scene::Scene& scene, double& seconds) {
+                              const scene::Scene& scene, double& seconds, bool bvh = false) {
     RcRenderParams params{};
     params.nTriangles = uint32_t(scene.triangles.size());
     params.nSpheres = uint32_t(scene.spheres.size());
     params.nQuadrics = uint32_t(scene.quadrics.size());
     const render::DeviceScene device(scene);
     const render::SceneBuffers buffers(ctx, device, params);
-    auto query = render::MakeBruteForceQuery(ctx, program, buffers);
+    auto query = bvh ? render::MakeBvhQuery(ctx, program, buffers, scene)
+                     : render::MakeBruteForceQuery(ctx, program, buffers);
     const RcCamera cam = render::CameraBasis(scene.camera).ToDevice();
     const uint32_t n = cam.width * cam.height;
     cl::Buffer camBuffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof cam,
@@ -63,16 +81,204 @@ std::vector<RcHit> KernelHits(clrt::Context& ctx, const cl::Program& program,
     render::KernelTimer timer;
     // Brute force shades nothing itself: the shading buffers stay unused.
     query->Intersect(rays, n, nullptr, hits, render::ShadeBuffers{}, timer);
-    seconds = timer.Seconds().at("rc_intersect_brute");
+    seconds = 0;
+    for (const auto& [name, s] : timer.Seconds()) seconds += s;
     std::vector<RcHit> out(n);
     ctx.queue().enqueueReadBuffer(hits, CL_TRUE, 0, n * sizeof(RcHit), out.data());
     return out;
+}
+
+// Ellipsoids with semi-axes (4r, r, r), the long axis rotated by `degrees` about z (the view
+// axis of the camera at +z), each clipped to its exact axis-aligned box.
+scene::Scene RotatedEllipsoids(uint32_t n, float degrees) {
+    scene::Scene s = RandomSpheres(n);
+    const float c = std::cos(glm::radians(degrees)), sn = std::sin(glm::radians(degrees));
+    const glm::mat3 rot(c, sn, 0, -sn, c, 0, 0, 0, 1);  // columns
+    for (const scene::Sphere& sp : s.spheres) {
+        const glm::vec3 semi(4 * sp.radius, sp.radius, sp.radius);
+        const glm::mat3 inv2(glm::vec3(1 / (semi.x * semi.x), 0, 0),
+                             glm::vec3(0, 1 / (semi.y * semi.y), 0),
+                             glm::vec3(0, 0, 1 / (semi.z * semi.z)));
+        const glm::mat3 a = rot * inv2 * glm::transpose(rot);  // (x-p)^T A (x-p) = 1
+        const glm::vec3 p = sp.center, ap = a * p;
+        scene::Quadric q;
+        q.c = {a[0][0],     a[1][1],   a[2][2],   2 * a[1][0], 2 * a[2][0],
+               2 * a[2][1], -2 * ap.x, -2 * ap.y, -2 * ap.z,   glm::dot(p, ap) - 1};
+        glm::vec3 half;
+        for (int i = 0; i < 3; ++i) {
+            half[i] =
+                glm::length(glm::vec3(rot[0][i] * semi.x, rot[1][i] * semi.y, rot[2][i] * semi.z));
+        }
+        q.boxMin = p - half;
+        q.boxMax = p + half;
+        s.quadrics.push_back(q);
+    }
+    s.spheres.clear();
+    return s;
+}
+
+// `n` squares of side 40 facing the camera at z = 0, -0.5, -1, ... (front first).
+scene::Scene Layers(uint32_t n) {
+    scene::Scene s = RandomSpheres(0);
+    for (uint32_t i = 0; i < n; ++i) {
+        const float z = -0.5f * float(i);
+        const glm::vec3 a(-20, -20, z), b(20, -20, z), c(20, 20, z), d(-20, 20, z);
+        scene::Triangle t;
+        t.p = {a, b, c};
+        s.triangles.push_back(t);
+        t.p = {a, c, d};
+        s.triangles.push_back(t);
+    }
+    return s;
+}
+
+struct Measured {
+    raster::RasterStats best, counted;
+    double mismatch = 0;
+};
+
+// Best of `runs` frames after a warm-up, the counters from a separate counting pass, and the
+// fraction of pixels whose id differs from `reference`.
+Measured Measure(raster::GlContext& gl, const scene::Scene& scene, raster::RasterOptions options,
+                 const std::vector<RcHit>& reference, int runs) {
+    Measured m;
+    const RcCamera cam = render::CameraBasis(scene.camera).ToDevice();
+    raster::RasterPass pass(gl, scene, options);
+    pass.Render(cam);
+    m.best.totalS = 1e30;
+    std::vector<RcHit> hits;
+    for (int rep = 0; rep < runs; ++rep) {
+        raster::RasterStats st;
+        hits = pass.Render(cam, &st);
+        if (st.totalS < m.best.totalS) m.best = st;
+    }
+    size_t mismatch = 0;
+    for (size_t i = 0; i < hits.size(); ++i) mismatch += hits[i].prim != reference[i].prim;
+    m.mismatch = double(mismatch) / double(std::max<size_t>(1, hits.size()));
+    options.countFragments = true;
+    raster::RasterPass counting(gl, scene, options);
+    counting.Render(cam, &m.counted);
+    return m;
+}
+
+int Experiments(int argc, char** argv) {
+    uint32_t width = 400, height = 300;
+    int runs = 3;
+    std::vector<uint32_t> hullCounts{1000, 10000, 100000};
+    std::vector<std::string> depthScenes;
+    for (int i = 2; i + 1 < argc; i += 2) {
+        const std::string a = argv[i], v = argv[i + 1];
+        if (a == "--width")
+            width = uint32_t(std::stoul(v));
+        else if (a == "--height")
+            height = uint32_t(std::stoul(v));
+        else if (a == "--runs")
+            runs = std::max(1, std::stoi(v));
+        else if (a == "--depth-scene")
+            depthScenes.push_back(v);
+        else if (a == "--hull-counts") {
+            hullCounts.clear();
+            std::stringstream ss(v);
+            for (std::string item; std::getline(ss, item, ',');)
+                hullCounts.push_back(std::stoul(item));
+        } else
+            throw std::invalid_argument("unknown option " + a);
+    }
+    if (depthScenes.empty()) {
+        depthScenes.push_back(
+            (std::filesystem::path(RAYCLASS_BENCH_SOURCE_DIR) / "scenes/cornell.json").string());
+    }
+    std::string why;
+    raster::GlContext* gl = raster::GlContext::Shared(&why);
+    if (!gl) {
+        std::fprintf(stderr, "raster_bench: no OpenGL context: %s\n", why.c_str());
+        return 3;  // scripts/bench reports the experiments as skipped
+    }
+    clrt::Context ctx("cpu");
+    const cl::Program program = render::BuildRenderProgram(ctx);
+    std::printf(
+        "experiment,scene,prims,hull,slabs,depth_bits,x,pass_ms,draw_ms,frags_per_px,"
+        "tested_per_px,id_mismatch_fraction,reference_ms\n");
+    const double pixels = double(width) * height;
+    auto row = [&](const char* experiment, const std::string& label, scene::Scene& scene,
+                   const raster::RasterOptions& options, double x, const std::vector<RcHit>& ref,
+                   double refS) {
+        const Measured m = Measure(*gl, scene, options, ref, runs);
+        std::printf("%s,%s,%u,%s,%u,%d,%g,%.4g,%.4g,%.4g,%.4g,%.6g,%.4g\n", experiment,
+                    label.c_str(), scene.PrimitiveCount(), raster::HullName(options.hull),
+                    options.slabs, options.depthBits, x, m.best.totalS * 1e3, m.best.drawS * 1e3,
+                    double(m.counted.fragments) / pixels, double(m.counted.tested) / pixels,
+                    m.mismatch, refS * 1e3);
+        std::fflush(stdout);
+    };
+    auto prepare = [&](scene::Scene& scene, double& refS) {
+        scene.camera.width = width;
+        scene.camera.height = height;
+        return KernelHits(ctx, program, scene, refS, true);
+    };
+    for (const std::string& file : depthScenes) {
+        scene::Scene scene = scene::LoadScene(file);
+        double refS = 0;
+        const std::vector<RcHit> ref = prepare(scene, refS);
+        raster::RasterPass probe(*gl, scene);
+        probe.Render(render::CameraBasis(scene.camera).ToDevice());
+        const double derived = probe.DepthScale();
+        const std::string label = std::filesystem::path(file).stem().string();
+        for (int bits : {16, 24, 32}) {
+            for (double factor : {1.0 / 256, 1.0 / 16, 1.0, 2.0, 4.0}) {
+                raster::RasterOptions options;
+                options.depthBits = bits;
+                options.depthScale = derived * factor;
+                row("depth", label, scene, options, factor, ref, refS);
+            }
+        }
+    }
+    const raster::Hull hulls[] = {raster::Hull::Sphere, raster::Hull::Box, raster::Hull::Billboard};
+    for (uint32_t n : hullCounts) {
+        scene::Scene scene = RandomSpheres(n);
+        double refS = 0;
+        const std::vector<RcHit> ref = prepare(scene, refS);
+        for (raster::Hull hull : hulls) {
+            raster::RasterOptions options;
+            options.hull = hull;
+            row("hulls", "spheres", scene, options, n, ref, refS);
+        }
+    }
+    for (float degrees : {0.0f, 15.0f, 30.0f, 45.0f, 60.0f, 75.0f, 90.0f}) {
+        scene::Scene scene = RotatedEllipsoids(2000, degrees);
+        double refS = 0;
+        const std::vector<RcHit> ref = prepare(scene, refS);
+        for (raster::Hull hull : hulls) {
+            raster::RasterOptions options;
+            options.hull = hull;
+            row("rotation", "ellipsoids", scene, options, degrees, ref, refS);
+        }
+    }
+    for (uint32_t n : {1u, 2u, 4u, 8u, 16u, 32u, 64u}) {
+        scene::Scene scene = Layers(n);
+        double refS = 0;
+        const std::vector<RcHit> ref = prepare(scene, refS);
+        for (uint32_t slabs : {1u, 4u}) {
+            raster::RasterOptions options;
+            options.slabs = slabs;
+            row("layers", "squares", scene, options, n, ref, refS);
+        }
+    }
+    return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
     setenv("POCL_MAX_PTHREAD_COUNT", "2", 0);
+    if (argc >= 2 && std::string(argv[1]) == "--experiments") {
+        try {
+            return Experiments(argc, argv);
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "raster_bench: %s\n", e.what());
+            return 1;
+        }
+    }
     uint32_t width = 400, height = 300;
     int a = 1;
     if (argc >= 3 && std::isdigit(static_cast<unsigned char>(argv[1][0]))) {
@@ -111,8 +317,7 @@ int main(int argc, char** argv) {
             double kernelS = 0;
             const std::vector<RcHit> kernel = KernelHits(ctx, program, scene, kernelS);
             std::printf("%-16s %8u %-16s %10.1f %10s %10s %12s %12s %10s\n", label.c_str(),
-                        scene.PrimitiveCount(), "cl-brute", kernelS * 1e3, "-", "-", "-", "-",
-                        "-");
+                        scene.PrimitiveCount(), "cl-brute", kernelS * 1e3, "-", "-", "-", "-", "-");
             const double pixels = double(width) * height;
             struct Method {
                 const char* name;

@@ -3,7 +3,7 @@
 //
 //   raybench SCENE --camera NAME --light SPEC [--width W --height H] [--runs N] [--warmup N]
 //            [--methods LIST] [--brute-max-prims N] [--save-rays FILE] [--cl-options S]
-//            [--device D] [--seed S] [--kinds LIST]
+//            [--device D] [--seed S] [--kinds LIST] [--classify NAME=VALUE]...
 //   raybench --micro [--rays N] [--prims N] [--runs N]
 //
 // The eye rays' hits come from the BVH query (identical to brute force); the secondary sets are
@@ -18,11 +18,14 @@
 // kernel and cannot be excluded); setup_s: query construction (BVH build and upload, the
 // classification's presorted lists); mrays_s = rays / median_s; hits: rays that hit / are
 // blocked (equal across methods). The rays of the classified query are read back from the device
-// inside the timed stage, as the renderer does.
+// inside the timed stage, as the renderer does. --classify sets a cost-function parameter of the
+// classified methods as `rayclass render --classify` does (classify::SetParam), for sweeps.
 //
-// --micro: peak intersection tests per second of the brute-force kernel (one ray per work-item,
-// scalar loop) for spheres, quadrics and triangles, N random rays against P primitives each.
-//   kind,method,rays,median_s,min_s,max_s,mrays_s,tests_per_s
+// --micro: peak intersection tests per second for spheres, quadrics and triangles, N random rays
+// against P primitives each (P a multiple of 16): the renderer's brute-force kernel (method
+// brute-scalar: one ray per work-item, scalar loop) and the branch/select x scalar/vec16 variants
+// of micro_kernels.h (methods scalar-branch, scalar-select, vec16-branch, vec16-select).
+//   kind,method,rays,median_s,min_s,max_s,mrays_s,tests_per_s,hits
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -31,13 +34,14 @@
 #include <string>
 #include <vector>
 
-#include "raysets.h"
+#include "micro_kernels.h"
 #include "rayclass/classify/params.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/device_scene.h"
 #include "rayclass/scene/loader.h"
+#include "raysets.h"
 
 using namespace rayclass;
 using Clock = std::chrono::steady_clock;
@@ -98,19 +102,20 @@ struct Bench {
     const scene::Scene& scene;
     cl::Program program;
     render::SceneBuffers buffers;
+    classify::Params params;
 
     Bench(clrt::Context& c, const scene::Scene& s, const std::string& clOptions)
         : ctx(c),
           scene(s),
           program(render::BuildRenderProgram(c, clOptions)),
-          buffers(c, render::DeviceScene(s), ParamsFor(s)) {}
+          buffers(c, render::DeviceScene(s), ParamsFor(s)),
+          params(classify::Params::ForScene(s)) {}
 
     std::unique_ptr<render::RayQuery> Make(const std::string& method) {
         if (method == "brute") return render::MakeBruteForceQuery(ctx, program, buffers);
         if (method == "bvh") return render::MakeBvhQuery(ctx, program, buffers, scene);
         if (method.rfind("classify/", 0) == 0) {
-            return render::MakeClassifiedQuery(ctx, program, buffers, scene,
-                                               classify::Params::ForScene(scene),
+            return render::MakeClassifiedQuery(ctx, program, buffers, scene, params,
                                                render::ParseKernelStyle(method.substr(9)));
         }
         throw std::invalid_argument("unknown method '" + method + "'");
@@ -136,6 +141,38 @@ RcShadowRay ToShadow(const bench::BenchRay& r) {
     return s;
 }
 
+// Component k of primitive i at [k * n + i]: sphere centre, radius; triangle v0, e1, e2; quadric
+// coefficients, box min, box max (the layout micro_kernels.h reads).
+std::vector<float> MicroSoa(const scene::Scene& s, uint32_t n) {
+    std::vector<float> soa;
+    auto put = [&](uint32_t k, uint32_t i, float v) {
+        if (soa.size() < size_t(k + 1) * n) soa.resize(size_t(k + 1) * n, 0.0f);
+        soa[size_t(k) * n + i] = v;
+    };
+    for (uint32_t i = 0; i < s.spheres.size(); ++i) {
+        const auto& sp = s.spheres[i];
+        for (int k = 0; k < 3; ++k) put(k, i, sp.center[k]);
+        put(3, i, sp.radius);
+    }
+    for (uint32_t i = 0; i < s.triangles.size(); ++i) {
+        const auto& p = s.triangles[i].p;
+        for (int k = 0; k < 3; ++k) {
+            put(k, i, p[0][k]);
+            put(3 + k, i, p[1][k] - p[0][k]);
+            put(6 + k, i, p[2][k] - p[0][k]);
+        }
+    }
+    for (uint32_t i = 0; i < s.quadrics.size(); ++i) {
+        const auto& q = s.quadrics[i];
+        for (int k = 0; k < 10; ++k) put(k, i, q.c[k]);
+        for (int k = 0; k < 3; ++k) {
+            put(10 + k, i, q.boxMin[k]);
+            put(13 + k, i, q.boxMax[k]);
+        }
+    }
+    return soa;
+}
+
 int Micro(int argc, char** argv) {
     uint32_t nRays = 1u << 18, nPrims = 256;
     int runs = 5;
@@ -148,8 +185,16 @@ int Micro(int argc, char** argv) {
         else if (a == "--device") device = v;
         else throw std::invalid_argument("unknown option " + a);
     }
+    if (nPrims % 16 != 0) throw std::invalid_argument("--prims must be a multiple of 16");
     clrt::Context ctx(device);
-    std::printf("kind,method,rays,median_s,min_s,max_s,mrays_s,tests_per_s\n");
+    cl::Program micro(ctx.context(), bench::kMicroSource);
+    try {
+        micro.build("-cl-std=CL1.2");
+    } catch (const cl::Error&) {
+        throw std::runtime_error("micro kernels: " +
+                                 micro.getBuildInfo<CL_PROGRAM_BUILD_LOG>(ctx.device()));
+    }
+    std::printf("kind,method,rays,median_s,min_s,max_s,mrays_s,tests_per_s,hits\n");
     for (const char* kind : {"sphere", "quadric", "triangle"}) {
         // Primitives scattered in [-1,1]^3, small enough that most rays miss most of them; rays
         // from z = -4 towards random points of the box.
@@ -179,13 +224,24 @@ int Micro(int argc, char** argv) {
         }
         Bench b(ctx, s, "");
         std::vector<RcRay> rays(nRays);
+        std::vector<rc_float4> orig(nRays), dir(nRays);
         for (uint32_t i = 0; i < nRays; ++i) {
             bench::BenchRay r;
             r.origin = glm::vec3(0, 0, -4);
             r.direction = glm::normalize(glm::vec3(pos(rng), pos(rng), pos(rng)) - r.origin);
             r.tMax = INFINITY;
             rays[i] = ToRc(r, i, RC_RAY_EYE);
+            orig[i] = rays[i].origin;
+            dir[i] = rays[i].direction;
         }
+        auto report = [&](const std::string& method, std::vector<double> times, uint64_t hits) {
+            const double med = Median(times);
+            std::sort(times.begin(), times.end());
+            std::printf("%s,%s,%u,%.6g,%.6g,%.6g,%.4g,%.4g,%llu\n", kind, method.c_str(), nRays,
+                        med, times.front(), times.back(), nRays / med * 1e-6,
+                        double(nRays) * nPrims / med, (unsigned long long)hits);
+            std::fflush(stdout);
+        };
         const cl::Buffer raysBuf = Upload(ctx, rays);
         const cl::Buffer hits = Device(ctx, nRays * sizeof(RcHit));
         auto q = b.Make("brute");
@@ -195,12 +251,43 @@ int Micro(int argc, char** argv) {
             q->Intersect(raysBuf, nRays, nullptr, hits, {}, timer);
             if (r > 0) times.push_back(timer.Seconds().begin()->second);
         }
-        const double med = Median(times);
-        std::sort(times.begin(), times.end());
-        std::printf("%s,brute-scalar,%u,%.6g,%.6g,%.6g,%.4g,%.4g\n", kind, nRays, med,
-                    times.front(), times.back(), nRays / med * 1e-6,
-                    double(nRays) * nPrims / med);
-        std::fflush(stdout);
+        std::vector<RcHit> h(nRays);
+        ctx.queue().enqueueReadBuffer(hits, CL_TRUE, 0, nRays * sizeof(RcHit), h.data());
+        report("brute-scalar", times, std::count_if(h.begin(), h.end(), [](const RcHit& x) {
+                   return x.prim != RC_NO_HIT;
+               }));
+
+        // The same primitives in SoA for the variants of micro_kernels.h.
+        const std::vector<float> soa = MicroSoa(s, nPrims);
+        const cl::Buffer primsBuf = Upload(ctx, soa), origBuf = Upload(ctx, orig),
+                         dirBuf = Upload(ctx, dir);
+        const cl::Buffer outT = Device(ctx, nRays * sizeof(float)),
+                         outId = Device(ctx, nRays * sizeof(uint32_t));
+        for (const char* variant :
+             {"scalar_branch", "scalar_select", "vec16_branch", "vec16_select"}) {
+            cl::Kernel k(micro, (std::string(kind) + "_" + variant).c_str());
+            k.setArg(0, origBuf);
+            k.setArg(1, dirBuf);
+            k.setArg(2, nRays);
+            k.setArg(3, primsBuf);
+            k.setArg(4, nPrims);
+            k.setArg(5, outT);
+            k.setArg(6, outId);
+            times.clear();
+            for (int r = 0; r <= runs; ++r) {
+                const auto t0 = Clock::now();
+                ctx.queue().enqueueNDRangeKernel(
+                    k, cl::NullRange, cl::NDRange(clrt::RoundUp(nRays, 64)), cl::NDRange(64));
+                ctx.queue().finish();
+                if (r > 0) times.push_back(Since(t0));
+            }
+            std::vector<uint32_t> ids(nRays);
+            ctx.queue().enqueueReadBuffer(outId, CL_TRUE, 0, nRays * sizeof(uint32_t), ids.data());
+            std::string method = variant;
+            std::replace(method.begin(), method.end(), '_', '-');
+            report(method, times,
+                   std::count_if(ids.begin(), ids.end(), [](uint32_t x) { return x != ~0u; }));
+        }
     }
     return 0;
 }
@@ -218,6 +305,7 @@ int main(int argc, char** argv) try {
     uint32_t width = 1024, height = 768, seed = 1, bruteMaxPrims = 5000;
     int runs = 5, warmup = 1;
     std::vector<std::string> kinds(std::begin(bench::kKinds), std::end(bench::kKinds));
+    std::vector<std::pair<std::string, std::string>> classifyParams;
     std::vector<std::string> methods{"classify/scalar", "classify/vertex", "classify/fragment",
                                      "classify/auto", "bvh", "brute"};
     for (int i = 2; i + 1 < argc; i += 2) {
@@ -235,7 +323,10 @@ int main(int argc, char** argv) try {
         else if (a == "--cl-options") clOptions = v;
         else if (a == "--device") device = v;
         else if (a == "--seed") seed = uint32_t(std::stoul(v));
-        else throw std::invalid_argument("unknown option " + a);
+        else if (a == "--classify" && v.find('=') != std::string::npos)
+            classifyParams.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
+        else
+            throw std::invalid_argument("unknown option " + a + " " + v);
     }
 
     auto t0 = Clock::now();
@@ -244,6 +335,7 @@ int main(int argc, char** argv) try {
     clrt::Context ctx(device);
     t0 = Clock::now();
     Bench b(ctx, sc, clOptions);
+    for (const auto& [name, value] : classifyParams) classify::SetParam(b.params, name, value);
     const double buildS = Since(t0);
     auto& queue = ctx.queue();
 

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """CTest smoke test of scripts/bench (label `bench`): runs `scripts/bench --quick` into a
-temporary folder and checks that every CSV row is complete and every chart file exists.
+temporary folder and checks that every CSV row is complete, that the sweep, scene family,
+1-thread, FLIP, raster and micro-variant rows are there, and that every chart file exists.
 usage: check_bench.py SOURCE_DIR BUILD_DIR"""
 import csv
 import os
@@ -15,7 +16,14 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
     if p.returncode != 0:
         sys.exit("scripts/bench --quick failed with %d" % p.returncode)
     failures = []
-    for name in ("results.csv", "accuracy.csv", "micro.csv"):
+    with open(os.path.join(out, "machine.txt")) as f:
+        machine = f.read()
+    # raster.csv is left out only where raster_bench found no OpenGL context (said in machine.txt).
+    raster_skipped = "raster experiments: skipped" in machine
+    csvs = ["results.csv", "sweep.csv", "family.csv", "accuracy.csv", "micro.csv"]
+    if not raster_skipped:
+        csvs.append("raster.csv")
+    for name in csvs:
         path = os.path.join(out, name)
         if not os.path.exists(path):
             failures.append("missing " + name)
@@ -40,6 +48,51 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
     for k in ("eye", "shadow", "reflection", "refraction", "diffuse"):
         if k not in kinds:
             failures.append("results.csv has no rows for ray kind " + k)
+    if not {r["method"] for r in results if r["threads"] == "1"} >= {"classify/fragment", "bvh"}:
+        failures.append("results.csv has no 1-thread rows for classify/fragment and bvh")
+
+    def load(name):
+        with open(os.path.join(out, name), newline="") as f:
+            return list(csv.DictReader(f))
+
+    sweep = load("sweep.csv")
+    for param in ("min-candidates", "min-rays"):
+        for style in ("classify/vertex", "classify/fragment", "classify/auto"):
+            if len({r["value"] for r in sweep if r["param"] == param and r["method"] == style}) < 2:
+                failures.append("sweep.csv: fewer than two %s values for %s" % (param, style))
+    family = load("family.csv")
+    for m in ("classify/auto", "bvh", "brute"):
+        if len({r["triangles"] for r in family if r["method"] == m}) < 2:
+            failures.append("family.csv: fewer than two scene sizes for " + m)
+    # FLIP is a number where flip-evaluator is installed and "missing" otherwise, never empty.
+    flip_installed = "image metric: HDR-FLIP" in machine
+    def is_number(v):
+        try:
+            return float(v) >= 0
+        except ValueError:
+            return False
+
+    for r in load("accuracy.csv"):
+        v = r["flip"]
+        if (is_number(v) if flip_installed else v == "missing") is False:
+            failures.append("accuracy.csv: flip of %s is %r" % (r["setting"], v))
+    if not raster_skipped:
+        experiments = {r["experiment"] for r in load("raster.csv")}
+        for e in ("depth", "hulls", "rotation", "layers"):
+            if e not in experiments:
+                failures.append("raster.csv has no %s rows" % e)
+    micro_rows = load("micro.csv")
+    micro = {(r["kind"], r["method"]) for r in micro_rows}
+    # The variants are the same formulas: on the same rays they find the same number of hits.
+    for k in ("sphere", "quadric", "triangle"):
+        counts = {r["hits"] for r in micro_rows if r["kind"] == k}
+        if len(counts) > 1:
+            failures.append("micro.csv: %s variants disagree on the hits: %s" % (k, sorted(counts)))
+    for k in ("sphere", "quadric", "triangle"):
+        for m in ("brute-scalar", "scalar-branch", "scalar-select", "vec16-branch",
+                  "vec16-select"):
+            if (k, m) not in micro:
+                failures.append("micro.csv has no row for %s %s" % (k, m))
     # Every rayclass query finds the same hits on the same rays (Embree's watertight triangle
     # test may decide a grazing ray differently from Moeller-Trumbore, so it is not compared).
     hits = {}
@@ -50,8 +103,8 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
     for key, values in hits.items():
         if len(values) != 1:
             failures.append("methods disagree on the hits of %s: %s" % (key, sorted(values)))
-    for name in ("styles.png", "accel.png", "speed_accuracy.png", "micro.png", "summary.md",
-                 "machine.txt"):
+    for name in ("styles.png", "sweep.png", "accel.png", "scaling.png", "speed_accuracy.png",
+                 "micro.png", "raster.png", "summary.md", "machine.txt"):
         path = os.path.join(out, name)
         if not os.path.exists(path) or os.path.getsize(path) == 0:
             failures.append("missing or empty " + name)
