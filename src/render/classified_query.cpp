@@ -133,7 +133,12 @@ class ClassifiedQuery final : public RayQuery {
           shadeIds_(program, "rc_shade_ids"),
           shadeLights_(program, "rc_shade_lights") {
         const classify::Hierarchy hierarchy(scene, params);
-        const unsigned threads = std::min(std::thread::hardware_concurrency(), kMaxThreads);
+        // A CPU device computes on the host's cores: classify on as many as it uses (PoCL's
+        // POCL_MAX_PTHREAD_COUNT then bounds the whole render, host work included).
+        unsigned threads = std::min(std::thread::hardware_concurrency(), kMaxThreads);
+        if (ctx.info().type == "cpu" && ctx.info().computeUnits > 0) {
+            threads = std::min(threads, ctx.info().computeUnits);
+        }
         rays_ = std::make_unique<ParallelClassifier>(hierarchy, style, threads);
         shadows_ = std::make_unique<ParallelClassifier>(hierarchy, style, threads);
     }
