@@ -3,10 +3,8 @@
 #include <chrono>
 #include <cstddef>
 #include <cstring>
-#include <future>
 #include <mutex>
 #include <numeric>
-#include <thread>
 
 #include "rayclass/classify/hierarchy.h"
 #include "rayclass/core/error.h"
@@ -32,97 +30,14 @@ struct ClassifiedBatch final : PreparedBatch {
 // at 0.5 against 5.10 / 3.13 at 0.125, always-fragment 5.56 / 3.43.
 constexpr float kCoherentDirExtent = 0.5f;
 
-// Rays of a batch classified on several threads: consecutive parts of the batch (bands of the
-// image, for rays in pixel order) each go through a hierarchy of their own, copies sharing the
-// presorted lists, and the parts' leaves are concatenated. The answer does not depend on the
-// split: every leaf's list holds every primitive its rays can hit.
-class ParallelClassifier {
-  public:
-    ParallelClassifier(const classify::Hierarchy& hierarchy, KernelStyle style, unsigned parts)
-        : parts_(std::max(1u, parts), hierarchy), scratch_(parts_.size() - 1), style_(style) {}
-
-    void Classify(classify::RayView rays, ClassifiedBatch& out) {
-        const size_t n = rays.size();
-        const size_t nParts = std::clamp<size_t>(n / kMinPartRays, 1, parts_.size());
-        std::vector<std::future<void>> others;
-        for (size_t p = 1; p < nParts; ++p) {
-            others.push_back(std::async(
-                std::launch::async, [&, p] { ClassifyPart(p, nParts, rays, scratch_[p - 1]); }));
-        }
-        ClassifyPart(0, nParts, rays, out.batch);
-        Styles(parts_[0], out.batch, 0, out);
-        for (size_t p = 1; p < nParts; ++p) {
-            others[p - 1].get();
-            Append(scratch_[p - 1], uint32_t(PartBegin(p, nParts, n)), parts_[p], out);
-        }
-        out.batch.nRays = uint32_t(n);
-        out.rayLeaf.resize(out.batch.rayIndex.size());
-        for (uint32_t l = 0; l < out.batch.leaves.size(); ++l) {
-            const RcLeaf& leaf = out.batch.leaves[l];
-            std::fill_n(out.rayLeaf.begin() + leaf.rayBegin, leaf.rayCount, l);
-        }
-    }
-
-  private:
-    // Fewer rays per part cost more in duplicated subdivision than the thread saves.
-    static constexpr size_t kMinPartRays = 16384;
-
-    static size_t PartBegin(size_t p, size_t nParts, size_t n) { return n * p / nParts; }
-
-    void ClassifyPart(size_t p, size_t nParts, classify::RayView rays, classify::LeafBatch& batch) {
-        const size_t begin = PartBegin(p, nParts, rays.size());
-        parts_[p].Classify(rays.Sub(begin, PartBegin(p + 1, nParts, rays.size()) - begin), batch);
-    }
-
-    // Sorts leaves [first, end) of out.batch by kernel style.
-    void Styles(const classify::Hierarchy& hierarchy, const classify::LeafBatch& batch,
-                uint32_t first, ClassifiedBatch& out) const {
-        if (first == 0) {
-            out.vertexLeaves.clear();
-            out.fragmentLeaves.clear();
-        }
-        const auto& nodes = hierarchy.Nodes();
-        for (uint32_t l = 0; l < batch.leaves.size(); ++l) {
-            const RcLeaf& leaf = batch.leaves[l];
-            bool fragment = style_ == KernelStyle::kFragment;
-            if (style_ == KernelStyle::kAuto) {
-                const auto& box = nodes[leaf.node].box;
-                const float dirExtent = std::max(box.hi[3] - box.lo[3], box.hi[4] - box.lo[4]);
-                fragment = leaf.rayCount >= 16 && dirExtent <= kCoherentDirExtent;
-            }
-            (fragment ? out.fragmentLeaves : out.vertexLeaves).push_back(first + l);
-        }
-    }
-
-    // Appends a part's leaves, whose ray indices start at rayBase in the batch.
-    void Append(const classify::LeafBatch& part, uint32_t rayBase,
-                const classify::Hierarchy& hierarchy, ClassifiedBatch& out) const {
-        classify::LeafBatch& b = out.batch;
-        const uint32_t firstLeaf = uint32_t(b.leaves.size());
-        const uint32_t rayOffset = uint32_t(b.rayIndex.size());
-        const uint32_t candOffset = uint32_t(b.candidates.size());
-        Styles(hierarchy, part, firstLeaf, out);
-        for (RcLeaf leaf : part.leaves) {
-            leaf.rayBegin += rayOffset;
-            leaf.candBegin += candOffset;
-            b.leaves.push_back(leaf);
-        }
-        for (rc_uint i : part.rayIndex) b.rayIndex.push_back(rayBase + i);
-        b.candidates.insert(b.candidates.end(), part.candidates.begin(), part.candidates.end());
-        for (rc_uint i : part.missed) b.missed.push_back(rayBase + i);
-    }
-
-    std::vector<classify::Hierarchy> parts_;
-    std::vector<classify::LeafBatch> scratch_;  // leaves of parts 1, 2, ...
-    KernelStyle style_;
-};
-
 class ClassifiedQuery final : public RayQuery {
   public:
     ClassifiedQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& buffers,
                     const scene::Scene& scene, const classify::Params& params, KernelStyle style)
         : ctx_(ctx),
           scene_(buffers),
+          hierarchy_(scene, params),
+          shadowHierarchy_(hierarchy_),  // a copy: it shares the presorted face lists
           style_(style),
           queryScalar_(program, "rc_query_scalar"),
           occludedScalar_(program, "rc_occluded_scalar"),
@@ -131,17 +46,7 @@ class ClassifiedQuery final : public RayQuery {
           occludedVertex_(program, "rc_occluded_vertex"),
           queryFragment_(program, "rc_query_fragment"),
           shadeIds_(program, "rc_shade_ids"),
-          shadeLights_(program, "rc_shade_lights") {
-        const classify::Hierarchy hierarchy(scene, params);
-        // A CPU device computes on the host's cores: classify on as many as it uses (PoCL's
-        // POCL_MAX_PTHREAD_COUNT then bounds the whole render, host work included).
-        unsigned threads = std::min(std::thread::hardware_concurrency(), kMaxThreads);
-        if (ctx.info().type == "cpu" && ctx.info().computeUnits > 0) {
-            threads = std::min(threads, ctx.info().computeUnits);
-        }
-        rays_ = std::make_unique<ParallelClassifier>(hierarchy, style, threads);
-        shadows_ = std::make_unique<ParallelClassifier>(hierarchy, style, threads);
-    }
+          shadeLights_(program, "rc_shade_lights") {}
 
     std::string Name() const override { return std::string("classify/") + KernelStyleName(style_); }
     double HostSeconds() const override {
@@ -167,13 +72,13 @@ class ClassifiedQuery final : public RayQuery {
             void* mapped = clrt::Check("clEnqueueMapBuffer", [&] {
                 return queue.enqueueMapBuffer(rays, CL_TRUE, CL_MAP_READ, 0, n * sizeof(RcRay));
             });
-            Classify(*rays_, classify::RayView(mapped, n, sizeof(RcRay)), *out);
+            Classify(hierarchy_, classify::RayView(mapped, n, sizeof(RcRay)), *out);
             clrt::Check("clEnqueueUnmapMemObject", [&] {
                 queue.enqueueUnmapMemObject(rays, mapped);
                 queue.finish();
             });
         } else {
-            Classify(*rays_, classify::RayView(), *out);
+            Classify(hierarchy_, classify::RayView(), *out);
         }
         return out;
     }
@@ -202,16 +107,31 @@ class ClassifiedQuery final : public RayQuery {
                     [&] { ctx_.queue().enqueueFillBuffer(blocked, uint8_t(0), 0, n); });
         // Every slot: empty ones have no direction and miss at once.
         static_assert(sizeof(classify::Ray) == offsetof(RcShadowRay, contribution));
-        Classify(*shadows_, classify::RayView(hostRays.data(), n, sizeof(RcShadowRay)),
+        Classify(shadowHierarchy_, classify::RayView(hostRays.data(), n, sizeof(RcShadowRay)),
                  shadowBatch_);
         return Query(shadowBatch_, shadowRays, blocked, nullptr, timer).tests;
     }
 
   private:
     // Classifies `rays` into out's leaves and sorts the leaves by kernel style.
-    void Classify(ParallelClassifier& classifier, classify::RayView rays, ClassifiedBatch& out) {
+    void Classify(classify::Hierarchy& hierarchy, classify::RayView rays, ClassifiedBatch& out) {
         const auto t0 = Clock::now();
-        classifier.Classify(rays, out);
+        hierarchy.Classify(rays, out.batch);
+        out.rayLeaf.resize(out.batch.rayIndex.size());
+        out.vertexLeaves.clear();
+        out.fragmentLeaves.clear();
+        const auto& nodes = hierarchy.Nodes();
+        for (uint32_t l = 0; l < out.batch.leaves.size(); ++l) {
+            const RcLeaf& leaf = out.batch.leaves[l];
+            std::fill_n(out.rayLeaf.begin() + leaf.rayBegin, leaf.rayCount, l);
+            bool fragment = style_ == KernelStyle::kFragment;
+            if (style_ == KernelStyle::kAuto) {
+                const auto& box = nodes[leaf.node].box;
+                const float dirExtent = std::max(box.hi[3] - box.lo[3], box.hi[4] - box.lo[4]);
+                fragment = leaf.rayCount >= 16 && dirExtent <= kCoherentDirExtent;
+            }
+            (fragment ? out.fragmentLeaves : out.vertexLeaves).push_back(l);
+        }
         AddHostSeconds(Seconds(t0));
     }
 
@@ -372,11 +292,12 @@ class ClassifiedQuery final : public RayQuery {
 
     clrt::Context& ctx_;
     const SceneBuffers& scene_;
-    // Eye, reflection and refraction rays of every generation share one set of hierarchies
-    // (classified on the renderer's worker thread); shadow rays have their own (classified on the
-    // calling thread).
-    static constexpr unsigned kMaxThreads = 8;
-    std::unique_ptr<ParallelClassifier> rays_, shadows_;
+    // Eye, reflection and refraction rays of every generation share one hierarchy (classified on
+    // the worker thread); shadow rays have their own (classified on the calling thread). One
+    // thread each: a hierarchy per thread repeats the filtering of the long top-level lists,
+    // which cost more than the thread saved (Conference eye rays 8.5 -> 2.4-5.4 Mrays/s).
+    classify::Hierarchy hierarchy_;
+    classify::Hierarchy shadowHierarchy_;
     KernelStyle style_;
     cl::Kernel queryScalar_, occludedScalar_, gather_, queryVertexShade_, occludedVertex_,
         queryFragment_, shadeIds_, shadeLights_;
