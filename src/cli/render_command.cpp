@@ -77,6 +77,7 @@ struct RenderArgs {
     std::string eyeRays;  // empty: raster when a GL context can be made
     int depthBits = 32;
     double depthScale = 0;  // 0: automatic
+    std::string rasterOption;  // the first option given that only the raster pass reads
     render::RenderOptions options;
 };
 
@@ -178,15 +179,18 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
                 throw UsageError("--eye-rays expects raster or kernel, not '" + r.eyeRays + "'");
             }
         } else if (a == "--hull") {
+            if (r.rasterOption.empty()) r.rasterOption = a;
             r.options.hull = value();
             raster::ParseHull(r.options.hull);  // throws UsageError on an unknown name
         } else if (a == "--depth-bits") {
+            if (r.rasterOption.empty()) r.rasterOption = a;
             const std::string& bits = value();
             if (bits != "16" && bits != "24" && bits != "32") {
                 throw UsageError("--depth-bits must be 16, 24 or 32, not '" + bits + "'");
             }
             r.depthBits = std::stoi(bits);
         } else if (a == "--depth-scale") {
+            if (r.rasterOption.empty()) r.rasterOption = a;
             const std::string& scale = value();
             r.depthScale = scale == "auto" ? 0.0 : ParseNumber<double>(a, scale, 1e-30, 1e30);
         } else if (a == "-q" || a == "--quiet") {
@@ -206,6 +210,11 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
         throw UsageError(r.output + ": unsupported output format '" + ext + "' (use .exr or .png)");
     }
     if (!r.aovs.empty() && ext != ".exr") throw UsageError("--aov needs an .exr output");
+    // Silently ignoring them would pass off a kernel or reference image as a raster experiment.
+    if (!r.rasterOption.empty() && (r.reference || r.eyeRays == "kernel")) {
+        throw UsageError(r.rasterOption + " sets up the raster eye-ray pass, which " +
+                         (r.reference ? "--reference" : "--eye-rays kernel") + " does not run");
+    }
     if (!r.statsFile.empty() && Extension(r.statsFile) != ".json") {
         throw UsageError("--stats expects a .json file, not '" + r.statsFile + "'");
     }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -115,6 +116,27 @@ TEST(RasterCli, BadDepthOptionsAreUsageErrors) {
         const CliRun r = RunRayclass("", base + args);
         EXPECT_EQ(r.status, 2) << args;
         EXPECT_EQ(r.err, message) << args;
+    }
+}
+
+TEST(RasterCli, RasterOptionsWithoutTheRasterPassAreUsageErrors) {
+    const std::string base = "render '" + Scene() + "' -o '" + Out("i.png") + "' ";
+    const std::pair<const char*, const char*> cases[] = {
+        {"--eye-rays kernel --hull box",
+         "rayclass render: --hull sets up the raster eye-ray pass, which --eye-rays kernel does "
+         "not run\n"},
+        {"--depth-bits 16 --reference --hull box",
+         "rayclass render: --depth-bits sets up the raster eye-ray pass, which --reference does "
+         "not run\n"},
+        {"--depth-scale 0.5 --eye-rays kernel",
+         "rayclass render: --depth-scale sets up the raster eye-ray pass, which --eye-rays "
+         "kernel does not run\n"},
+    };
+    for (const auto& [args, message] : cases) {
+        const CliRun r = RunRayclass("", base + args);
+        EXPECT_EQ(r.status, 2) << args;
+        EXPECT_EQ(r.err, message) << args;
+        EXPECT_FALSE(std::filesystem::exists(Out("i.png"))) << args;
     }
 }
 
