@@ -147,6 +147,23 @@ RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcSu
     shadowRays[slot] = sr;
 }
 
+/* Writes a secondary ray of `parent` into slot `slot` (direction dir, not yet unit) and flags it. */
+RC_SHADE_INLINE void rc_spawn(__global RcRay* secondary, __global uchar* spawned, uint slot,
+                              const RcRay* parent, float3 origin, float3 dir, float3 weight,
+                              uint depth, uint kind) {
+    RcRay out;
+    out.origin = (float4)(origin, 0.0f);
+    uint packed;
+    out.direction = (float4)(rc_encode_direction(normalize(dir), &packed), INFINITY);
+    out.weight = (float4)(weight, 1.0f);
+    out.pixel = parent->pixel;
+    out.depth = depth;
+    out.kind = kind;
+    out.polar16 = packed;
+    secondary[slot] = out;
+    spawned[slot] = 1;
+}
+
 /* Shades the hit of ray i: radiance, normal, the reflection and refraction rays and, when
  * withLights, every light's shadow slot (else a per-(ray, light) pass writes them). */
 RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, RcHit hit, int withLights,
@@ -195,33 +212,15 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, RcHit hit, int withL
         float3 rdir = d + 2.0f * cosi * s.ns;
         /* A shading normal can tilt the mirror direction below the surface: fall back to ng. */
         if (dot(rdir, s.ng) <= 0.0f) rdir = d - 2.0f * dot(d, s.ng) * s.ng;
-        RcRay out;
-        out.origin = (float4)(rc_offset_ray_origin(s.p, s.ng), 0.0f);
-        uint packed;
-        out.direction = (float4)(rc_encode_direction(normalize(rdir), &packed), INFINITY);
-        out.weight = (float4)(wr, 1.0f);
-        out.pixel = ray->pixel;
-        out.depth = depth;
-        out.kind = RC_RAY_REFLECTION;
-        out.polar16 = packed;
-        secondary[2 * i] = out;
-        spawned[2 * i] = 1;
+        rc_spawn(secondary, spawned, 2 * i, ray, rc_offset_ray_origin(s.p, s.ng), rdir, wr,
+                 depth, RC_RAY_REFLECTION);
     }
     const float3 wt = weight * ktEff;
     if (!tir && rc_worth_spawning(wt, depth, params)) {
         const float3 tdir = eta * d + (eta * cosi - sqrt(1.0f - sin2t)) * s.ns;
         if (dot(tdir, s.ng) < 0.0f) {
-            RcRay out;
-            out.origin = (float4)(rc_offset_ray_origin(s.p, -s.ng), 0.0f);
-            uint packed;
-            out.direction = (float4)(rc_encode_direction(normalize(tdir), &packed), INFINITY);
-            out.weight = (float4)(wt, 1.0f);
-            out.pixel = ray->pixel;
-            out.depth = depth;
-            out.kind = RC_RAY_REFRACTION;
-            out.polar16 = packed;
-            secondary[2 * i + 1] = out;
-            spawned[2 * i + 1] = 1;
+            rc_spawn(secondary, spawned, 2 * i + 1, ray, rc_offset_ray_origin(s.p, -s.ng), tdir,
+                     wt, depth, RC_RAY_REFRACTION);
         }
     }
 }
