@@ -67,20 +67,6 @@ std::vector<BenchRay> EyeRays(const scene::Camera& camera) {
     return rays;
 }
 
-namespace {
-
-glm::vec3 GeometricNormal(const scene::Scene& scene, uint32_t prim, const glm::vec3& p) {
-    if (prim < scene.SphereBase()) {
-        const auto& v = scene.triangles[prim].p;
-        return glm::cross(v[1] - v[0], v[2] - v[0]);
-    }
-    if (prim < scene.QuadricBase()) return p - scene.spheres[prim - scene.SphereBase()].center;
-    const scene::Quadric& q = scene.quadrics[prim - scene.QuadricBase()];
-    return geometry::QuadricGradient(q.c, p);
-}
-
-}  // namespace
-
 RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
                     const std::vector<BenchHit>& hits, const glm::vec3& light, uint32_t seed) {
     RaySets out;
@@ -93,7 +79,7 @@ RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
         if (hits[i].prim == 0xFFFFFFFFu) continue;
         const glm::vec3 d = eye[i].direction;
         const glm::vec3 p = eye[i].origin + hits[i].t * d;
-        glm::vec3 n = GeometricNormal(scene, hits[i].prim, p);
+        glm::vec3 n = geometry::GeometricNormal(scene, hits[i].prim, p);
         if (!(glm::length(n) > 0.0f)) continue;
         n = glm::normalize(n);
         if (glm::dot(n, d) > 0.0f) n = -n;  // facing the eye

@@ -20,16 +20,6 @@ double Seconds(Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double>(b - a).count();
 }
 
-glm::vec3 GeometricNormal(const scene::Scene& scene, uint32_t prim, const glm::vec3& p) {
-    if (prim < scene.SphereBase()) {
-        const auto& v = scene.triangles[prim].p;
-        return glm::cross(v[1] - v[0], v[2] - v[0]);
-    }
-    if (prim < scene.QuadricBase()) return p - scene.spheres[prim - scene.SphereBase()].center;
-    const scene::Quadric& q = scene.quadrics[prim - scene.QuadricBase()];
-    return geometry::QuadricGradient(q.c, p);
-}
-
 // CPU time of the calling thread: unlike the wall clock it does not count time the thread spent
 // preempted, which on these shared 2-core machines is most of the noise.
 double ThreadCpuSeconds() {
@@ -78,7 +68,7 @@ std::vector<Ray> MirrorRays(const scene::Scene& scene, std::span<const Ray> rays
         if (!hits[i].Valid()) continue;
         const Ray& r = rays[i];
         const glm::vec3 p = r.origin + hits[i].t * r.direction;
-        glm::vec3 n = GeometricNormal(scene, hits[i].prim, p);
+        glm::vec3 n = geometry::GeometricNormal(scene, hits[i].prim, p);
         if (!(glm::length(n) > 0.0f)) continue;
         n = glm::normalize(n);
         if (glm::dot(n, r.direction) > 0.0f) n = -n;

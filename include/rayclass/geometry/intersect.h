@@ -203,6 +203,18 @@ std::array<T, 10> QuadricCoefficients(const scene::Quadric& q) {
     return c;
 }
 
+// The (unnormalised) geometric normal of primitive `prim` at its surface point p: the triangle's
+// edge cross product, the sphere's radius vector, the quadric's gradient.
+inline glm::vec3 GeometricNormal(const scene::Scene& scene, uint32_t prim, const glm::vec3& p) {
+    if (prim < scene.SphereBase()) {
+        const auto& v = scene.triangles[prim].p;
+        return glm::cross(v[1] - v[0], v[2] - v[0]);
+    }
+    if (prim < scene.QuadricBase()) return p - scene.spheres[prim - scene.SphereBase()].center;
+    const scene::Quadric& q = scene.quadrics[prim - scene.QuadricBase()];
+    return QuadricGradient(q.c, p);
+}
+
 // Tests primitive `id` of `scene` and updates `best` when the hit is better (nearer, or equally
 // near with a lower id). Returns whether it updated.
 template <typename T>
