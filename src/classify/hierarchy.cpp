@@ -281,36 +281,58 @@ Bounds6 EmptyBounds() {
 }
 
 #if defined(__AVX512F__)
+// Gather offsets (in floats) of 16 consecutive rays of `rays` from the first.
+__m512i RayOffsets16(const RayView& rays) {
+    return _mm512_mullo_epi32(
+        _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+        _mm512_set1_epi32(int(rays.Stride() / 4)));
+}
+
+// The lanes of the 16 rays from i on that exist among n.
+__mmask16 LiveLanes16(size_t n, size_t i) {
+    const size_t rest = n - i;
+    return rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
+}
+
+// DominantAxis of 16 directions (ties to the lower axis): a mask per axis, the direction's
+// absolute components, |d_a| and whether d_a < 0.
+struct Axis16 {
+    __mmask16 isX, isY, isZ, neg;
+    __m512 ax, ay, az, da;
+};
+
+Axis16 DominantAxis16(__m512 dx, __m512 dy, __m512 dz) {
+    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
+    Axis16 a;
+    a.ax = _mm512_and_ps(dx, absMask);
+    a.ay = _mm512_and_ps(dy, absMask);
+    a.az = _mm512_and_ps(dz, absMask);
+    a.isX = _mm512_cmp_ps_mask(a.ax, a.ay, _CMP_GE_OQ) & _mm512_cmp_ps_mask(a.ax, a.az, _CMP_GE_OQ);
+    a.isY = __mmask16(~a.isX & _mm512_cmp_ps_mask(a.ay, a.az, _CMP_GE_OQ));
+    a.isZ = __mmask16(~a.isX & ~a.isY);
+    a.da = _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, a.az, a.ay), a.ax);
+    const __m512 sd = _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, dz, dy), dx);
+    a.neg = _mm512_cmp_ps_mask(sd, _mm512_setzero_ps(), _CMP_LT_OQ);
+    return a;
+}
+
 // Counts the rays of each face (kFaceCount: no usable direction), 16 at a time.
 void CountFaces(RayView rays, uint32_t* count) {
-    const __m512i idx = _mm512_mullo_epi32(_mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10,
-                                                             11, 12, 13, 14, 15),
-                                           _mm512_set1_epi32(int(rays.Stride() / 4)));
-    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
+    const __m512i idx = RayOffsets16(rays);
     const __m512 fmax = _mm512_set1_ps(kFloatMax);
     const __m512 zero = _mm512_setzero_ps();
     const size_t n = rays.size();
     for (size_t i = 0; i < n; i += 16) {
-        const size_t rest = n - i;
-        const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
+        const __mmask16 live = LiveLanes16(n, i);
         const float* at = rays.Floats(i);
         const __m512 dx = _mm512_mask_i32gather_ps(zero, live, idx, at + 4, 4);
         const __m512 dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
         const __m512 dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
-        const __m512 ax = _mm512_and_ps(dx, absMask);
-        const __m512 ay = _mm512_and_ps(dy, absMask);
-        const __m512 az = _mm512_and_ps(dz, absMask);
+        const auto [isX, isY, isZ, neg, ax, ay, az, da] = DominantAxis16(dx, dy, dz);
         const __mmask16 finite = _mm512_cmp_ps_mask(ax, fmax, _CMP_LE_OQ) &
                                  _mm512_cmp_ps_mask(ay, fmax, _CMP_LE_OQ) &
                                  _mm512_cmp_ps_mask(az, fmax, _CMP_LE_OQ);
-        const __mmask16 isX = _mm512_cmp_ps_mask(ax, ay, _CMP_GE_OQ) &
-                              _mm512_cmp_ps_mask(ax, az, _CMP_GE_OQ);
-        const __mmask16 isY = __mmask16(~isX & _mm512_cmp_ps_mask(ay, az, _CMP_GE_OQ));
-        const __mmask16 isZ = __mmask16(~isX & ~isY);
-        const __m512 da = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, az, ay), ax);
-        const __m512 sd = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dz, dy), dx);
         const __mmask16 ok = __mmask16(live & finite & _mm512_cmp_ps_mask(da, zero, _CMP_GT_OQ));
-        const __mmask16 neg = _mm512_cmp_ps_mask(sd, zero, _CMP_LT_OQ);
         count[0] += uint32_t(std::popcount(unsigned(ok & isX & ~neg)));
         count[1] += uint32_t(std::popcount(unsigned(ok & isX & neg)));
         count[2] += uint32_t(std::popcount(unsigned(ok & isY & ~neg)));
@@ -351,9 +373,7 @@ void Hierarchy::Convert(RayView rays, uint32_t firstId, uint32_t* next,
 #if defined(__AVX512F__)
     // The fast path of ToRay5 for 16 rays at a time, with the same float operations so the points
     // are bit-identical; lanes that need the slow path take the scalar one.
-    const __m512i idx = _mm512_mullo_epi32(_mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10,
-                                                             11, 12, 13, 14, 15),
-                                           _mm512_set1_epi32(int(rays.Stride() / 4)));
+    const __m512i idx = RayOffsets16(rays);
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
     const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
@@ -372,8 +392,7 @@ void Hierarchy::Convert(RayView rays, uint32_t firstId, uint32_t* next,
         }
     }
     for (; i < n; i += 16) {
-        const size_t rest = n - i;
-        const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
+        const __mmask16 live = LiveLanes16(n, i);
         const float* at = rays.Floats(i);
         const __m512 ox = _mm512_mask_i32gather_ps(zero, live, idx, at + 0, 4);
         const __m512 oy = _mm512_mask_i32gather_ps(zero, live, idx, at + 1, 4);
@@ -383,16 +402,7 @@ void Hierarchy::Convert(RayView rays, uint32_t firstId, uint32_t* next,
         const __m512 dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
         const __m512 dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
         const __m512 tmax = _mm512_mask_i32gather_ps(zero, live, idx, at + 7, 4);
-        const __m512 ax = _mm512_and_ps(dx, absMask);
-        const __m512 ay = _mm512_and_ps(dy, absMask);
-        const __m512 az = _mm512_and_ps(dz, absMask);
-        const __mmask16 isX = _mm512_cmp_ps_mask(ax, ay, _CMP_GE_OQ) &
-                              _mm512_cmp_ps_mask(ax, az, _CMP_GE_OQ);
-        const __mmask16 isY = __mmask16(~isX & _mm512_cmp_ps_mask(ay, az, _CMP_GE_OQ));
-        const __mmask16 isZ = __mmask16(~isX & ~isY);
-        const __m512 da = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, az, ay), ax);
-        const __m512 sd = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dz, dy), dx);
-        const __mmask16 neg = _mm512_cmp_ps_mask(sd, zero, _CMP_LT_OQ);
+        const auto [isX, isY, isZ, neg, ax, ay, az, da] = DominantAxis16(dx, dy, dz);
         // start = tMin == 0 ? origin : origin + tMin d
         const __mmask16 t0 = _mm512_cmp_ps_mask(tmin, zero, _CMP_EQ_OQ);
         const __m512 sx = _mm512_mask_blend_ps(t0, _mm512_add_ps(ox, _mm512_mul_ps(tmin, dx)), ox);
