@@ -1,9 +1,14 @@
 #include "rayclass/classify/hierarchy.h"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <cstdio>
 #include <future>
+#include <mutex>
 #include <numeric>
 #include <thread>
 
@@ -15,19 +20,14 @@
 
 namespace rayclass::classify {
 
-// A node's tight bounds: X, Y, Z, u, v and the end X of its rays (index 5).
-struct Bounds6 {
-    float lo[kDims + 1];
-    float hi[kDims + 1];
-    Box5 ToBox5() const {
-        Box5 b;
-        for (int k = 0; k < kDims; ++k) {
-            b.lo[k] = lo[k];
-            b.hi[k] = hi[k];
-        }
-        return b;
+Box5 Bounds6::ToBox5() const {
+    Box5 b;
+    for (int k = 0; k < kDims; ++k) {
+        b.lo[k] = lo[k];
+        b.hi[k] = hi[k];
     }
-};
+    return b;
+}
 
 namespace {
 
@@ -36,6 +36,21 @@ constexpr float kFloatMax = 3.402823466e38f;
 constexpr int kCoords = kDims + 1;
 // Scenes smaller than this sort their face lists on one thread: starting threads costs more.
 constexpr uint32_t kParallelSortMin = 16384;
+// Generations with fewer rays are subdivided on one thread, for the same reason.
+constexpr uint32_t kParallelRaysMin = 32768;
+// Nodes with more than max(kTaskRaysMin, rays / kTasks) rays hand their later children to the
+// task queue: enough tasks to balance the threads, few enough that queueing costs nothing.
+constexpr uint32_t kTaskRaysMin = 4096;
+constexpr uint32_t kTasks = 64;
+
+// Runs f(t) for t in [0, n), f(0) on the calling thread.
+template <typename F>
+void OnThreads(int n, const F& f) {
+    std::vector<std::future<void>> others;
+    for (int t = 1; t < n; ++t) others.push_back(std::async(std::launch::async, [&f, t] { f(t); }));
+    f(0);
+    for (auto& o : others) o.get();
+}
 
 void MinMax(const float* x, size_t n, float& lo, float& hi) {
 #if defined(__AVX512F__)
@@ -189,7 +204,10 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
     auto lists = std::make_shared<std::array<FaceList, kFaceCount>>();
     for (int face = 0; face < kFaceCount; ++face) {
         const Box5 root = BoxInFace(face, sceneBox_);
-        NewNode(root, face, 0, false);
+        Node n;
+        n.box = root;
+        n.face = uint8_t(face);
+        nodes_.push_back(n);
         for (int k = 0; k < kDims; ++k) rootExtent_[face][k] = std::max(root.hi[k] - root.lo[k], 0.0f);
     }
     // The faces' lists are independent: sorted on every core (Conference's 331k primitives take
@@ -228,7 +246,6 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
     for (int face = 0; face < kFaceCount; face += threads) buildFace(face);
     for (auto& w : workers) w.get();
     faceLists_ = std::move(lists);
-    levelLists_.resize(size_t(params_.maxDepth) + 2);
 }
 
 void Hierarchy::Reset() {
@@ -238,14 +255,20 @@ void Hierarchy::Reset() {
     }
 }
 
-uint32_t Hierarchy::NewNode(const Box5& box, int face, int depth, bool isRemainder) {
+uint32_t Hierarchy::NewNode(Worker& w, const Box5& box, int face, int depth, bool isRemainder) {
     Node n;
     n.box = box;
     n.face = uint8_t(face);
     n.depth = uint8_t(depth);
     n.isRemainder = isRemainder ? 1 : 0;
-    nodes_.push_back(n);
-    return uint32_t(nodes_.size() - 1);
+    w.part->nodes.push_back(n);
+    return kLocal | uint32_t(w.part->nodes.size() - 1);
+}
+
+int Hierarchy::Threads(uint32_t nRays) const {
+    if (params_.threads > 0) return int(params_.threads);
+    if (nRays < kParallelRaysMin) return 1;
+    return int(std::clamp(std::thread::hardware_concurrency(), 1u, 64u));
 }
 
 void Hierarchy::Insert(RayView rays) {
@@ -350,8 +373,8 @@ void CountFaces(RayView rays, uint32_t* count) {
 
 }  // namespace
 
-void Hierarchy::Convert(RayView rays, uint32_t firstId, uint32_t* next,
-                        Bounds6* faceBounds, std::vector<rc_uint>& missed) {
+void Hierarchy::Convert(RayView rays, uint32_t firstId, uint32_t* next, Bounds6* faceBounds,
+                        std::vector<rc_uint>& missed) {
     float* c[kCoords];
     for (int k = 0; k < kCoords; ++k) c[k] = coord_[0][k].data();
     uint32_t* ids = id_[0].data();
@@ -482,6 +505,92 @@ void Hierarchy::Convert(RayView rays, uint32_t firstId, uint32_t* next,
     }
 }
 
+void Hierarchy::ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out) {
+    for (int f = 0; f < kFaceCount; ++f) faceBounds[f] = EmptyBounds();
+    if (sceneBox_.Empty()) {
+        for (uint32_t i = 0; i < nInserted_; ++i) out.missed.push_back(i);
+        std::fill(begin, begin + kFaceCount + 1, 0u);
+        return;
+    }
+    // Every inserted array in `threads` pieces. Pass 1 counts each piece's faces; pass 2 maps
+    // every ray straight into its place in its face's range of the structure-of-arrays buffer
+    // (no intermediate array), faces in order, pieces in order within a face.
+    const int threads = Threads(nInserted_);
+    struct Piece {
+        RayView rays;
+        uint32_t firstId;
+        uint32_t count[kFaceCount + 1] = {};
+        uint32_t start[kFaceCount], next[kFaceCount];
+        Bounds6 bounds[kFaceCount];
+        std::vector<rc_uint> missed;
+    };
+    std::vector<Piece> pieces;
+    uint32_t firstId = 0;
+    for (const RayView& rays : inserted_) {
+        const size_t step = (rays.size() + size_t(threads) - 1) / size_t(threads);
+        for (size_t at = 0; at < rays.size(); at += step) {
+            Piece& p = pieces.emplace_back();
+            p.rays = rays.Sub(at, std::min(step, rays.size() - at));
+            p.firstId = firstId + uint32_t(at);
+        }
+        firstId += uint32_t(rays.size());
+    }
+    OnThreads(threads, [&](int t) {
+        for (size_t i = size_t(t); i < pieces.size(); i += size_t(threads)) {
+            CountFaces(pieces[i].rays, pieces[i].count);
+        }
+    });
+    uint32_t at = 0;
+    for (int f = 0; f < kFaceCount; ++f) {
+        for (Piece& p : pieces) {
+            p.start[f] = p.next[f] = at;
+            at += p.count[f];
+        }
+    }
+    for (int b = 0; b < 2; ++b) {
+        for (auto& c : coord_[b]) c.resize(at);
+        id_[b].resize(at);
+    }
+    dest_.resize(at);
+    OnThreads(threads, [&](int t) {
+        for (size_t i = size_t(t); i < pieces.size(); i += size_t(threads)) {
+            Piece& p = pieces[i];
+            for (auto& b : p.bounds) b = EmptyBounds();
+            Convert(p.rays, p.firstId, p.next, p.bounds, p.missed);
+        }
+    });
+    // Rays that the slow path found to miss the box leave holes at the ends of their pieces'
+    // ranges: close them (rare: only for origins outside the box).
+    uint32_t to = 0;
+    for (int f = 0; f < kFaceCount; ++f) {
+        begin[f] = to;
+        for (Piece& p : pieces) {
+            const uint32_t from = p.start[f], len = p.next[f] - p.start[f];
+            if (to != from) {
+                for (auto& c : coord_[0])
+                    std::copy(c.begin() + from, c.begin() + from + len, c.begin() + to);
+                std::copy(id_[0].begin() + from, id_[0].begin() + from + len, id_[0].begin() + to);
+            }
+            to += len;
+            for (int k = 0; k < kCoords; ++k) {
+                faceBounds[f].lo[k] = std::min(faceBounds[f].lo[k], p.bounds[f].lo[k]);
+                faceBounds[f].hi[k] = std::max(faceBounds[f].hi[k], p.bounds[f].hi[k]);
+            }
+        }
+    }
+    begin[kFaceCount] = to;
+    for (Piece& p : pieces) out.missed.insert(out.missed.end(), p.missed.begin(), p.missed.end());
+    std::sort(out.missed.begin(), out.missed.end());
+}
+
+struct Hierarchy::Schedule {
+    std::mutex mutex;
+    std::condition_variable changed;
+    std::deque<Task> queue;
+    int busy = 0;  // threads inside a task
+    uint32_t cut;  // nodes with more rays hand their later children to the queue
+};
+
 void Hierarchy::Subdivide(LeafBatch& out) {
     counters_ = {};
     out.leaves.clear();
@@ -489,83 +598,195 @@ void Hierarchy::Subdivide(LeafBatch& out) {
     out.candidates.clear();
     out.missed.clear();
     out.nRays = nInserted_;
-    // Pass 1 counts the faces, pass 2 maps every ray straight into its face's range of the
-    // structure-of-arrays buffer (no intermediate array) and gathers each face's bounds.
-    uint32_t count[kFaceCount + 1] = {};
-    const bool empty = sceneBox_.Empty();
-    if (empty) {
-        count[kFaceCount] = nInserted_;
-    } else {
-        for (const auto& rays : inserted_) CountFaces(rays, count);
-    }
-    const uint32_t n = nInserted_ - count[kFaceCount];
-    for (int b = 0; b < 2; ++b) {
-        for (auto& c : coord_[b]) c.resize(n);
-        id_[b].resize(n);
-    }
-    dest_.resize(n);
-    uint32_t begin[kFaceCount + 1] = {};
-    for (int f = 0; f < kFaceCount; ++f) begin[f + 1] = begin[f] + count[f];
-    uint32_t next[kFaceCount];
-    std::copy(begin, begin + kFaceCount, next);
+    uint32_t begin[kFaceCount + 1];
     Bounds6 faceBounds[kFaceCount];
-    for (auto& b : faceBounds) b = EmptyBounds();
-    out.missed.reserve(count[kFaceCount]);
-    uint32_t firstId = 0;
-    for (const auto& rays : inserted_) {
-        if (empty) {
-            for (uint32_t i = 0; i < rays.size(); ++i) out.missed.push_back(firstId + i);
-        } else {
-            Convert(rays, firstId, next, faceBounds, out.missed);
-        }
-        firstId += uint32_t(rays.size());
-    }
-    // Rays that the slow path found to miss the box leave holes at the ends of their faces'
-    // ranges: close them (rare: only for origins outside the box).
-    uint32_t to = 0;
+    ConvertAll(begin, faceBounds, out);
+    const uint32_t n = begin[kFaceCount];
+    out.rayIndex.resize(n);
+    rayIndex_ = out.rayIndex.data();
+    // Coordinates that do not vary among a face's rays (the origin of eye rays, the end of
+    // unbounded rays) are never moved.
     for (int f = 0; f < kFaceCount; ++f) {
-        const uint32_t from = begin[f], len = next[f] - begin[f];
-        if (to != from) {
-            for (auto& c : coord_[0]) std::copy(c.begin() + from, c.begin() + from + len, c.begin() + to);
-            std::copy(id_[0].begin() + from, id_[0].begin() + from + len, id_[0].begin() + to);
+        for (int k = 0; k < kCoords; ++k) {
+            active_[f][k] = faceBounds[f].lo[k] < faceBounds[f].hi[k];
+            constant_[f][k] = faceBounds[f].lo[k];
         }
-        begin[f] = to;
-        to += len;
     }
-    begin[kFaceCount] = to;
-    std::sort(out.missed.begin(), out.missed.end());
-    out.rayIndex.resize(to);
+    Schedule schedule;
+    schedule.cut = params_.taskRays > 0 ? params_.taskRays : std::max(kTaskRaysMin, n / kTasks);
+    nParts_ = nKeptLists_ = 0;
     for (int f = 0; f < kFaceCount; ++f) {
         if (begin[f] == begin[f + 1]) continue;
-        BuildFace(f, begin[f], begin[f + 1], faceBounds[f], out);
+        const FaceList& all = (*faceLists_)[f];
+        schedule.queue.push_back({FaceRoot(f), begin[f], begin[f + 1], 0, faceBounds[f], &all,
+                                  all.Size(), false, &NewPart(begin[f])});
     }
-    size_t scratch = (dest_.capacity() + keys_.capacity()) * 4;
+    const int threads = Threads(n);
+    if (workers_.size() < size_t(threads)) workers_.resize(size_t(threads));
+    for (Worker& w : workers_) {
+        w.counters = {};
+        w.levelLists.resize(size_t(params_.maxDepth) + 2);
+        w.schedule = &schedule;
+    }
+    OnThreads(threads, [&](int t) { Work(workers_[size_t(t)]); });
+    Join(out);
+    size_t scratch = dest_.capacity() * 4;
     for (int b = 0; b < 2; ++b) scratch += (id_[b].capacity() + coord_[b][0].capacity() * kCoords) * 4;
-    for (const auto& l : levelLists_) scratch += l.Bytes();
-    counters_.scratchBytes = std::max(counters_.scratchBytes, scratch);
+    for (const FaceList& l : keptLists_) scratch += l.Bytes();
+    for (Worker& w : workers_) {
+        counters_.boxTests += w.counters.boxTests;
+        counters_.rayMoves += w.counters.rayMoves;
+        counters_.maxDepth = std::max(counters_.maxDepth, w.counters.maxDepth);
+        scratch += w.keys.capacity() * 4;
+        for (const auto& l : w.levelLists) scratch += l.Bytes();
+        w.schedule = nullptr;
+        w.part = nullptr;
+    }
+    counters_.scratchBytes = scratch;
     inserted_.clear();
     nInserted_ = 0;
+    rayIndex_ = nullptr;
 }
 
-void Hierarchy::BuildFace(int face, uint32_t begin, uint32_t end, const Bounds6& tight,
-                          LeafBatch& out) {
-    // Coordinates that do not vary among the face's rays (the origin of eye rays, the end of
-    // unbounded rays) are never moved.
-    for (int k = 0; k < kCoords; ++k) {
-        active_[k] = tight.lo[k] < tight.hi[k];
-        constant_[k] = tight.lo[k];
+void Hierarchy::Work(Worker& w) {
+    Schedule& s = *w.schedule;
+    for (;;) {
+        Task task;
+        {
+            std::unique_lock lock(s.mutex);
+            s.changed.wait(lock, [&] { return !s.queue.empty() || s.busy == 0; });
+            if (s.queue.empty()) return;
+            task = s.queue.front();
+            s.queue.pop_front();
+            ++s.busy;
+        }
+        w.part = task.part;
+        Process(w, task.node, task.begin, task.end, task.buf, task.tight,
+                View(*task.list, task.listSize), task.reuseList);
+        std::lock_guard lock(s.mutex);
+        if (--s.busy == 0 && s.queue.empty()) s.changed.notify_all();
     }
-    const FaceList& all = (*faceLists_)[face];
-    Process(FaceRoot(face), begin, end, 0, tight, View(all, all.Size()), false, out);
 }
 
-Bounds6 Hierarchy::Bounds(int buf, uint32_t begin, uint32_t end) const {
+namespace {
+uint32_t& Link(Node& n, int field) { return field < 2 ? n.child[field] : n.remainder; }
+}  // namespace
+
+Hierarchy::Part& Hierarchy::NewPart(uint32_t begin) {
+    if (nParts_ == parts_.size()) parts_.emplace_back();
+    Part& p = parts_[nParts_++];
+    p.begin = begin;
+    p.leaves.clear();
+    p.candidates.clear();
+    p.nodes.clear();
+    p.relinked.clear();
+    p.linkPart = nullptr;
+    p.linkNode = kNoNode;
+    return p;
+}
+
+void Hierarchy::Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, uint32_t begin,
+                      uint32_t end, int buf, const Bounds6& tight, const ListView& list,
+                      bool reuseList) {
+    Schedule& s = *w.schedule;
+    {
+        std::lock_guard lock(s.mutex);
+        Part& part = NewPart(begin);
+        Node& parent = At(w, node);
+        uint32_t root = Link(parent, field);
+        if (newBox) {
+            // The new root goes into the task's part, so that the task reads it as its own;
+            // Join links the parent to it.
+            Node n;
+            n.box = *newBox;
+            n.face = parent.face;
+            n.depth = uint8_t(parent.depth + 1);
+            n.isRemainder = field == 2 ? 1 : 0;
+            part.nodes.push_back(n);
+            part.linkPart = w.part;
+            part.linkNode = node;
+            part.linkField = field;
+            root = kLocal;
+            Link(parent, field) = kPending;
+        }
+        // `list` is a view of a kept list or of the face's list: both outlive the task.
+        const FaceList* from = nullptr;
+        for (size_t i = 0; i < nKeptLists_ && !from; ++i) {
+            if (keptLists_[i].prim.data() == list.prim) from = &keptLists_[i];
+        }
+        if (!from) from = &(*faceLists_)[parent.face];
+        s.queue.push_back({root, begin, end, buf, tight, from, list.n, reuseList, &part});
+    }
+    s.changed.notify_one();
+}
+
+void Hierarchy::Join(LeafBatch& out) {
+    // Parts in ray order, their nodes appended in that order.
+    std::vector<Part*> parts(nParts_);
+    for (size_t p = 0; p < nParts_; ++p) parts[p] = &parts_[p];
+    std::sort(parts.begin(), parts.end(),
+              [](const Part* a, const Part* b) { return a->begin < b->begin; });
+    uint32_t base = uint32_t(nodes_.size());
+    for (Part* part : parts) {
+        part->base = base;
+        base += uint32_t(part->nodes.size());
+    }
+    struct Placed {
+        RcLeaf leaf;
+        const RcCandidate* candidates;
+    };
+    std::vector<Placed> leaves;
+    size_t nCandidates = 0;
+    for (Part* part : parts) {
+        auto fix = [b = part->base](uint32_t& id) {
+            if ((id & kLocal) && id < kPending) id = b + (id & ~kLocal);
+        };
+        for (Node& node : part->nodes) {
+            fix(node.child[0]);
+            fix(node.child[1]);
+            fix(node.remainder);
+        }
+        for (uint32_t g : part->relinked) {
+            fix(nodes_[g].child[0]);
+            fix(nodes_[g].child[1]);
+            fix(nodes_[g].remainder);
+        }
+        for (RcLeaf leaf : part->leaves) {
+            fix(leaf.node);
+            leaves.push_back({leaf, part->candidates.data() + leaf.candBegin});
+            nCandidates += leaf.candCount;
+        }
+    }
+    for (Part* part : parts) nodes_.insert(nodes_.end(), part->nodes.begin(), part->nodes.end());
+    for (Part* part : parts) {
+        if (part->linkNode == kNoNode) continue;
+        const uint32_t parent = (part->linkNode & kLocal)
+                                    ? part->linkPart->base + (part->linkNode & ~kLocal)
+                                    : part->linkNode;
+        Link(nodes_[parent], part->linkField) = part->base;
+    }
+    // Leaves in ray order (their ranges are disjoint), lists in leaf order.
+    std::sort(leaves.begin(), leaves.end(),
+              [](const Placed& a, const Placed& b) { return a.leaf.rayBegin < b.leaf.rayBegin; });
+    out.leaves.resize(leaves.size());
+    out.candidates.resize(nCandidates);
+    uint32_t at = 0;
+    for (size_t i = 0; i < leaves.size(); ++i) {
+        RcLeaf leaf = leaves[i].leaf;
+        std::copy_n(leaves[i].candidates, leaf.candCount, out.candidates.begin() + at);
+        leaf.candBegin = at;
+        at += leaf.candCount;
+        out.leaves[i] = leaf;
+    }
+}
+
+Bounds6 Hierarchy::Bounds(int face, int buf, uint32_t begin, uint32_t end) const {
     Bounds6 b;
     for (int k = 0; k < kCoords; ++k) {
-        if (active_[k]) {
+        if (active_[face][k]) {
             MinMax(coord_[buf][k].data() + begin, end - begin, b.lo[k], b.hi[k]);
         } else {
-            b.lo[k] = b.hi[k] = constant_[k];
+            b.lo[k] = b.hi[k] = constant_[face][k];
         }
     }
     return b;
@@ -600,34 +821,45 @@ float SampledKeepFraction(const Bounds6& tight, const ListView& list) {
 
 }  // namespace
 
-ListView Hierarchy::Filter(const Bounds6& tight, const ListView& list, int level) {
-    FaceList& dst = levelLists_[size_t(level)];
+ListView Hierarchy::Filter(Worker& w, const Bounds6& tight, const ListView& list, int level,
+                           bool keep) {
+    FaceList* dst = &w.levelLists[size_t(level)];
+    if (keep) {
+        // Tasks read this list after its node returns: it goes where it stays until the end.
+        std::lock_guard lock(w.schedule->mutex);
+        if (nKeptLists_ == keptLists_.size()) keptLists_.emplace_back();
+        dst = &keptLists_[nKeptLists_++];
+    }
     // No ray of the node gets past X = end, and the list is sorted by near X: cut it there first.
     const float endHi = tight.hi[kDims];
     ListView in = list;
     in.n = size_t(std::upper_bound(in.x0, in.x0 + in.n, endHi) - in.x0);
-    if (dst.Size() < in.n) dst.Resize(in.n);
+    if (dst->Size() < in.n) dst->Resize(in.n);
     // Every ray's reach is its end minus its start X, so the node's is at most endHi - lo X.
     const float reach = endHi - tight.lo[0];
-    const size_t kept = FilterList(MakeBeamTest(tight.ToBox5(), reach), in, dst);
-    counters_.boxTests += in.n;
-    return View(dst, kept);
+    const size_t kept = FilterList(MakeBeamTest(tight.ToBox5(), reach), in, *dst);
+    w.counters.boxTests += in.n;
+    return View(*dst, kept);
 }
 
-void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, const Bounds6& tight,
-                        const ListView& list, bool reuseList, LeafBatch& out) {
-    const int depth = nodes_[node].depth;
-    const int face = nodes_[node].face;
+void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
+                        const Bounds6& tight, const ListView& list, bool reuseList) {
+    const int depth = At(w, node).depth;
+    const int face = At(w, node).face;
     const int other = buf ^ 1;
-    if (!nodes_[node].IsLeaf()) {
+    // A node with many rays builds its first child and queues the others.
+    const bool spawns = end - begin > w.schedule->cut;
+    if (!At(w, node).IsLeaf()) {
         // A node split by an earlier generation: route by containment, the rest to the remainder.
-        const ListView own = Filter(tight, list, depth);
-        const Box5 box0 = nodes_[nodes_[node].child[0]].box;
-        const Box5 box1 = nodes_[nodes_[node].child[1]].box;
+        const ListView own = Filter(w, tight, list, depth, spawns);
+        const Box5 box0 = At(w, At(w, node).child[0]).box;
+        const Box5 box1 = At(w, At(w, node).child[1]).box;
+        const bool* active = active_[face];
+        const float* constant = constant_[face];
         uint32_t count[3] = {};
         for (uint32_t i = begin; i < end; ++i) {
             std::array<float, kDims> p;
-            for (int k = 0; k < kDims; ++k) p[k] = active_[k] ? coord_[buf][k][i] : constant_[k];
+            for (int k = 0; k < kDims; ++k) p[k] = active[k] ? coord_[buf][k][i] : constant[k];
             const uint32_t g = box0.Contains(p) ? 0 : (box1.Contains(p) ? 1 : 2);
             dest_[i] = g;
             ++count[g];
@@ -636,25 +868,29 @@ void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, co
         uint32_t next[3] = {start[0], start[1], start[2]};
         for (uint32_t i = begin; i < end; ++i) dest_[i] = next[dest_[i]]++;
         for (int k = 0; k < kCoords; ++k) {
-            if (!active_[k]) continue;
+            if (!active[k]) continue;
             for (uint32_t i = begin; i < end; ++i) coord_[other][k][dest_[i]] = coord_[buf][k][i];
         }
         for (uint32_t i = begin; i < end; ++i) id_[other][dest_[i]] = id_[buf][i];
-        counters_.rayMoves += end - begin;
-        for (int g = 0; g < 3; ++g) {
+        w.counters.rayMoves += end - begin;
+        // The later groups first, so that the queue gets them at once.
+        const int firstGroup = count[0] ? 0 : (count[1] ? 1 : 2);
+        for (int g = 2; g >= 0; --g) {
             if (count[g] == 0) continue;
-            uint32_t target;
-            if (g < 2) {
-                target = nodes_[node].child[g];
-            } else {
-                target = nodes_[node].remainder;
-                if (target == kNoNode) {
-                    target = NewNode(nodes_[node].box, face, depth + 1, true);
-                    nodes_[node].remainder = target;
-                }
-            }
             const uint32_t b = start[g], e = start[g] + count[g];
-            Process(target, b, e, other, Bounds(other, b, e), own, false, out);
+            const bool create = g == 2 && At(w, node).remainder == kNoNode;
+            if (spawns && g != firstGroup) {
+                const Box5 box = At(w, node).box;
+                Spawn(w, node, g, create ? &box : nullptr, b, e, other, Bounds(face, other, b, e),
+                      own, false);
+                continue;
+            }
+            if (create) {
+                const uint32_t r = NewNode(w, At(w, node).box, face, depth + 1, true);
+                At(w, node).remainder = r;
+                if (!(node & kLocal)) w.part->relinked.push_back(node);
+            }
+            Process(w, Link(At(w, node), g), b, e, other, Bounds(face, other, b, e), own, false);
         }
         return;
     }
@@ -666,26 +902,34 @@ void Hierarchy::Process(uint32_t node, uint32_t begin, uint32_t end, int buf, co
     if (filtered && list.n >= kSampledFilterMin && SampledKeepFraction(tight, list) > kSkipKeep) {
         filtered = false;
     }
-    ListView own = filtered ? Filter(tight, list, depth) : CutAtEnd(tight, list);
+    ListView own = filtered ? Filter(w, tight, list, depth, spawns) : CutAtEnd(tight, list);
     int dim = 0;
     uint32_t mid = begin;
     Bounds6 leftBox, rightBox;
-    if (ChooseSplit(nodes_[node], tight, end - begin, own, dim)) {
-        const float value = SplitValue(dim, buf, begin, end, tight);
-        mid = Partition(dim, value, buf, begin, end, leftBox, rightBox);
+    if (ChooseSplit(At(w, node), tight, end - begin, own, dim)) {
+        const float value = SplitValue(w, dim, buf, begin, end, tight);
+        mid = Partition(w, face, dim, value, buf, begin, end, leftBox, rightBox);
     }
     if (mid == begin || mid == end) {
-        if (!filtered) own = Filter(tight, list, depth);
-        EmitLeaf(node, begin, end, buf, own, tight.hi[kDims], out);
+        if (!filtered) own = Filter(w, tight, list, depth, false);
+        EmitLeaf(w, node, begin, end, buf, own, tight.hi[kDims]);
         return;
     }
-    const uint32_t left = NewNode(leftBox.ToBox5(), face, depth + 1, false);
-    const uint32_t right = NewNode(rightBox.ToBox5(), face, depth + 1, false);
-    nodes_[node].child[0] = left;
-    nodes_[node].child[1] = right;
+    const uint32_t left = NewNode(w, leftBox.ToBox5(), face, depth + 1, false);
+    At(w, node).child[0] = left;
+    if (!(node & kLocal)) w.part->relinked.push_back(node);
     const bool reuse = filtered && (depth + 1) % std::max(params_.splitsPerList, 1) != 0;
-    Process(left, begin, mid, other, leftBox, own, reuse, out);
-    Process(right, mid, end, other, rightBox, own, reuse, out);
+    if (spawns) {
+        // Queued first, so that another thread can start on it at once.
+        const Box5 box = rightBox.ToBox5();
+        Spawn(w, node, 1, &box, mid, end, other, rightBox, own, reuse);
+        Process(w, left, begin, mid, other, leftBox, own, reuse);
+        return;
+    }
+    const uint32_t right = NewNode(w, rightBox.ToBox5(), face, depth + 1, false);
+    At(w, node).child[1] = right;
+    Process(w, left, begin, mid, other, leftBox, own, reuse);
+    Process(w, right, mid, end, other, rightBox, own, reuse);
 }
 
 bool Hierarchy::ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays,
@@ -727,13 +971,14 @@ bool Hierarchy::ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRa
     return saved > cost;
 }
 
-float Hierarchy::SplitValue(int dim, int buf, uint32_t begin, uint32_t end, const Bounds6& tight) {
+float Hierarchy::SplitValue(Worker& w, int dim, int buf, uint32_t begin, uint32_t end,
+                            const Bounds6& tight) {
     const float lo = tight.lo[dim], hi = tight.hi[dim];
     if (params_.splitRule == SplitRule::kMedian) {
         const float* x = coord_[buf][dim].data();
-        keys_.assign(x + begin, x + end);
-        const auto m = keys_.begin() + keys_.size() / 2;
-        std::nth_element(keys_.begin(), m, keys_.end());
+        w.keys.assign(x + begin, x + end);
+        const auto m = w.keys.begin() + w.keys.size() / 2;
+        std::nth_element(w.keys.begin(), m, w.keys.end());
         return *m > lo ? *m : std::nextafter(lo, kInf);
     }
     const float m = 0.5f * (lo + hi);
@@ -741,47 +986,50 @@ float Hierarchy::SplitValue(int dim, int buf, uint32_t begin, uint32_t end, cons
     return m > lo ? m : hi;
 }
 
-uint32_t Hierarchy::Partition(int dim, float value, int buf, uint32_t begin, uint32_t end,
-                              Bounds6& leftBox, Bounds6& rightBox) {
+uint32_t Hierarchy::Partition(Worker& w, int face, int dim, float value, int buf, uint32_t begin,
+                              uint32_t end, Bounds6& leftBox, Bounds6& rightBox) {
     const int other = buf ^ 1;
-    counters_.rayMoves += end - begin;
+    w.counters.rayMoves += end - begin;
     PartitionIo io;
     int mask = 0;
     for (int k = 0; k < kCoords; ++k) {
         io.src[k] = coord_[buf][k].data();
         io.dst[k] = coord_[other][k].data();
-        mask |= active_[k] ? 1 << k : 0;
+        mask |= active_[face][k] ? 1 << k : 0;
     }
     io.srcId = id_[buf].data();
     io.dstId = id_[other].data();
     io.key = coord_[buf][dim].data();
     const uint32_t mid = DispatchPartition(mask, io, value, begin, end, leftBox, rightBox);
     for (int k = 0; k < kCoords; ++k) {
-        if (!active_[k]) leftBox.lo[k] = leftBox.hi[k] = rightBox.lo[k] = rightBox.hi[k] = constant_[k];
+        if (!active_[face][k]) {
+            leftBox.lo[k] = leftBox.hi[k] = rightBox.lo[k] = rightBox.hi[k] = constant_[face][k];
+        }
     }
     return mid;
 }
 
-void Hierarchy::EmitLeaf(uint32_t node, uint32_t begin, uint32_t end, int buf,
-                         const ListView& list, float endHi, LeafBatch& out) {
+void Hierarchy::EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
+                         const ListView& list, float endHi) {
     RcLeaf leaf{};
     // Faces and leaves fill the range in order, so a leaf's rays keep their buffer positions.
     leaf.rayBegin = begin;
     leaf.rayCount = end - begin;
-    std::copy(id_[buf].begin() + begin, id_[buf].begin() + end, out.rayIndex.begin() + begin);
+    std::copy(id_[buf].begin() + begin, id_[buf].begin() + end, rayIndex_ + begin);
     // The current nearest-hit bound: no ray of the leaf gets past X = endHi, and the list is
     // sorted by near X, so everything after that is cut at once (Filter has already cut it when
     // the leaf filtered its own list).
     const size_t n = size_t(std::upper_bound(list.x0, list.x0 + list.n, endHi) - list.x0);
-    leaf.candBegin = uint32_t(out.candidates.size());
+    std::vector<RcCandidate>& candidates = w.part->candidates;
+    leaf.candBegin = uint32_t(candidates.size());
     leaf.candCount = uint32_t(n);
-    out.candidates.resize(leaf.candBegin + n);
-    RcCandidate* cand = out.candidates.data() + leaf.candBegin;
+    candidates.resize(leaf.candBegin + n);
+    RcCandidate* cand = candidates.data() + leaf.candBegin;
     for (size_t i = 0; i < n; ++i) cand[i] = {list.prim[i], list.x0[i]};
-    leaf.face = nodes_[node].face;
+    leaf.face = At(w, node).face;
     leaf.node = node;
-    out.leaves.push_back(leaf);
-    counters_.maxDepth = std::max<uint32_t>(counters_.maxDepth, nodes_[node].depth);
+    w.part->leaves.push_back(leaf);
+    w.counters.maxDepth = std::max<uint32_t>(w.counters.maxDepth, At(w, node).depth);
 }
 
 uint32_t Hierarchy::Route(const Ray5& r) const {

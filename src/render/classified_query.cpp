@@ -19,7 +19,8 @@ using Clock = std::chrono::steady_clock;
 // A classified batch: the leaves and, per leaf, its rays' slots and its kernel style.
 struct ClassifiedBatch final : PreparedBatch {
     classify::LeafBatch batch;
-    std::vector<uint32_t> rayLeaf;         // per slot of batch.rayIndex: its leaf
+    std::vector<uint32_t> rayLeaf;         // per slot of batch.rayIndex: its leaf (when all
+                                           // leaves take one per-ray kernel)
     std::vector<uint32_t> vertexLeaves;    // leaves the vertex-style kernel answers
     std::vector<uint32_t> fragmentLeaves;  // leaves the fragment-style kernel answers
 };
@@ -72,13 +73,13 @@ class ClassifiedQuery final : public RayQuery {
             void* mapped = clrt::Check("clEnqueueMapBuffer", [&] {
                 return queue.enqueueMapBuffer(rays, CL_TRUE, CL_MAP_READ, 0, n * sizeof(RcRay));
             });
-            Classify(hierarchy_, classify::RayView(mapped, n, sizeof(RcRay)), *out);
+            Classify(hierarchy_, classify::RayView(mapped, n, sizeof(RcRay)), *out, style_);
             clrt::Check("clEnqueueUnmapMemObject", [&] {
                 queue.enqueueUnmapMemObject(rays, mapped);
                 queue.finish();
             });
         } else {
-            Classify(hierarchy_, classify::RayView(), *out);
+            Classify(hierarchy_, classify::RayView(), *out, style_);
         }
         return out;
     }
@@ -108,24 +109,29 @@ class ClassifiedQuery final : public RayQuery {
         // Every slot: empty ones have no direction and miss at once.
         static_assert(sizeof(classify::Ray) == offsetof(RcShadowRay, contribution));
         Classify(shadowHierarchy_, classify::RayView(hostRays.data(), n, sizeof(RcShadowRay)),
-                 shadowBatch_);
+                 shadowBatch_, style_ == KernelStyle::kScalar ? style_ : KernelStyle::kVertex);
         return Query(shadowBatch_, shadowRays, blocked, nullptr, timer).tests;
     }
 
   private:
-    // Classifies `rays` into out's leaves and sorts the leaves by kernel style.
-    void Classify(classify::Hierarchy& hierarchy, classify::RayView rays, ClassifiedBatch& out) {
+    // Classifies `rays` into out's leaves and sorts the leaves by kernel style (`style`: the
+    // query's, or vertex for shadow rays).
+    void Classify(classify::Hierarchy& hierarchy, classify::RayView rays, ClassifiedBatch& out,
+                  KernelStyle style) {
         const auto t0 = Clock::now();
         hierarchy.Classify(rays, out.batch);
-        out.rayLeaf.resize(out.batch.rayIndex.size());
+        // Leaves lie in ray order and cover every slot, so when one per-ray kernel answers them
+        // all, its slots are batch.rayIndex itself and only their leaves are needed.
+        const bool perRay = style == KernelStyle::kScalar || style == KernelStyle::kVertex;
+        out.rayLeaf.resize(perRay ? out.batch.rayIndex.size() : 0);
         out.vertexLeaves.clear();
         out.fragmentLeaves.clear();
         const auto& nodes = hierarchy.Nodes();
         for (uint32_t l = 0; l < out.batch.leaves.size(); ++l) {
             const RcLeaf& leaf = out.batch.leaves[l];
-            std::fill_n(out.rayLeaf.begin() + leaf.rayBegin, leaf.rayCount, l);
-            bool fragment = style_ == KernelStyle::kFragment;
-            if (style_ == KernelStyle::kAuto) {
+            if (perRay) std::fill_n(out.rayLeaf.begin() + leaf.rayBegin, leaf.rayCount, l);
+            bool fragment = style == KernelStyle::kFragment;
+            if (style == KernelStyle::kAuto) {
                 const auto& box = nodes[leaf.node].box;
                 const float dirExtent = std::max(box.hi[3] - box.lo[3], box.hi[4] - box.lo[4]);
                 fragment = leaf.rayCount >= 16 && dirExtent <= kCoherentDirExtent;
@@ -175,8 +181,7 @@ class ClassifiedQuery final : public RayQuery {
                                  sizeof(RcTriangleBlock16);
         for (size_t next = 0; next < vertexLeaves.size();) {
             const auto t1 = Clock::now();
-            vertexSlots_.clear();
-            vertexRayLeaf_.clear();
+            const size_t firstLeaf = next;
             blockLeaf_.clear();
             blockFirst_.clear();
             leafFirstBlock_.assign(cb.batch.leaves.size(), 0);
@@ -190,18 +195,33 @@ class ClassifiedQuery final : public RayQuery {
                     blockLeaf_.push_back(l);
                     blockFirst_.push_back(c);
                 }
-                for (uint32_t r = 0; r < leaf.rayCount; ++r) {
-                    vertexSlots_.push_back(cb.batch.rayIndex[leaf.rayBegin + r]);
-                    vertexRayLeaf_.push_back(l);
+            }
+            const bool wholeBatch =
+                firstLeaf == 0 && next == cb.batch.leaves.size() && !cb.rayLeaf.empty();
+            const cl::Buffer* slots = &rayIndex;
+            const cl::Buffer* slotLeaf = nullptr;
+            uint32_t nSlots = uint32_t(cb.batch.rayIndex.size());
+            if (wholeBatch) {
+                slotLeaf = &rayLeafBuf_.Upload(ctx_, cb.rayLeaf);
+            } else {
+                vertexSlots_.clear();
+                vertexRayLeaf_.clear();
+                for (size_t i = firstLeaf; i < next; ++i) {
+                    const uint32_t l = vertexLeaves[i];
+                    const RcLeaf& leaf = cb.batch.leaves[l];
+                    for (uint32_t r = 0; r < leaf.rayCount; ++r) {
+                        vertexSlots_.push_back(cb.batch.rayIndex[leaf.rayBegin + r]);
+                        vertexRayLeaf_.push_back(l);
+                    }
                 }
+                nSlots = uint32_t(vertexSlots_.size());
+                slots = &slotsBuf_.Upload(ctx_, vertexSlots_);
+                slotLeaf = &rayLeafBuf_.Upload(ctx_, vertexRayLeaf_);
             }
             const uint32_t nBlocks = uint32_t(blockLeaf_.size());
-            const uint32_t nSlots = uint32_t(vertexSlots_.size());
             const cl::Buffer& blockLeaf = blockLeafBuf_.Upload(ctx_, blockLeaf_);
             const cl::Buffer& blockFirst = blockFirstBuf_.Upload(ctx_, blockFirst_);
             const cl::Buffer& leafFirstBlock = leafFirstBlockBuf_.Upload(ctx_, leafFirstBlock_);
-            const cl::Buffer& slots = slotsBuf_.Upload(ctx_, vertexSlots_);
-            const cl::Buffer& slotLeaf = rayLeafBuf_.Upload(ctx_, vertexRayLeaf_);
             const cl::Buffer& blocks =
                 blocksBuf_.Reserve(ctx_, size_t(nBlocks) * sizeof(RcTriangleBlock16));
             const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
@@ -209,11 +229,11 @@ class ClassifiedQuery final : public RayQuery {
                     scene_.params, blocks);
             cl::Kernel& k = shadow ? occludedVertex_ : queryVertexShade_;
             if (shadow) {
-                SetArgs(k, rays, slots, slotLeaf, nSlots, leaves, leafFirstBlock, blocks,
+                SetArgs(k, rays, *slots, *slotLeaf, nSlots, leaves, leafFirstBlock, blocks,
                         scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
                         testsBuf);
             } else {
-                SetArgs(k, rays, slots, slotLeaf, nSlots, leaves, leafFirstBlock, blocks, out,
+                SetArgs(k, rays, *slots, *slotLeaf, nSlots, leaves, leafFirstBlock, blocks, out,
                         testsBuf, scene_.triangles, scene_.triangleShading, scene_.spheres,
                         scene_.quadrics, scene_.materials, scene_.lights, scene_.params,
                         shade->radiance, shade->normals, shade->shadow, shade->secondary,
@@ -228,16 +248,21 @@ class ClassifiedQuery final : public RayQuery {
         // The rays the vertex kernel did not shade (fragment leaves' rays and the misses), in
         // slot order: shading then walks the batch's arrays in order, not leaf by leaf.
         const auto tUnshaded = Clock::now();
-        shadedByVertex_.assign(cb.batch.nRays, 0);
-        for (uint32_t l : cb.vertexLeaves) {
-            const RcLeaf& leaf = cb.batch.leaves[l];
-            for (uint32_t r = 0; r < leaf.rayCount; ++r) {
-                shadedByVertex_[cb.batch.rayIndex[leaf.rayBegin + r]] = 1;
-            }
-        }
         unshaded_.clear();
-        for (uint32_t i = 0; i < cb.batch.nRays; ++i) {
-            if (!shadedByVertex_[i]) unshaded_.push_back(i);
+        if (cb.vertexLeaves.empty()) {
+            unshaded_.resize(cb.batch.nRays);
+            std::iota(unshaded_.begin(), unshaded_.end(), 0u);
+        } else {
+            shadedByVertex_.assign(cb.batch.nRays, 0);
+            for (uint32_t l : cb.vertexLeaves) {
+                const RcLeaf& leaf = cb.batch.leaves[l];
+                for (uint32_t r = 0; r < leaf.rayCount; ++r) {
+                    shadedByVertex_[cb.batch.rayIndex[leaf.rayBegin + r]] = 1;
+                }
+            }
+            for (uint32_t i = 0; i < cb.batch.nRays; ++i) {
+                if (!shadedByVertex_[i]) unshaded_.push_back(i);
+            }
         }
         AddHostSeconds(Seconds(tUnshaded));
         if (!cb.fragmentLeaves.empty()) {

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <random>
 #include <set>
+#include <string>
 
 #include "rayclass/classify/query.h"
 #include "rayclass/geometry/offset.h"
@@ -339,6 +341,107 @@ TEST(Hierarchy, StridedViewsClassifyLikePackedRays) {
             EXPECT_EQ(got.leaves[l].rayBegin, expected.leaves[l].rayBegin);
             EXPECT_EQ(got.leaves[l].candCount, expected.leaves[l].candCount);
         }
+    }
+}
+
+void ExpectSameLeaves(const LeafBatch& a, const LeafBatch& b, bool sameNodeIds) {
+    EXPECT_EQ(a.rayIndex, b.rayIndex);
+    EXPECT_EQ(a.missed, b.missed);
+    EXPECT_EQ(a.nRays, b.nRays);
+    ASSERT_EQ(a.leaves.size(), b.leaves.size());
+    for (size_t l = 0; l < a.leaves.size(); ++l) {
+        const RcLeaf &x = a.leaves[l], &y = b.leaves[l];
+        ASSERT_TRUE(x.rayBegin == y.rayBegin && x.rayCount == y.rayCount &&
+                    x.candBegin == y.candBegin && x.candCount == y.candCount && x.face == y.face &&
+                    (!sameNodeIds || x.node == y.node))
+            << "leaf " << l;
+    }
+    ASSERT_EQ(a.candidates.size(), b.candidates.size());
+    for (size_t c = 0; c < a.candidates.size(); ++c) {
+        ASSERT_EQ(a.candidates[c].prim, b.candidates[c].prim) << "candidate " << c;
+        ASSERT_EQ(a.candidates[c].nearX, b.candidates[c].nearX) << "candidate " << c;
+    }
+}
+
+void ExpectSameNodes(const Hierarchy& a, const Hierarchy& b) {
+    ASSERT_EQ(a.Nodes().size(), b.Nodes().size());
+    for (size_t i = 0; i < a.Nodes().size(); ++i) {
+        const Node &x = a.Nodes()[i], &y = b.Nodes()[i];
+        ASSERT_TRUE(x.box.lo == y.box.lo && x.box.hi == y.box.hi && x.child[0] == y.child[0] &&
+                    x.child[1] == y.child[1] && x.remainder == y.remainder && x.face == y.face &&
+                    x.depth == y.depth && x.isRemainder == y.isRemainder)
+            << "node " << i;
+    }
+}
+
+// The hierarchy's shape without its ids: nodes in depth-first order from the face roots (first
+// child, second child, remainder). Fails when a node is reached twice or not at all.
+std::vector<std::string> Shape(const Hierarchy& h) {
+    std::vector<std::string> out;
+    std::vector<int> seen(h.Nodes().size(), 0);
+    std::vector<uint32_t> stack;
+    for (int f = kFaceCount - 1; f >= 0; --f) stack.push_back(h.FaceRoot(f));
+    while (!stack.empty()) {
+        const uint32_t id = stack.back();
+        stack.pop_back();
+        EXPECT_LT(id, h.Nodes().size());
+        if (id >= h.Nodes().size() || seen[id]++) {
+            ADD_FAILURE() << "node " << id << " reached twice or out of range";
+            return out;
+        }
+        const Node& n = h.Nodes()[id];
+        std::string line;
+        for (int k = 0; k < kDims; ++k) {
+            line += std::to_string(n.box.lo[k]) + " " + std::to_string(n.box.hi[k]) + " ";
+        }
+        line += std::to_string(n.face) + " " + std::to_string(n.depth) + " " +
+                std::to_string(n.isRemainder) + (n.IsLeaf() ? " leaf" : " split") +
+                (n.remainder == kNoNode ? "" : " +remainder");
+        out.push_back(line);
+        if (n.remainder != kNoNode) stack.push_back(n.remainder);
+        if (!n.IsLeaf()) {
+            stack.push_back(n.child[1]);
+            stack.push_back(n.child[0]);
+        }
+    }
+    EXPECT_EQ(out.size(), h.Nodes().size()) << "nodes not reachable from the face roots";
+    return out;
+}
+
+// Subdivide's tasks depend on the rays alone: every thread count gives the same leaves, lists and
+// nodes, over generations that route through earlier splits and spawn remainders. Small task
+// sizes make many tasks (new roots linked across parts, remainders made in a task's part).
+TEST(Hierarchy, ThreadCountDoesNotChangeTheResult) {
+    const scene::Scene s = RandomScene(71, 500, 10, 4);
+    const auto first = RandomRays(72, 12000);
+    const auto second = RandomRays(73, 9000);
+    Params serial = DeepParams(s);
+    serial.threads = 1;
+    serial.taskRays = 1u << 30;  // one task per face: the plain recursion
+    Hierarchy reference(s, serial);
+    const LeafBatch ref[4] = {reference.Classify(first), reference.Classify(second),
+                              reference.Classify(first), reference.Classify(second)};
+    ExpectSameHits(Query(s, ref[1], second), BruteForce(s, second));
+    std::unique_ptr<Hierarchy> oneThread;
+    for (const uint32_t threads : {1u, 2u, 3u}) {
+        SCOPED_TRACE(threads);
+        Params p = DeepParams(s);
+        p.threads = threads;
+        p.taskRays = 64;
+        auto h = std::make_unique<Hierarchy>(s, p);
+        const LeafBatch got[4] = {h->Classify(first), h->Classify(second), h->Classify(first),
+                                  h->Classify(second)};
+        for (int g = 0; g < 4; ++g) ExpectSameLeaves(got[g], ref[g], false);
+        ExpectSameHits(Query(s, got[2], first), BruteForce(s, first));
+        EXPECT_EQ(Shape(*h), Shape(reference));
+        if (!oneThread) {
+            oneThread = std::move(h);
+            continue;
+        }
+        ExpectSameNodes(*h, *oneThread);
+        Hierarchy again(s, p);
+        for (const auto* rays : {&first, &second, &first, &second}) again.Classify(*rays);
+        ExpectSameNodes(again, *oneThread);
     }
 }
 

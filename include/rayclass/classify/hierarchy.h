@@ -18,12 +18,18 @@
 // while a generation is being subdivided: inner lists are scratch per depth, leaf lists go into
 // the returned LeafBatch.
 //
+// Subdivide runs on Params::threads cores. The work is a tree of tasks that depends on the rays
+// alone: each face root is a task, and a node with many rays builds its first child itself and
+// hands the others to the queue. Each task writes its leaves and new nodes into its own part;
+// parts are joined in ray order, so the result is the same for any thread count or timing.
+//
 // Invariants (checked by tests/classify): every ray that can hit the scene lies in exactly one
 // leaf; a node's interval contains the 5D points of the rays that were routed to it.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <span>
 #include <vector>
@@ -41,7 +47,13 @@ static_assert(sizeof(RcCandidate) == 8);
 constexpr uint32_t kNoNode = 0xFFFFFFFFu;
 
 struct ListView;
-struct Bounds6;  // a Box5 plus the range of the rays' end X (private to the module)
+
+// A node's tight bounds: X, Y, Z, u, v and the end X of its rays (index 5).
+struct Bounds6 {
+    float lo[kDims + 1];
+    float hi[kDims + 1];
+    Box5 ToBox5() const;
+};
 
 struct Node {
     Box5 box;                  // the node's interval: its rays' bounds when it was made
@@ -124,21 +136,71 @@ public:
     };
 
 private:
+  static constexpr int kCoords = kDims + 1;
+  // Ids of the nodes a task makes, until the tasks' parts are joined: the index in its part
+  // with this bit set. kNoNode keeps its meaning (local indices stay far below it); kPending
+  // is a link to the root of another task, set when the parts are joined.
+  static constexpr uint32_t kLocal = 0x80000000u;
+  static constexpr uint32_t kPending = kNoNode - 1;
+
+  // What one task makes: leaves, their lists and nodes.
+  struct Part {
+      uint32_t begin = 0;  // the task's first ray position: parts join in this order
+      uint32_t base = 0;   // where its nodes go in nodes_
+      std::vector<RcLeaf> leaves;
+      std::vector<RcCandidate> candidates;
+      std::vector<Node> nodes;         // ids kLocal | index
+      std::vector<uint32_t> relinked;  // earlier nodes whose links now point into `nodes`
+      // When the task's root is new (nodes[0]): the node that links to it, in linkPart.
+      const Part* linkPart = nullptr;
+      uint32_t linkNode = kNoNode;
+      int linkField = 0;  // 0, 1: child, 2: remainder
+  };
+  // A subtree to build: a face root, or a later child of a node with many rays.
+  struct Task {
+      uint32_t node, begin, end;
+      int buf;
+      Bounds6 tight;
+      const FaceList* list;  // the parent's list: a face list or one of keptLists_
+      size_t listSize;
+      bool reuseList;
+      Part* part;
+  };
+  struct Schedule;  // the task queue of one Subdivide (private to the module)
+  // One thread's state while subdividing.
+  struct Worker {
+      std::vector<FaceList> levelLists;  // per depth: the list of the node being built
+      std::vector<float> keys;
+      BuildCounters counters;
+      Part* part = nullptr;
+      Schedule* schedule = nullptr;
+  };
+
     void Convert(RayView rays, uint32_t firstId, uint32_t* next, Bounds6* faceBounds,
                  std::vector<rc_uint>& missed);
-    void BuildFace(int face, uint32_t begin, uint32_t end, const Bounds6& tight, LeafBatch& out);
-    void Process(uint32_t node, uint32_t begin, uint32_t end, int buf, const Bounds6& tight,
-                 const ListView& list, bool reuseList, LeafBatch& out);
-    void EmitLeaf(uint32_t node, uint32_t begin, uint32_t end, int buf, const ListView& list,
-                  float endHi, LeafBatch& out);
-    ListView Filter(const Bounds6& tight, const ListView& list, int level);
+    void Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
+                 const Bounds6& tight, const ListView& list, bool reuseList);
+    void Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, uint32_t begin,
+               uint32_t end, int buf, const Bounds6& tight, const ListView& list, bool reuseList);
+    void Work(Worker& w);
+    void EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
+                  const ListView& list, float endHi);
+    ListView Filter(Worker& w, const Bounds6& tight, const ListView& list, int level, bool keep);
     bool ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays, const ListView& list,
                      int& dim) const;
-    Bounds6 Bounds(int buf, uint32_t begin, uint32_t end) const;
-    float SplitValue(int dim, int buf, uint32_t begin, uint32_t end, const Bounds6& tight);
-    uint32_t Partition(int dim, float value, int buf, uint32_t begin, uint32_t end, Bounds6& left,
-                       Bounds6& right);
-    uint32_t NewNode(const Box5& box, int face, int depth, bool isRemainder);
+    Bounds6 Bounds(int face, int buf, uint32_t begin, uint32_t end) const;
+    float SplitValue(Worker& w, int dim, int buf, uint32_t begin, uint32_t end,
+                     const Bounds6& tight);
+    uint32_t Partition(Worker& w, int face, int dim, float value, int buf, uint32_t begin,
+                       uint32_t end, Bounds6& left, Bounds6& right);
+    uint32_t NewNode(Worker& w, const Box5& box, int face, int depth, bool isRemainder);
+    Node& At(Worker& w, uint32_t id) {
+        return (id & kLocal) ? w.part->nodes[id & ~kLocal] : nodes_[id];
+    }
+    void ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out);
+    void Join(LeafBatch& out);
+    Part& NewPart(uint32_t begin);
+    int Threads(uint32_t nRays) const;
 
     const scene::Scene& scene_;
     Params params_;
@@ -147,20 +209,24 @@ private:
     std::vector<Node> nodes_;
     // Read-only once built: copies of a hierarchy share them.
     std::shared_ptr<const std::array<FaceList, kFaceCount>> faceLists_;
-    std::vector<FaceList> levelLists_;    // scratch list per filter level
 
     // The current generation: the inserted rays, and their 5D points by face in two ping-pong
     // buffers of structure-of-arrays: X, Y, Z, u, v and the X where the ray ends (its start's X
     // plus its reach, which cuts beams: shadow rays end at the light).
-    static constexpr int kCoords = kDims + 1;
     std::vector<RayView> inserted_;
     uint32_t nInserted_ = 0;
     std::vector<float> coord_[2][kCoords];
     std::vector<uint32_t> id_[2];
     std::vector<uint32_t> dest_;
-    std::vector<float> keys_;
-    bool active_[kCoords] = {};  // coordinates that vary in the face being built
-    float constant_[kCoords] = {};
+    uint32_t* rayIndex_ = nullptr;  // the output's rayIndex while subdividing
+    // Per face: coordinates that vary among its rays, and the value of those that do not.
+    bool active_[kFaceCount][kCoords] = {};
+    float constant_[kFaceCount][kCoords] = {};
+    // Scratch kept between generations so that steady state allocates nothing.
+    std::vector<Worker> workers_;
+    std::deque<Part> parts_;          // the first nParts_ belong to this generation's tasks
+    std::deque<FaceList> keptLists_;  // lists of nodes whose later children are tasks
+    size_t nParts_ = 0, nKeptLists_ = 0;
     BuildCounters counters_;
 };
 
