@@ -29,11 +29,12 @@ struct ListView {
     const float* z1;
     const uint32_t* prim;
     size_t n;
+    const Hierarchy::FaceList* owner;  // the list viewed (its first n entries)
 };
 
 inline ListView View(const Hierarchy::FaceList& l, size_t n) {
-    return {l.x0.data(), l.x1.data(), l.y0.data(), l.y1.data(),
-            l.z0.data(), l.z1.data(), l.prim.data(), n};
+    return {l.x0.data(), l.x1.data(),   l.y0.data(), l.y1.data(), l.z0.data(),
+            l.z1.data(), l.prim.data(), n,           &l};
 }
 
 struct BeamTest {

@@ -709,13 +709,8 @@ void Hierarchy::Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, u
             root = kLocal;
             Link(parent, field) = kPending;
         }
-        // `list` is a view of a kept list or of the face's list: both outlive the task.
-        const FaceList* from = nullptr;
-        for (size_t i = 0; i < nKeptLists_ && !from; ++i) {
-            if (keptLists_[i].prim.data() == list.prim) from = &keptLists_[i];
-        }
-        if (!from) from = &(*faceLists_)[parent.face];
-        s.queue.push_back({root, begin, end, buf, tight, from, list.n, reuseList, &part});
+        // `list` views a kept list or the face's list: both outlive the task.
+        s.queue.push_back({root, begin, end, buf, tight, list.owner, list.n, reuseList, &part});
     }
     s.changed.notify_one();
 }

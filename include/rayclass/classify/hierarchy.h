@@ -36,6 +36,7 @@
 
 #include "rayclass/classify/params.h"
 #include "rayclass/classify/ray5d.h"
+#include "rayclass/core/scratch_vector.h"
 #include "rayclass/scene/scene.h"
 #include "rc_types.h"
 
@@ -56,34 +57,34 @@ struct Bounds6 {
 };
 
 struct Node {
-    Box5 box;                  // the node's interval: its rays' bounds when it was made
+    Box5 box;  // the node's interval: its rays' bounds when it was made
     uint32_t child[2] = {kNoNode, kNoNode};
     uint32_t remainder = kNoNode;  // made when a ray first falls outside both children
     uint8_t face = 0;
     uint8_t depth = 0;
-    uint8_t isRemainder = 0;   // a remainder's interval is its parent's minus the children
+    uint8_t isRemainder = 0;  // a remainder's interval is its parent's minus the children
     bool IsLeaf() const { return child[0] == kNoNode; }
 };
 
 // The leaves of one generation in flat arrays, ready to copy into OpenCL buffers.
 struct LeafBatch {
     std::vector<RcLeaf> leaves;
-    std::vector<rc_uint> rayIndex;         // leaves' rays, contiguous per leaf
-    std::vector<RcCandidate> candidates;   // leaves' lists, contiguous per leaf, sorted by nearX
-    std::vector<rc_uint> missed;           // rays that miss the scene box: answered "no hit"
-    uint32_t nRays = 0;                    // rays of the generation (leaf rays + missed)
+    std::vector<rc_uint> rayIndex;        // leaves' rays, contiguous per leaf
+    std::vector<RcCandidate> candidates;  // leaves' lists, contiguous per leaf, sorted by nearX
+    std::vector<rc_uint> missed;          // rays that miss the scene box: answered "no hit"
+    uint32_t nRays = 0;                   // rays of the generation (leaf rays + missed)
 };
 
 // Counters of the last Subdivide().
 struct BuildCounters {
-    uint64_t boxTests = 0;      // candidate tests made while filtering lists
-    uint64_t rayMoves = 0;      // rays moved by partitions (sum over levels)
-    uint32_t maxDepth = 0;      // deepest leaf
-    size_t scratchBytes = 0;    // peak bytes of the per-depth list and ray buffers
+    uint64_t boxTests = 0;    // candidate tests made while filtering lists
+    uint64_t rayMoves = 0;    // rays moved by partitions (sum over levels)
+    uint32_t maxDepth = 0;    // deepest leaf
+    size_t scratchBytes = 0;  // peak bytes of the per-depth list and ray buffers
 };
 
 class Hierarchy {
-public:
+  public:
     Hierarchy(const scene::Scene& scene, const Params& params);
 
     // Adds rays to the current generation. Several calls append; the generation's ray indices are
@@ -128,53 +129,53 @@ public:
 
     // Presorted per-face boxes (structure of arrays, padded, in the face frame, sorted by x0).
     struct FaceList {
-        std::vector<float> x0, x1, y0, y1, z0, z1;
-        std::vector<uint32_t> prim;
+        ScratchVector<float> x0, x1, y0, y1, z0, z1;
+        ScratchVector<uint32_t> prim;
         size_t Size() const { return prim.size(); }
         size_t Bytes() const { return prim.capacity() * 4 + x0.capacity() * 24; }
         void Resize(size_t n);
     };
 
-private:
-  static constexpr int kCoords = kDims + 1;
-  // Ids of the nodes a task makes, until the tasks' parts are joined: the index in its part
-  // with this bit set. kNoNode keeps its meaning (local indices stay far below it); kPending
-  // is a link to the root of another task, set when the parts are joined.
-  static constexpr uint32_t kLocal = 0x80000000u;
-  static constexpr uint32_t kPending = kNoNode - 1;
+  private:
+    static constexpr int kCoords = kDims + 1;
+    // Ids of the nodes a task makes, until the tasks' parts are joined: the index in its part
+    // with this bit set. kNoNode keeps its meaning (local indices stay far below it); kPending
+    // is a link to the root of another task, set when the parts are joined.
+    static constexpr uint32_t kLocal = 0x80000000u;
+    static constexpr uint32_t kPending = kNoNode - 1;
 
-  // What one task makes: leaves, their lists and nodes.
-  struct Part {
-      uint32_t begin = 0;  // the task's first ray position: parts join in this order
-      uint32_t base = 0;   // where its nodes go in nodes_
-      std::vector<RcLeaf> leaves;
-      std::vector<RcCandidate> candidates;
-      std::vector<Node> nodes;         // ids kLocal | index
-      std::vector<uint32_t> relinked;  // earlier nodes whose links now point into `nodes`
-      // When the task's root is new (nodes[0]): the node that links to it, in linkPart.
-      const Part* linkPart = nullptr;
-      uint32_t linkNode = kNoNode;
-      int linkField = 0;  // 0, 1: child, 2: remainder
-  };
-  // A subtree to build: a face root, or a later child of a node with many rays.
-  struct Task {
-      uint32_t node, begin, end;
-      int buf;
-      Bounds6 tight;
-      const FaceList* list;  // the parent's list: a face list or one of keptLists_
-      size_t listSize;
-      bool reuseList;
-      Part* part;
-  };
-  struct Schedule;  // the task queue of one Subdivide (private to the module)
-  // One thread's state while subdividing.
-  struct Worker {
-      std::vector<FaceList> levelLists;  // per depth: the list of the node being built
-      std::vector<float> keys;
-      BuildCounters counters;
-      Part* part = nullptr;
-      Schedule* schedule = nullptr;
-  };
+    // What one task makes: leaves, their lists and nodes.
+    struct Part {
+        uint32_t begin = 0;  // the task's first ray position: parts join in this order
+        uint32_t base = 0;   // where its nodes go in nodes_
+        std::vector<RcLeaf> leaves;
+        std::vector<RcCandidate> candidates;
+        std::vector<Node> nodes;         // ids kLocal | index
+        std::vector<uint32_t> relinked;  // earlier nodes whose links now point into `nodes`
+        // When the task's root is new (nodes[0]): the node that links to it, in linkPart.
+        const Part* linkPart = nullptr;
+        uint32_t linkNode = kNoNode;
+        int linkField = 0;  // 0, 1: child, 2: remainder
+    };
+    // A subtree to build: a face root, or a later child of a node with many rays.
+    struct Task {
+        uint32_t node, begin, end;
+        int buf;
+        Bounds6 tight;
+        const FaceList* list;  // the parent's list: a face list or one of keptLists_
+        size_t listSize;
+        bool reuseList;
+        Part* part;
+    };
+    struct Schedule;  // the task queue of one Subdivide (private to the module)
+    // One thread's state while subdividing.
+    struct Worker {
+        std::vector<FaceList> levelLists;  // per depth: the list of the node being built
+        std::vector<float> keys;
+        BuildCounters counters;
+        Part* part = nullptr;
+        Schedule* schedule = nullptr;
+    };
 
     void Convert(RayView rays, uint32_t firstId, uint32_t* next, Bounds6* faceBounds,
                  std::vector<rc_uint>& missed);
@@ -215,9 +216,9 @@ private:
     // plus its reach, which cuts beams: shadow rays end at the light).
     std::vector<RayView> inserted_;
     uint32_t nInserted_ = 0;
-    std::vector<float> coord_[2][kCoords];
-    std::vector<uint32_t> id_[2];
-    std::vector<uint32_t> dest_;
+    ScratchVector<float> coord_[2][kCoords];
+    ScratchVector<uint32_t> id_[2];
+    ScratchVector<uint32_t> dest_;
     uint32_t* rayIndex_ = nullptr;  // the output's rayIndex while subdividing
     // Per face: coordinates that vary among its rays, and the value of those that do not.
     bool active_[kFaceCount][kCoords] = {};
