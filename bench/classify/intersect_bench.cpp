@@ -83,7 +83,7 @@ void BM_FilterBoxes(benchmark::State& state) {
     const classify::ListView view = classify::View(in, kPrims);
     size_t kept = 0;
     for (auto _ : state) {
-        kept = classify::FilterList(test, view, out);
+        kept = classify::FilterList(test, view, classify::Out(out, 0));
         benchmark::DoNotOptimize(out.prim.data());
     }
     state.counters["kept"] = double(kept);

@@ -19,7 +19,7 @@ float WidenLower(float s) { return s == 0.0f ? -kTinySlope : s; }
 #if defined(__AVX512F__)
 
 template <int kSigns>
-size_t FilterAvx512(const BeamTest& t, const ListView& in, Hierarchy::FaceList& out) {
+size_t FilterAvx512(const BeamTest& t, const ListView& in, const ListOut& out) {
     const __m512 x0 = _mm512_set1_ps(t.x0), x1 = _mm512_set1_ps(t.x1);
     const __m512 y0 = _mm512_set1_ps(t.y0), y1 = _mm512_set1_ps(t.y1);
     const __m512 z0 = _mm512_set1_ps(t.z0), z1 = _mm512_set1_ps(t.z1);
@@ -27,13 +27,13 @@ size_t FilterAvx512(const BeamTest& t, const ListView& in, Hierarchy::FaceList& 
     const __m512 rv1 = _mm512_set1_ps(t.rv1), rv0 = _mm512_set1_ps(t.rv0);
     const __m512 reach = _mm512_set1_ps(t.reach);
     const __m512 zero = _mm512_setzero_ps();
-    float* ox0 = out.x0.data();
-    float* ox1 = out.x1.data();
-    float* oy0 = out.y0.data();
-    float* oy1 = out.y1.data();
-    float* oz0 = out.z0.data();
-    float* oz1 = out.z1.data();
-    uint32_t* oprim = out.prim.data();
+    float* ox0 = out.x0;
+    float* ox1 = out.x1;
+    float* oy0 = out.y0;
+    float* oy1 = out.y1;
+    float* oz0 = out.z0;
+    float* oz1 = out.z1;
+    uint32_t* oprim = out.prim;
     size_t k = 0;
     for (size_t i = 0; i < in.n; i += 16) {
         const size_t rest = in.n - i;
@@ -72,7 +72,7 @@ size_t FilterAvx512(const BeamTest& t, const ListView& in, Hierarchy::FaceList& 
 }
 
 template <int kSigns = 0>
-size_t Dispatch(const BeamTest& t, const ListView& in, Hierarchy::FaceList& out) {
+size_t Dispatch(const BeamTest& t, const ListView& in, const ListOut& out) {
     if constexpr (kSigns == 16) {
         return 0;
     } else {
@@ -121,7 +121,7 @@ bool BeamMayReach(const BeamTest& t, float bx0, float bx1, float by0, float by1,
     return lo <= hi;
 }
 
-size_t FilterList(const BeamTest& t, const ListView& in, Hierarchy::FaceList& out) {
+size_t FilterList(const BeamTest& t, const ListView& in, const ListOut& out) {
 #if defined(__AVX512F__)
     return Dispatch(t, in, out);
 #else

@@ -20,21 +20,26 @@
 
 namespace rayclass::classify {
 
-struct ListView {
-    const float* x0;
-    const float* x1;
-    const float* y0;
-    const float* y1;
-    const float* z0;
-    const float* z1;
-    const uint32_t* prim;
-    size_t n;
-    const Hierarchy::FaceList* owner;  // the list viewed (its first n entries)
+inline ListView View(const Hierarchy::FaceList& l, size_t n) {
+    return {l.x0.data(), l.x1.data(), l.y0.data(),   l.y1.data(),
+            l.z0.data(), l.z1.data(), l.prim.data(), n};
+}
+
+// Where a filter writes its kept boxes: n entries from these pointers on.
+struct ListOut {
+    float* x0;
+    float* x1;
+    float* y0;
+    float* y1;
+    float* z0;
+    float* z1;
+    uint32_t* prim;
 };
 
-inline ListView View(const Hierarchy::FaceList& l, size_t n) {
-    return {l.x0.data(), l.x1.data(),   l.y0.data(), l.y1.data(), l.z0.data(),
-            l.z1.data(), l.prim.data(), n,           &l};
+// Entries [at, ...) of `l`.
+inline ListOut Out(Hierarchy::FaceList& l, size_t at) {
+    return {l.x0.data() + at, l.x1.data() + at, l.y0.data() + at,  l.y1.data() + at,
+            l.z0.data() + at, l.z1.data() + at, l.prim.data() + at};
 }
 
 struct BeamTest {
@@ -50,8 +55,8 @@ BeamTest MakeBeamTest(const Box5& box, float reach);
 bool BeamMayReach(const BeamTest& t, float bx0, float bx1, float by0, float by1, float bz0,
                   float bz1);
 
-// Keeps the boxes of `in` that `t` may reach, in order, in out[0, result). `out` must hold at
-// least in.n entries.
-size_t FilterList(const BeamTest& t, const ListView& in, Hierarchy::FaceList& out);
+// Keeps the boxes of `in` that `t` may reach, in order, in out[0, result). `out` must have room
+// for in.n entries.
+size_t FilterList(const BeamTest& t, const ListView& in, const ListOut& out);
 
 }  // namespace rayclass::classify

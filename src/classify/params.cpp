@@ -58,7 +58,7 @@ float ParseFloat(const std::string& name, const std::string& value, float lo, fl
 
 const char* ParamNames() {
     return "min-rays, min-candidates, splits-per-list, split, min-origin-fraction, "
-           "min-dir-fraction, dir-weight, threads";
+           "min-dir-fraction, dir-weight, threads, task-rays";
 }
 
 void SetParam(Params& params, const std::string& name, const std::string& value) {
@@ -83,6 +83,8 @@ void SetParam(Params& params, const std::string& name, const std::string& value)
         params.minDirFraction = ParseFloat(name, value, 0.0f, 1.0f, false, "a number in [0, 1]");
     } else if (name == "dir-weight") {
         params.dirWeight = ParseFloat(name, value, 0.0f, 1e30f, true, "a number > 0");
+    } else if (name == "task-rays") {
+        params.taskRays = ParseCount(name, value, 0);
     } else if (name == "threads") {
         params.threads = std::min<uint32_t>(ParseCount(name, value, 0), 256);
     } else {

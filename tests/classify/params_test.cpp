@@ -18,6 +18,10 @@ TEST(SetParam, SetsEveryNamedParameter) {
     SetParam(p, "min-origin-fraction", "0.001");
     SetParam(p, "min-dir-fraction", "1e-5");
     SetParam(p, "dir-weight", "0.5");
+    SetParam(p, "threads", "3");
+    SetParam(p, "task-rays", "5000");
+    EXPECT_EQ(p.threads, 3u);
+    EXPECT_EQ(p.taskRays, 5000u);
     EXPECT_EQ(p.minRays, 8u);
     EXPECT_EQ(p.minCandidates, 0u);
     EXPECT_EQ(p.splitsPerList, 2);

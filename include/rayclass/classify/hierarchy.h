@@ -47,7 +47,17 @@ static_assert(sizeof(RcCandidate) == 8);
 
 constexpr uint32_t kNoNode = 0xFFFFFFFFu;
 
-struct ListView;
+// The first n entries of a candidate list (structure of arrays, sorted by x0).
+struct ListView {
+    const float* x0;
+    const float* x1;
+    const float* y0;
+    const float* y1;
+    const float* z0;
+    const float* z1;
+    const uint32_t* prim;
+    size_t n;
+};
 
 // A node's tight bounds: X, Y, Z, u, v and the end X of its rays (index 5).
 struct Bounds6 {
@@ -144,15 +154,17 @@ class Hierarchy {
     static constexpr uint32_t kLocal = 0x80000000u;
     static constexpr uint32_t kPending = kNoNode - 1;
 
-    // What one task makes: leaves, their lists and nodes.
+    // What one task made: ranges of the arrays of the worker that ran it.
     struct Part {
         uint32_t begin = 0;  // the task's first ray position: parts join in this order
         uint32_t base = 0;   // where its nodes go in nodes_
-        std::vector<RcLeaf> leaves;
-        std::vector<RcCandidate> candidates;
-        std::vector<Node> nodes;         // ids kLocal | index
-        std::vector<uint32_t> relinked;  // earlier nodes whose links now point into `nodes`
-        // When the task's root is new (nodes[0]): the node that links to it, in linkPart.
+        int worker = 0;
+        size_t leafBegin = 0, leafEnd = 0, nodeBegin = 0, nodeEnd = 0;
+        std::vector<uint32_t> relinked;  // earlier nodes whose links now point into the part
+        // When the task's root is new: the root (the part's first node) and the node that links
+        // to it, in linkPart.
+        bool newRoot = false;
+        Node root;
         const Part* linkPart = nullptr;
         uint32_t linkNode = kNoNode;
         int linkField = 0;  // 0, 1: child, 2: remainder
@@ -162,19 +174,27 @@ class Hierarchy {
         uint32_t node, begin, end;
         int buf;
         Bounds6 tight;
-        const FaceList* list;  // the parent's list: a face list or one of keptLists_
-        size_t listSize;
+        ListView list;  // the parent's list: a face list or a kept one
         bool reuseList;
         Part* part;
     };
     struct Schedule;  // the task queue of one Subdivide (private to the module)
-    // One thread's state while subdividing.
+    // One thread's state while subdividing. The arrays keep their memory between generations.
     struct Worker {
         std::vector<FaceList> levelLists;  // per depth: the list of the node being built
         std::vector<float> keys;
         BuildCounters counters;
-        Part* part = nullptr;
         Schedule* schedule = nullptr;
+        Part* part = nullptr;  // of the running task
+        // What the tasks it ran made, one after another (Part ranges index them; a leaf's
+        // candBegin indexes `candidates`).
+        std::vector<RcLeaf> leaves;
+        std::vector<RcCandidate> candidates;
+        std::vector<Node> nodes;
+        // Lists of nodes whose later children are tasks: they live until Subdivide returns, in
+        // chunks filled one after another.
+        std::vector<FaceList> kept;
+        size_t keptChunk = 0, keptUsed = 0;
     };
 
     void Convert(RayView rays, uint32_t firstId, uint32_t* next, Bounds6* faceBounds,
@@ -183,7 +203,7 @@ class Hierarchy {
                  const Bounds6& tight, const ListView& list, bool reuseList);
     void Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, uint32_t begin,
                uint32_t end, int buf, const Bounds6& tight, const ListView& list, bool reuseList);
-    void Work(Worker& w);
+    void Work(Worker& w, int index);
     void EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
                   const ListView& list, float endHi);
     ListView Filter(Worker& w, const Bounds6& tight, const ListView& list, int level, bool keep);
@@ -196,7 +216,7 @@ class Hierarchy {
                        uint32_t end, Bounds6& left, Bounds6& right);
     uint32_t NewNode(Worker& w, const Box5& box, int face, int depth, bool isRemainder);
     Node& At(Worker& w, uint32_t id) {
-        return (id & kLocal) ? w.part->nodes[id & ~kLocal] : nodes_[id];
+        return (id & kLocal) ? w.nodes[w.part->nodeBegin + (id & ~kLocal)] : nodes_[id];
     }
     void ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out);
     void Join(LeafBatch& out);
@@ -225,9 +245,8 @@ class Hierarchy {
     float constant_[kFaceCount][kCoords] = {};
     // Scratch kept between generations so that steady state allocates nothing.
     std::vector<Worker> workers_;
-    std::deque<Part> parts_;          // the first nParts_ belong to this generation's tasks
-    std::deque<FaceList> keptLists_;  // lists of nodes whose later children are tasks
-    size_t nParts_ = 0, nKeptLists_ = 0;
+    std::deque<Part> parts_;  // the first nParts_ belong to this generation's tasks
+    size_t nParts_ = 0;
     BuildCounters counters_;
 };
 

@@ -59,7 +59,7 @@ struct Params {
     // The result does not depend on it.
     uint32_t threads = 0;
     // A node with more rays than this queues its later children as tasks for the threads
-    // (0: max(4096, rays / 64)). The result does not depend on it either, except for node ids.
+    // (0: max(32768, rays / 32)). The result does not depend on it either, except for node ids.
     uint32_t taskRays = 0;
 
     // Minimum hypercube size: a dimension is split only while its extent exceeds this fraction of
@@ -80,7 +80,7 @@ struct Params {
 // Sets one parameter by its command-line name (`--classify NAME=VALUE`):
 //   min-rays N, min-candidates N, splits-per-list N (N >= 1), split midpoint|median,
 //   min-origin-fraction F, min-dir-fraction F (0 <= F <= 1), dir-weight W (W > 0),
-//   threads N (0: one per core).
+//   threads N (0: one per core), task-rays N (0: automatic).
 // Throws rayclass::UsageError naming the valid names or values when `name` is unknown or `value`
 // does not parse completely or is out of range.
 void SetParam(Params& params, const std::string& name, const std::string& value);
