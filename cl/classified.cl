@@ -2,7 +2,8 @@
  * flat: leaves (ray and candidate ranges), rayIndex (the leaves' rays as indices into the
  * generation's ray buffer, which stays on the device), candidates (sorted by nearX per leaf).
  *
- * Three styles answer the same question and return the same hit (lower id wins ties):
+ * Three styles answer the same question and return the same hit (lower id wins ties; shadow
+ * rays: the same blocked flag):
  * - scalar: one work-item per ray, one candidate at a time: the baseline;
  * - vertex (the thesis's MIMD vertex unit): one work-item per ray with its own control flow, the
  *   SIMD lanes over 16 candidates of its leaf (RcTriangleBlock16), stopping at the first block
@@ -384,5 +385,92 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
         h.v = bv[k];
         hits[ids[k]] = h;
     }
+    tests[p] = c * count;
+}
+
+/* Any hit before each lane's tmax (the light), 16 shadow rays of one leaf in lockstep: a lane is
+ * done once blocked or once the candidates start beyond its end X; the packet stops when every
+ * lane is done. The triangle test is rc_intersect_triangle's, lane by lane. */
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_fragment(
+    __global const RcShadowRay* rays, __global const uint* rayIndex,
+    __global const uint* packetLeaf, __global const uint* packetFirst, uint nPackets,
+    __global const RcLeaf* leaves, __global const RcCandidate* candidates,
+    __global const RcTriangle* triangles, __global const RcSphere* spheres,
+    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
+    __global uchar* blocked, __global uint* tests) {
+    const uint p = get_global_id(0);
+    if (p >= nPackets) return;
+    const RcLeaf leaf = leaves[packetLeaf[p]];
+    const uint first = packetFirst[p];
+    const uint count = min(16u, leaf.rayCount - first);
+    float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], tmins[16], tmaxs[16];
+    uint ids[16];
+    for (uint k = 0; k < 16; ++k) {
+        /* Unused lanes repeat the packet's first ray; their results are not written. */
+        const uint id = rayIndex[leaf.rayBegin + first + (k < count ? k : 0)];
+        ids[k] = id;
+        const float4 o4 = rays[id].origin, d4 = rays[id].direction;
+        ox[k] = o4.x;
+        oy[k] = o4.y;
+        oz[k] = o4.z;
+        tmins[k] = o4.w;
+        dx[k] = d4.x;
+        dy[k] = d4.y;
+        dz[k] = d4.z;
+        tmaxs[k] = d4.w;
+    }
+    const float16 Ox = vload16(0, ox), Oy = vload16(0, oy), Oz = vload16(0, oz);
+    const float16 Dx = vload16(0, dx), Dy = vload16(0, dy), Dz = vload16(0, dz);
+    const float16 Tmin = vload16(0, tmins), Tmax = vload16(0, tmaxs);
+    const uint axis = leaf.face >> 1;
+    const float sign = (leaf.face & 1) ? -1.0f : 1.0f;
+    const float16 endX = sign * (axis == 0 ? Ox : (axis == 1 ? Oy : Oz)) +
+                         Tmax * fabs(axis == 0 ? Dx : (axis == 1 ? Dy : Dz));
+    int16 hit = (int16)(0);
+    const uint nT = params->nTriangles, nS = params->nSpheres;
+    uint c = 0;
+    for (; c < leaf.candCount; ++c) {
+        const RcCandidate cand = candidates[leaf.candBegin + c];
+        /* Lists are sorted by nearX: a lane that has passed its end stays past it. */
+        const int16 beyond = cand.nearX > endX;
+        if (all(hit | beyond)) break;
+        const uint prim = cand.prim;
+        if (prim < nT) {
+            const float3 p0 = triangles[prim].v0.xyz;
+            const float3 e1 = triangles[prim].v1.xyz - p0;
+            const float3 e2 = triangles[prim].v2.xyz - p0;
+            const float16 pvx = Dy * e2.z - e2.y * Dz;
+            const float16 pvy = Dz * e2.x - e2.z * Dx;
+            const float16 pvz = Dx * e2.y - e2.x * Dy;
+            const float16 det = e1.x * pvx + e1.y * pvy + e1.z * pvz;
+            const float16 invDet = 1.0f / det;
+            const float16 tvx = Ox - p0.x, tvy = Oy - p0.y, tvz = Oz - p0.z;
+            const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
+            const float16 qvx = tvy * e1.z - e1.y * tvz;
+            const float16 qvy = tvz * e1.x - e1.z * tvx;
+            const float16 qvz = tvx * e1.y - e1.x * tvy;
+            const float16 v = (Dx * qvx + Dy * qvy + Dz * qvz) * invDet;
+            const float16 t = (e2.x * qvx + e2.y * qvy + e2.z * qvz) * invDet;
+            hit |= ~beyond & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
+                   (u + v <= 1.0f) & (t > Tmin) & (t < Tmax);
+        } else {
+            int h[16], b[16];
+            vstore16(hit, 0, h);
+            vstore16(beyond, 0, b);
+            for (uint k = 0; k < 16; ++k) {
+                if (h[k] || b[k]) continue;
+                RcHit best = rc_no_hit(tmaxs[k]);
+                h[k] = rc_intersect_primitive(prim, (float3)(ox[k], oy[k], oz[k]),
+                                              (float3)(dx[k], dy[k], dz[k]), tmins[k], tmaxs[k],
+                                              triangles, spheres, quadrics, nT, nS, &best)
+                           ? -1
+                           : 0;
+            }
+            hit = vload16(0, h);
+        }
+    }
+    int h[16];
+    vstore16(hit, 0, h);
+    for (uint k = 0; k < count; ++k) blocked[ids[k]] = h[k] != 0 ? 1 : 0;
     tests[p] = c * count;
 }

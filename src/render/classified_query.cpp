@@ -46,6 +46,7 @@ class ClassifiedQuery final : public RayQuery {
           queryVertexShade_(program, "rc_query_vertex_shade"),
           occludedVertex_(program, "rc_occluded_vertex"),
           queryFragment_(program, "rc_query_fragment"),
+          occludedFragment_(program, "rc_occluded_fragment"),
           shadeIds_(program, "rc_shade_ids"),
           shadeLights_(program, "rc_shade_lights") {}
 
@@ -109,11 +110,19 @@ class ClassifiedQuery final : public RayQuery {
         // Every slot: empty ones have no direction and miss at once.
         static_assert(sizeof(classify::Ray) == offsetof(RcShadowRay, contribution));
         Classify(shadowHierarchy_, classify::RayView(hostRays.data(), n, sizeof(RcShadowRay)),
-                 shadowBatch_, style_ == KernelStyle::kScalar ? style_ : KernelStyle::kVertex);
+                 shadowBatch_, ShadowStyle());
         return Query(shadowBatch_, shadowRays, blocked, nullptr, timer).tests;
     }
 
   private:
+    // Shadow rays' leaves all take one style; auto takes packets. Any-hit queries let each
+    // vertex-style ray stop at its first blocker, yet on PoCL lockstep packets were as fast or
+    // faster (raybench, query kernels for 786,432 anchor shadow rays: Sibenik 15.3 ms as packets
+    // against 29.3 ms vertex style, Conference 23.4 against 22.6 ms).
+    KernelStyle ShadowStyle() const {
+        return style_ == KernelStyle::kAuto ? KernelStyle::kFragment : style_;
+    }
+
     // Classifies `rays` into out's leaves and sorts the leaves by kernel style (`style`: the
     // query's, or vertex for shadow rays).
     void Classify(classify::Hierarchy& hierarchy, classify::RayView rays, ClassifiedBatch& out,
@@ -166,14 +175,16 @@ class ClassifiedQuery final : public RayQuery {
             Launch(ctx_, k, nSlots, timer);
             return {SumTests(testsBuf, nSlots), false};
         }
-        // Vertex-style leaves: their rays as slots, their candidates as blocks of 16. Shadow rays
-        // take the vertex style whatever the setting: any-hit queries end at the first hit,
-        // which lockstep packets cannot exploit.
+        // Vertex-style leaves: their rays as slots, their candidates as blocks of 16. Every leaf
+        // of a shadow batch takes ShadowStyle().
         std::span<const uint32_t> vertexLeaves = cb.vertexLeaves;
+        std::span<const uint32_t> fragmentLeaves = cb.fragmentLeaves;
         if (shadow) {
             allLeaves_.resize(cb.batch.leaves.size());
             std::iota(allLeaves_.begin(), allLeaves_.end(), 0u);
-            vertexLeaves = allLeaves_;
+            const bool packets = ShadowStyle() == KernelStyle::kFragment;
+            vertexLeaves = packets ? std::span<const uint32_t>() : allLeaves_;
+            fragmentLeaves = packets ? allLeaves_ : std::span<const uint32_t>();
         }
         // Incoherent rays can have long lists in many leaves: launch the leaves in chunks whose
         // blocks fit one device allocation.
@@ -244,6 +255,30 @@ class ClassifiedQuery final : public RayQuery {
             Launch(ctx_, k, nSlots, timer);
             tests += SumTests(testsBuf, nSlots);
         }
+        if (!fragmentLeaves.empty()) {
+            const auto t1 = Clock::now();
+            packetLeaf_.clear();
+            packetFirst_.clear();
+            for (uint32_t l : fragmentLeaves) {
+                const RcLeaf& leaf = cb.batch.leaves[l];
+                for (uint32_t r = 0; r < leaf.rayCount; r += 16) {
+                    packetLeaf_.push_back(l);
+                    packetFirst_.push_back(r);
+                }
+            }
+            const uint32_t nPackets = uint32_t(packetLeaf_.size());
+            const cl::Buffer& packetLeaf = packetLeafBuf_.Upload(ctx_, packetLeaf_);
+            const cl::Buffer& packetFirst = packetFirstBuf_.Upload(ctx_, packetFirst_);
+            const cl::Buffer& testsBuf =
+                fragmentTestsBuf_.Reserve(ctx_, nPackets * sizeof(uint32_t));
+            cl::Kernel& k = shadow ? occludedFragment_ : queryFragment_;
+            SetArgs(k, rays, rayIndex, packetLeaf, packetFirst, nPackets, leaves, candidates,
+                    scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
+                    testsBuf);
+            AddHostSeconds(Seconds(t1));
+            Launch(ctx_, k, nPackets, timer);
+            tests += SumTests(testsBuf, nPackets);
+        }
         if (shadow) return {tests, false};
         // The rays the vertex kernel did not shade (fragment leaves' rays and the misses), in
         // slot order: shading then walks the batch's arrays in order, not leaf by leaf.
@@ -265,29 +300,6 @@ class ClassifiedQuery final : public RayQuery {
             }
         }
         AddHostSeconds(Seconds(tUnshaded));
-        if (!cb.fragmentLeaves.empty()) {
-            const auto t1 = Clock::now();
-            packetLeaf_.clear();
-            packetFirst_.clear();
-            for (uint32_t l : cb.fragmentLeaves) {
-                const RcLeaf& leaf = cb.batch.leaves[l];
-                for (uint32_t r = 0; r < leaf.rayCount; r += 16) {
-                    packetLeaf_.push_back(l);
-                    packetFirst_.push_back(r);
-                }
-            }
-            const uint32_t nPackets = uint32_t(packetLeaf_.size());
-            const cl::Buffer& packetLeaf = packetLeafBuf_.Upload(ctx_, packetLeaf_);
-            const cl::Buffer& packetFirst = packetFirstBuf_.Upload(ctx_, packetFirst_);
-            const cl::Buffer& testsBuf =
-                fragmentTestsBuf_.Reserve(ctx_, nPackets * sizeof(uint32_t));
-            SetArgs(queryFragment_, rays, rayIndex, packetLeaf, packetFirst, nPackets, leaves,
-                    candidates, scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params,
-                    out, testsBuf);
-            AddHostSeconds(Seconds(t1));
-            Launch(ctx_, queryFragment_, nPackets, timer);
-            tests += SumTests(testsBuf, nPackets);
-        }
         if (!unshaded_.empty()) {
             // The thesis's fragment pass 2: per ray (radiance, secondary rays), then per
             // (ray, light) pair (shadow rays).
@@ -325,7 +337,7 @@ class ClassifiedQuery final : public RayQuery {
     classify::Hierarchy shadowHierarchy_;
     KernelStyle style_;
     cl::Kernel queryScalar_, occludedScalar_, gather_, queryVertexShade_, occludedVertex_,
-        queryFragment_, shadeIds_, shadeLights_;
+        queryFragment_, occludedFragment_, shadeIds_, shadeLights_;
     ClassifiedBatch shadowBatch_;
     std::vector<uint32_t> allLeaves_, vertexSlots_, vertexRayLeaf_, blockLeaf_, blockFirst_,
         leafFirstBlock_, packetLeaf_, packetFirst_, testsHost_, unshaded_;

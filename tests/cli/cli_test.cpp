@@ -526,7 +526,7 @@ TEST_F(Cli, RenderWritesTheImageAndConsistentStatsAndNothingElse) {
         EXPECT_GE(times.at(key).get<double>(), 0.0) << key;
     }
     for (const char* kernel :
-         {"kernel_rc_generate_eye_rays", "kernel_rc_occluded_vertex", "host_classify"}) {
+         {"kernel_rc_generate_eye_rays", "kernel_rc_occluded_fragment", "host_classify"}) {
         EXPECT_TRUE(times.contains(kernel)) << kernel;
     }
     EXPECT_LE(times.at("program_build").get<double>(), times.at("total").get<double>());

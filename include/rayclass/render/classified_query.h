@@ -17,7 +17,7 @@ enum class KernelStyle {
     kScalar,    // one work-item per ray, one candidate at a time
     kVertex,    // one work-item per ray, 16 candidates per step (float16 lanes over candidates)
     kFragment,  // one work-item per 16 rays of a leaf, lockstep over candidates
-    kAuto,      // per leaf: fragment for coherent leaves, vertex otherwise
+    kAuto,      // per leaf: fragment for coherent leaves, vertex otherwise (shadow rays: fragment)
 };
 
 KernelStyle ParseKernelStyle(const std::string& name);  // throws UsageError
