@@ -44,8 +44,8 @@ constexpr uint32_t kParallelRaysMin = 32768;
 // 1.22 s with 32,768, 1.18 s on one thread without tasks).
 constexpr uint32_t kTaskRaysMin = 32768;
 constexpr uint32_t kTasks = 32;
-// Entries per chunk of a worker's kept lists (a longer list gets a chunk of its own).
-constexpr size_t kKeptChunk = size_t(1) << 18;
+// Entries per chunk of a worker's list arenas (a longer list gets a chunk of its own).
+constexpr size_t kListChunk = size_t(1) << 18;
 
 // Runs f(t) for t in [0, n), f(0) on the calling thread.
 template <typename F>
@@ -193,7 +193,12 @@ namespace {
 // on every core: Conference renders were 20 % slower for it.)
 template <typename V>
 void Regrow(V& v, size_t n) {
-    v.clear();
+    if (n > v.capacity()) {
+        // Geometric growth, as resize() would do: a list that grows a little at a time must not
+        // be reallocated (and its pages faulted in again) every time.
+        v.clear();
+        v.reserve(std::max(n, 2 * v.capacity()));
+    }
     v.resize(n);
 }
 }  // namespace
@@ -641,12 +646,11 @@ void Hierarchy::Subdivide(LeafBatch& out) {
     if (workers_.size() < size_t(threads)) workers_.resize(size_t(threads));
     for (Worker& w : workers_) {
         w.counters = {};
-        w.levelLists.resize(size_t(params_.maxDepth) + 2);
         w.schedule = &schedule;
         w.leaves.clear();
         w.candidates.clear();
         w.nodes.clear();
-        w.keptChunk = w.keptUsed = 0;
+        w.kept.chunk = w.kept.used = w.stack.chunk = w.stack.used = 0;
     }
     OnThreads(threads, [&](int t) { Work(workers_[size_t(t)], t); });
     Join(out);
@@ -660,8 +664,9 @@ void Hierarchy::Subdivide(LeafBatch& out) {
         scratch += w.keys.capacity() * 4 + w.leaves.capacity() * sizeof(RcLeaf) +
                    w.candidates.capacity() * sizeof(RcCandidate) +
                    w.nodes.capacity() * sizeof(Node);
-        for (const auto& l : w.levelLists) scratch += l.Bytes();
-        for (const auto& l : w.kept) scratch += l.Bytes();
+        for (const auto* a : {&w.stack, &w.kept}) {
+            for (const auto& l : a->chunks) scratch += l.Bytes();
+        }
         w.schedule = nullptr;
         w.part = nullptr;
     }
@@ -852,34 +857,36 @@ float SampledKeepFraction(const Bounds6& tight, const ListView& list) {
 
 }  // namespace
 
-ListView Hierarchy::Filter(Worker& w, const Bounds6& tight, const ListView& list, int level,
-                           bool keep) {
+namespace {
+
+// Room for n entries at the end of `arena`: in its current chunk, else in the next one.
+ListOut Take(Hierarchy::ListArena& arena, size_t n) {
+    if (arena.chunk < arena.chunks.size() && arena.used + n > arena.chunks[arena.chunk].Size()) {
+        ++arena.chunk;
+        arena.used = 0;
+    }
+    if (arena.chunk == arena.chunks.size()) arena.chunks.emplace_back();
+    Hierarchy::FaceList& c = arena.chunks[arena.chunk];
+    // Only an empty chunk is too small here, and nothing points into an empty chunk.
+    if (c.Size() < arena.used + n) c.Resize(std::max(n, kListChunk));
+    return Out(c, arena.used);
+}
+
+}  // namespace
+
+ListView Hierarchy::Filter(Worker& w, const Bounds6& tight, const ListView& list, bool keep) {
     // No ray of the node gets past X = end, and the list is sorted by near X: cut it there first.
     const float endHi = tight.hi[kDims];
     ListView in = list;
     in.n = size_t(std::upper_bound(in.x0, in.x0 + in.n, endHi) - in.x0);
-    FaceList* dst = &w.levelLists[size_t(level)];
-    size_t at = 0;
-    if (keep) {
-        // Tasks read this list after its node returns: it goes where it stays until the end.
-        if (w.keptChunk < w.kept.size() && w.keptUsed + in.n > w.kept[w.keptChunk].Size()) {
-            ++w.keptChunk;
-            w.keptUsed = 0;
-        }
-        if (w.keptChunk == w.kept.size()) w.kept.emplace_back();
-        dst = &w.kept[w.keptChunk];
-        if (dst->Size() < w.keptUsed + in.n) dst->Resize(std::max(in.n, kKeptChunk));
-        at = w.keptUsed;
-    } else if (dst->Size() < in.n) {
-        dst->Resize(in.n);
-    }
+    ListArena& arena = keep ? w.kept : w.stack;
+    const ListOut out = Take(arena, in.n);
     // Every ray's reach is its end minus its start X, so the node's is at most endHi - lo X.
     const float reach = endHi - tight.lo[0];
-    const size_t kept = FilterList(MakeBeamTest(tight.ToBox5(), reach), in, Out(*dst, at));
+    const size_t kept = FilterList(MakeBeamTest(tight.ToBox5(), reach), in, out);
     w.counters.boxTests += in.n;
-    if (keep) w.keptUsed += kept;
-    const ListOut o = Out(*dst, at);
-    return {o.x0, o.x1, o.y0, o.y1, o.z0, o.z1, o.prim, kept};
+    arena.used += kept;
+    return {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1, out.prim, kept};
 }
 
 void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
@@ -887,11 +894,20 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
     const int depth = At(w, node).depth;
     const int face = At(w, node).face;
     const int other = buf ^ 1;
+    // The lists this node filters onto the stack are released when its subtree is built.
+    struct Release {
+        ListArena& arena;
+        const size_t chunk, used;
+        ~Release() {
+            arena.chunk = chunk;
+            arena.used = used;
+        }
+    } release{w.stack, w.stack.chunk, w.stack.used};
     // A node with many rays builds its first child and queues the others.
     const bool spawns = end - begin > w.schedule->cut;
     if (!At(w, node).IsLeaf()) {
         // A node split by an earlier generation: route by containment, the rest to the remainder.
-        const ListView own = Filter(w, tight, list, depth, spawns);
+        const ListView own = Filter(w, tight, list, spawns);
         const Box5 box0 = At(w, At(w, node).child[0]).box;
         const Box5 box1 = At(w, At(w, node).child[1]).box;
         const bool* active = active_[face];
@@ -942,7 +958,7 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
     if (filtered && list.n >= kSampledFilterMin && SampledKeepFraction(tight, list) > kSkipKeep) {
         filtered = false;
     }
-    ListView own = filtered ? Filter(w, tight, list, depth, spawns) : CutAtEnd(tight, list);
+    ListView own = filtered ? Filter(w, tight, list, spawns) : CutAtEnd(tight, list);
     int dim = 0;
     uint32_t mid = begin;
     Bounds6 leftBox, rightBox;
@@ -951,7 +967,7 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
         mid = Partition(w, face, dim, value, buf, begin, end, leftBox, rightBox);
     }
     if (mid == begin || mid == end) {
-        if (!filtered) own = Filter(w, tight, list, depth, false);
+        if (!filtered) own = Filter(w, tight, list, false);
         EmitLeaf(w, node, begin, end, buf, own, tight.hi[kDims]);
         return;
     }

@@ -146,6 +146,15 @@ class Hierarchy {
         void Resize(size_t n);
     };
 
+    // Candidate lists filtered during a Subdivide, in chunks filled one after another and kept
+    // between generations. Used as a stack (a node's list is released when its subtree is
+    // built: siblings reuse the memory, which stays in cache) or, for lists that tasks read
+    // later, only released when Subdivide returns.
+    struct ListArena {
+        std::vector<FaceList> chunks;
+        size_t chunk = 0, used = 0;
+    };
+
   private:
     static constexpr int kCoords = kDims + 1;
     // Ids of the nodes a task makes, until the tasks' parts are joined: the index in its part
@@ -181,7 +190,6 @@ class Hierarchy {
     struct Schedule;  // the task queue of one Subdivide (private to the module)
     // One thread's state while subdividing. The arrays keep their memory between generations.
     struct Worker {
-        std::vector<FaceList> levelLists;  // per depth: the list of the node being built
         std::vector<float> keys;
         BuildCounters counters;
         Schedule* schedule = nullptr;
@@ -191,10 +199,8 @@ class Hierarchy {
         std::vector<RcLeaf> leaves;
         std::vector<RcCandidate> candidates;
         std::vector<Node> nodes;
-        // Lists of nodes whose later children are tasks: they live until Subdivide returns, in
-        // chunks filled one after another.
-        std::vector<FaceList> kept;
-        size_t keptChunk = 0, keptUsed = 0;
+        ListArena stack;  // the lists of the nodes on the path being built
+        ListArena kept;   // lists of nodes whose later children are tasks
     };
 
     void Convert(RayView rays, uint32_t firstId, uint32_t* next, Bounds6* faceBounds,
@@ -206,7 +212,7 @@ class Hierarchy {
     void Work(Worker& w, int index);
     void EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
                   const ListView& list, float endHi);
-    ListView Filter(Worker& w, const Bounds6& tight, const ListView& list, int level, bool keep);
+    ListView Filter(Worker& w, const Bounds6& tight, const ListView& list, bool keep);
     bool ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays, const ListView& list,
                      int& dim) const;
     Bounds6 Bounds(int face, int buf, uint32_t begin, uint32_t end) const;
