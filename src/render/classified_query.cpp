@@ -95,10 +95,16 @@ class ClassifiedQuery final : public RayQuery {
                           const cl::Buffer& hits, const ShadeBuffers& shade,
                           KernelTimer& timer) override {
         if (n == 0) return {};
-        const RcHit miss{std::numeric_limits<float>::infinity(), RC_NO_HIT, 0.0f, 0.0f};
-        clrt::Check("clEnqueueFillBuffer",
-                    [&] { ctx_.queue().enqueueFillBuffer(hits, miss, 0, n * sizeof(RcHit)); });
-        return Query(static_cast<const ClassifiedBatch&>(*prepared), rays, hits, &shade, timer);
+        const auto& batch = static_cast<const ClassifiedBatch&>(*prepared);
+        // Every kernel style writes the hit of each ray in a leaf: only the rays that miss the
+        // scene box need the miss written (none, usually: rays start inside the box).
+        if (!batch.batch.missed.empty()) {
+            const RcHit miss{std::numeric_limits<float>::infinity(), RC_NO_HIT, 0.0f, 0.0f};
+            clrt::Check("clEnqueueFillBuffer", [&] {
+                ctx_.queue().enqueueFillBuffer(hits, miss, 0, n * sizeof(RcHit));
+            });
+        }
+        return Query(batch, rays, hits, &shade, timer);
     }
 
     uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
