@@ -15,13 +15,14 @@
 // tMax, cut at the scene box), so a node's list is first cut at the largest end X of its rays:
 // shadow rays' lists stop at the light. A node whose beam would keep most of a long list (checked
 // on a sample) passes the list to its children unfiltered instead of copying it. Lists live only
-// while a generation is being subdivided: inner lists are scratch per depth, leaf lists go into
-// the returned LeafBatch.
+// while a generation is being subdivided: inner lists are scratch on a per-thread stack, leaf
+// lists go into the returned LeafBatch.
 //
 // Subdivide runs on Params::threads cores. The work is a tree of tasks that depends on the rays
 // alone: each face root is a task, and a node with many rays builds its first child itself and
-// hands the others to the queue. Each task writes its leaves and new nodes into its own part;
-// parts are joined in ray order, so the result is the same for any thread count or timing.
+// queues the others (their list is kept until Subdivide returns). A task's leaves and new nodes
+// form its part, a range of the arrays of the thread that ran it; parts are joined in ray order,
+// so the result is the same for any thread count or timing.
 //
 // Invariants (checked by tests/classify): every ray that can hit the scene lies in exactly one
 // leaf; a node's interval contains the 5D points of the rays that were routed to it.
