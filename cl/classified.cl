@@ -272,6 +272,73 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
 
 /* --- fragment style ----------------------------------------------------------------------- */
 
+typedef struct RcLanes16 {
+    float16 ox, oy, oz, dx, dy, dz, tmin, tmax;
+    float16 x, speed;  /* the origins' X and the directions' |component| along the leaf's face */
+} RcLanes16;
+
+/* The rays of a packet as lanes: the leaf's rays [first, first + 16), unused lanes repeating the
+ * first ray (their results are not written), also lane by lane in the arrays. `rays` are records
+ * of `stride` float4s that start with origin (w: tmin) and direction (w: tmax): RcRay and
+ * RcShadowRay alike. */
+RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const float4* rays, uint stride,
+                                    __global const uint* rayIndex, RcLeaf leaf, uint first,
+                                    uint* ids, float* ox, float* oy, float* oz, float* dx,
+                                    float* dy, float* dz, float* tmins, float* tmaxs) {
+    const uint count = min(16u, leaf.rayCount - first);
+    for (uint k = 0; k < 16; ++k) {
+        const uint id = rayIndex[leaf.rayBegin + first + (k < count ? k : 0)];
+        ids[k] = id;
+        const float4 o4 = rays[id * stride], d4 = rays[id * stride + 1];
+        ox[k] = o4.x;
+        oy[k] = o4.y;
+        oz[k] = o4.z;
+        tmins[k] = o4.w;
+        dx[k] = d4.x;
+        dy[k] = d4.y;
+        dz[k] = d4.z;
+        tmaxs[k] = d4.w;
+    }
+    RcLanes16 l;
+    l.ox = vload16(0, ox);
+    l.oy = vload16(0, oy);
+    l.oz = vload16(0, oz);
+    l.dx = vload16(0, dx);
+    l.dy = vload16(0, dy);
+    l.dz = vload16(0, dz);
+    l.tmin = vload16(0, tmins);
+    l.tmax = vload16(0, tmaxs);
+    const uint axis = leaf.face >> 1;
+    const float sign = (leaf.face & 1) ? -1.0f : 1.0f;
+    l.x = sign * (axis == 0 ? l.ox : (axis == 1 ? l.oy : l.oz));
+    l.speed = fabs(axis == 0 ? l.dx : (axis == 1 ? l.dy : l.dz));
+    return l;
+}
+
+/* rc_intersect_triangle for 16 rays against one triangle, the same operations lane by lane:
+ * the lanes that hit inside (tmin, tmax), with t, u and v. */
+RC_SHADE_INLINE int16 rc_packet_triangle(const RcLanes16* L, RcTriangle tri, float16* t,
+                                         float16* u, float16* v) {
+    const float16 Ox = L->ox, Oy = L->oy, Oz = L->oz, Dx = L->dx, Dy = L->dy, Dz = L->dz;
+    const float3 p0 = tri.v0.xyz;
+    const float3 e1 = tri.v1.xyz - p0;
+    const float3 e2 = tri.v2.xyz - p0;
+    const float16 pvx = Dy * e2.z - e2.y * Dz;
+    const float16 pvy = Dz * e2.x - e2.z * Dx;
+    const float16 pvz = Dx * e2.y - e2.x * Dy;
+    const float16 det = e1.x * pvx + e1.y * pvy + e1.z * pvz;
+    const float16 invDet = 1.0f / det;
+    const float16 tvx = Ox - p0.x, tvy = Oy - p0.y, tvz = Oz - p0.z;
+    *u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
+    const float16 qvx = tvy * e1.z - e1.y * tvz;
+    const float16 qvy = tvz * e1.x - e1.z * tvx;
+    const float16 qvz = tvx * e1.y - e1.x * tvy;
+    *v = (Dx * qvx + Dy * qvy + Dz * qvz) * invDet;
+    *t = (e2.x * qvx + e2.y * qvy + e2.z * qvz) * invDet;
+    return (det != 0.0f) & (*u >= 0.0f) & (*u <= 1.0f) & (*v >= 0.0f) & (*u + *v <= 1.0f) &
+           (*t > L->tmin) & (*t < L->tmax);
+}
+
 /* One work-item per packet: packetLeaf[p] and packetFirst[p] (the packet's first ray within its
  * leaf); the packet holds min(16, rayCount - first) rays. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_fragment(
@@ -283,32 +350,13 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     const uint p = get_global_id(0);
     if (p >= nPackets) return;
     const RcLeaf leaf = leaves[packetLeaf[p]];
-    const uint first = packetFirst[p];
-    const uint count = min(16u, leaf.rayCount - first);
+    const uint count = min(16u, leaf.rayCount - packetFirst[p]);
     float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], tmins[16], tmaxs[16];
     uint ids[16];
-    for (uint k = 0; k < 16; ++k) {
-        /* Unused lanes repeat the packet's first ray; their results are not written. */
-        const uint id = rayIndex[leaf.rayBegin + first + (k < count ? k : 0)];
-        ids[k] = id;
-        const float4 o4 = rays[id].origin, d4 = rays[id].direction;
-        ox[k] = o4.x;
-        oy[k] = o4.y;
-        oz[k] = o4.z;
-        tmins[k] = o4.w;
-        dx[k] = d4.x;
-        dy[k] = d4.y;
-        dz[k] = d4.z;
-        tmaxs[k] = d4.w;
-    }
-    const float16 Ox = vload16(0, ox), Oy = vload16(0, oy), Oz = vload16(0, oz);
-    const float16 Dx = vload16(0, dx), Dy = vload16(0, dy), Dz = vload16(0, dz);
-    const float16 Tmin = vload16(0, tmins), Tmax = vload16(0, tmaxs);
-    const uint axis = leaf.face >> 1;
-    const float sign = (leaf.face & 1) ? -1.0f : 1.0f;
-    const float16 originX = sign * (axis == 0 ? Ox : (axis == 1 ? Oy : Oz));
-    const float16 speed = fabs(axis == 0 ? Dx : (axis == 1 ? Dy : Dz));
-    float16 bestT = Tmax, bestU = 0.0f, bestV = 0.0f;
+    const RcLanes16 L = rc_load_packet((__global const float4*)rays, sizeof(rays[0]) / 16, rayIndex,
+                                       leaf, packetFirst[p], ids, ox, oy, oz, dx, dy, dz, tmins,
+                                       tmaxs);
+    float16 bestT = L.tmax, bestU = 0.0f, bestV = 0.0f;
     uint16 bestPrim = (uint16)(RC_NO_HIT);
     const uint nT = params->nTriangles, nS = params->nSpheres;
     uint c = 0;
@@ -316,29 +364,16 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
         const RcCandidate cand = candidates[leaf.candBegin + c];
         /* Every lane done: its hit is strictly nearer than this candidate's box. */
         const int16 done =
-            (bestPrim != (uint16)(RC_NO_HIT)) & (originX + bestT * speed < cand.nearX);
+            (bestPrim != (uint16)(RC_NO_HIT)) & (L.x + bestT * L.speed < cand.nearX);
         if (all(done)) break;
         const uint prim = cand.prim;
         if (prim < nT) {
-            const float3 p0 = triangles[prim].v0.xyz;
-            const float3 e1 = triangles[prim].v1.xyz - p0;
-            const float3 e2 = triangles[prim].v2.xyz - p0;
-            const float16 pvx = Dy * e2.z - e2.y * Dz;
-            const float16 pvy = Dz * e2.x - e2.z * Dx;
-            const float16 pvz = Dx * e2.y - e2.x * Dy;
-            const float16 det = e1.x * pvx + e1.y * pvy + e1.z * pvz;
-            const float16 invDet = 1.0f / det;
-            const float16 tvx = Ox - p0.x, tvy = Oy - p0.y, tvz = Oz - p0.z;
-            const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
-            const float16 qvx = tvy * e1.z - e1.y * tvz;
-            const float16 qvy = tvz * e1.x - e1.z * tvx;
-            const float16 qvz = tvx * e1.y - e1.x * tvy;
-            const float16 v = (Dx * qvx + Dy * qvy + Dz * qvz) * invDet;
-            const float16 t = (e2.x * qvx + e2.y * qvy + e2.z * qvz) * invDet;
+            float16 t, u, v;
+            const int16 inside = rc_packet_triangle(&L,
+                                                    triangles[prim], &t, &u, &v);
             /* Nearer, or equally near with a lower id: the depth test with the id tie-break. */
-            const int16 better = (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
-                                 (u + v <= 1.0f) & (t > Tmin) & (t < Tmax) &
-                                 ((t < bestT) | ((t == bestT) & ((uint16)(prim) < bestPrim)));
+            const int16 better =
+                inside & ((t < bestT) | ((t == bestT) & ((uint16)(prim) < bestPrim)));
             bestT = select(bestT, t, better);
             bestU = select(bestU, u, better);
             bestV = select(bestV, v, better);
@@ -401,31 +436,13 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const uint p = get_global_id(0);
     if (p >= nPackets) return;
     const RcLeaf leaf = leaves[packetLeaf[p]];
-    const uint first = packetFirst[p];
-    const uint count = min(16u, leaf.rayCount - first);
+    const uint count = min(16u, leaf.rayCount - packetFirst[p]);
     float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], tmins[16], tmaxs[16];
     uint ids[16];
-    for (uint k = 0; k < 16; ++k) {
-        /* Unused lanes repeat the packet's first ray; their results are not written. */
-        const uint id = rayIndex[leaf.rayBegin + first + (k < count ? k : 0)];
-        ids[k] = id;
-        const float4 o4 = rays[id].origin, d4 = rays[id].direction;
-        ox[k] = o4.x;
-        oy[k] = o4.y;
-        oz[k] = o4.z;
-        tmins[k] = o4.w;
-        dx[k] = d4.x;
-        dy[k] = d4.y;
-        dz[k] = d4.z;
-        tmaxs[k] = d4.w;
-    }
-    const float16 Ox = vload16(0, ox), Oy = vload16(0, oy), Oz = vload16(0, oz);
-    const float16 Dx = vload16(0, dx), Dy = vload16(0, dy), Dz = vload16(0, dz);
-    const float16 Tmin = vload16(0, tmins), Tmax = vload16(0, tmaxs);
-    const uint axis = leaf.face >> 1;
-    const float sign = (leaf.face & 1) ? -1.0f : 1.0f;
-    const float16 endX = sign * (axis == 0 ? Ox : (axis == 1 ? Oy : Oz)) +
-                         Tmax * fabs(axis == 0 ? Dx : (axis == 1 ? Dy : Dz));
+    const RcLanes16 L = rc_load_packet((__global const float4*)rays, sizeof(rays[0]) / 16, rayIndex,
+                                       leaf, packetFirst[p], ids, ox, oy, oz, dx, dy, dz, tmins,
+                                       tmaxs);
+    const float16 endX = L.x + L.tmax * L.speed;
     int16 hit = (int16)(0);
     const uint nT = params->nTriangles, nS = params->nSpheres;
     uint c = 0;
@@ -436,23 +453,10 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
         if (all(hit | beyond)) break;
         const uint prim = cand.prim;
         if (prim < nT) {
-            const float3 p0 = triangles[prim].v0.xyz;
-            const float3 e1 = triangles[prim].v1.xyz - p0;
-            const float3 e2 = triangles[prim].v2.xyz - p0;
-            const float16 pvx = Dy * e2.z - e2.y * Dz;
-            const float16 pvy = Dz * e2.x - e2.z * Dx;
-            const float16 pvz = Dx * e2.y - e2.x * Dy;
-            const float16 det = e1.x * pvx + e1.y * pvy + e1.z * pvz;
-            const float16 invDet = 1.0f / det;
-            const float16 tvx = Ox - p0.x, tvy = Oy - p0.y, tvz = Oz - p0.z;
-            const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
-            const float16 qvx = tvy * e1.z - e1.y * tvz;
-            const float16 qvy = tvz * e1.x - e1.z * tvx;
-            const float16 qvz = tvx * e1.y - e1.x * tvy;
-            const float16 v = (Dx * qvx + Dy * qvy + Dz * qvz) * invDet;
-            const float16 t = (e2.x * qvx + e2.y * qvy + e2.z * qvz) * invDet;
-            hit |= ~beyond & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
-                   (u + v <= 1.0f) & (t > Tmin) & (t < Tmax);
+            float16 t, u, v;
+            const int16 inside = rc_packet_triangle(&L,
+                                                    triangles[prim], &t, &u, &v);
+            hit |= ~beyond & inside;
         } else {
             int h[16], b[16];
             vstore16(hit, 0, h);
