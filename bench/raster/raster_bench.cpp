@@ -233,26 +233,20 @@ int Experiments(int argc, char** argv) {
             }
         }
     }
-    const raster::Hull hulls[] = {raster::Hull::Sphere, raster::Hull::Box, raster::Hull::Billboard};
-    for (uint32_t n : hullCounts) {
-        scene::Scene scene = RandomSpheres(n);
+    // One row per hull type for `scene`, against one reference query.
+    auto everyHull = [&](const char* experiment, const char* label, scene::Scene scene, double x) {
         double refS = 0;
         const std::vector<RcHit> ref = prepare(scene, refS);
-        for (raster::Hull hull : hulls) {
+        for (raster::Hull hull :
+             {raster::Hull::Sphere, raster::Hull::Box, raster::Hull::Billboard}) {
             raster::RasterOptions options;
             options.hull = hull;
-            row("hulls", "spheres", scene, options, n, ref, refS);
+            row(experiment, label, scene, options, x, ref, refS);
         }
-    }
+    };
+    for (uint32_t n : hullCounts) everyHull("hulls", "spheres", RandomSpheres(n), n);
     for (float degrees : {0.0f, 15.0f, 30.0f, 45.0f, 60.0f, 75.0f, 90.0f}) {
-        scene::Scene scene = RotatedEllipsoids(2000, degrees);
-        double refS = 0;
-        const std::vector<RcHit> ref = prepare(scene, refS);
-        for (raster::Hull hull : hulls) {
-            raster::RasterOptions options;
-            options.hull = hull;
-            row("rotation", "ellipsoids", scene, options, degrees, ref, refS);
-        }
+        everyHull("rotation", "ellipsoids", RotatedEllipsoids(2000, degrees), degrees);
     }
     for (uint32_t n : {1u, 2u, 4u, 8u, 16u, 32u, 64u}) {
         scene::Scene scene = Layers(n);

@@ -258,14 +258,9 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
     const int threads = nPrims < kParallelSortMin
                             ? 1
                             : int(std::clamp(std::thread::hardware_concurrency(), 1u, 6u));
-    std::vector<std::future<void>> workers;
-    for (int t = 1; t < threads; ++t) {
-        workers.push_back(std::async(std::launch::async, [&, t] {
-            for (int face = t; face < kFaceCount; face += threads) buildFace(face);
-        }));
-    }
-    for (int face = 0; face < kFaceCount; face += threads) buildFace(face);
-    for (auto& w : workers) w.get();
+    OnThreads(threads, [&](int t) {
+        for (int face = t; face < kFaceCount; face += threads) buildFace(face);
+    });
     faceLists_ = std::move(lists);
 }
 
