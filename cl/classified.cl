@@ -278,41 +278,57 @@ typedef struct RcLanes16 {
 } RcLanes16;
 
 /* The rays of a packet as lanes: the leaf's rays [first, first + 16), unused lanes repeating the
- * first ray (their results are not written), also lane by lane in the arrays. `rays` are records
- * of `stride` float4s that start with origin (w: tmin) and direction (w: tmax): RcRay and
- * RcShadowRay alike. */
+ * first ray (their results are not written); ids[k] is lane k's ray. `rays` are records of
+ * `stride` float4s that start with origin (w: tmin) and direction (w: tmax): RcRay and
+ * RcShadowRay alike. The records are read as float4 into registers and transposed there: lanes
+ * written one float at a time to private arrays and read back as float16 cost half the fragment
+ * kernel's time on PoCL (the arrays become per-work-item context memory). */
+#define RC_LANES16(a, f)                                                                         \
+    (float16)(a[0].f, a[1].f, a[2].f, a[3].f, a[4].f, a[5].f, a[6].f, a[7].f, a[8].f, a[9].f,  \
+              a[10].f, a[11].f, a[12].f, a[13].f, a[14].f, a[15].f)
 RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const float4* rays, uint stride,
-                                    __global const uint* rayIndex, RcLeaf leaf, uint first,
-                                    uint* ids, float* ox, float* oy, float* oz, float* dx,
-                                    float* dy, float* dz, float* tmins, float* tmaxs) {
+                                         __global const uint* rayIndex, RcLeaf leaf, uint first,
+                                         uint* ids) {
     const uint count = min(16u, leaf.rayCount - first);
+    __global const uint* index = rayIndex + leaf.rayBegin + first;
+    float4 o[16], d[16];
+#pragma unroll
     for (uint k = 0; k < 16; ++k) {
-        const uint id = rayIndex[leaf.rayBegin + first + (k < count ? k : 0)];
+        const uint id = index[k < count ? k : 0];
         ids[k] = id;
-        const float4 o4 = rays[id * stride], d4 = rays[id * stride + 1];
-        ox[k] = o4.x;
-        oy[k] = o4.y;
-        oz[k] = o4.z;
-        tmins[k] = o4.w;
-        dx[k] = d4.x;
-        dy[k] = d4.y;
-        dz[k] = d4.z;
-        tmaxs[k] = d4.w;
+        o[k] = rays[id * stride];
+        d[k] = rays[id * stride + 1];
     }
     RcLanes16 l;
-    l.ox = vload16(0, ox);
-    l.oy = vload16(0, oy);
-    l.oz = vload16(0, oz);
-    l.dx = vload16(0, dx);
-    l.dy = vload16(0, dy);
-    l.dz = vload16(0, dz);
-    l.tmin = vload16(0, tmins);
-    l.tmax = vload16(0, tmaxs);
+    l.ox = RC_LANES16(o, x);
+    l.oy = RC_LANES16(o, y);
+    l.oz = RC_LANES16(o, z);
+    l.tmin = RC_LANES16(o, w);
+    l.dx = RC_LANES16(d, x);
+    l.dy = RC_LANES16(d, y);
+    l.dz = RC_LANES16(d, z);
+    l.tmax = RC_LANES16(d, w);
     const uint axis = leaf.face >> 1;
     const float sign = (leaf.face & 1) ? -1.0f : 1.0f;
     l.x = sign * (axis == 0 ? l.ox : (axis == 1 ? l.oy : l.oz));
     l.speed = fabs(axis == 0 ? l.dx : (axis == 1 ? l.dy : l.dz));
     return l;
+}
+
+/* Lane k of a packet as a ray, for the lane-by-lane tests of spheres and quadrics. */
+typedef struct RcLaneArrays16 {
+    float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], tmin[16], tmax[16];
+} RcLaneArrays16;
+
+RC_SHADE_INLINE void rc_store_lanes(const RcLanes16* L, RcLaneArrays16* a) {
+    vstore16(L->ox, 0, a->ox);
+    vstore16(L->oy, 0, a->oy);
+    vstore16(L->oz, 0, a->oz);
+    vstore16(L->dx, 0, a->dx);
+    vstore16(L->dy, 0, a->dy);
+    vstore16(L->dz, 0, a->dz);
+    vstore16(L->tmin, 0, a->tmin);
+    vstore16(L->tmax, 0, a->tmax);
 }
 
 /* rc_intersect_triangle for 16 rays against one triangle, the same operations lane by lane:
@@ -351,11 +367,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     if (p >= nPackets) return;
     const RcLeaf leaf = leaves[packetLeaf[p]];
     const uint count = min(16u, leaf.rayCount - packetFirst[p]);
-    float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], tmins[16], tmaxs[16];
     uint ids[16];
     const RcLanes16 L = rc_load_packet((__global const float4*)rays, sizeof(rays[0]) / 16, rayIndex,
-                                       leaf, packetFirst[p], ids, ox, oy, oz, dx, dy, dz, tmins,
-                                       tmaxs);
+                                       leaf, packetFirst[p], ids);
     float16 bestT = L.tmax, bestU = 0.0f, bestV = 0.0f;
     uint16 bestPrim = (uint16)(RC_NO_HIT);
     const uint nT = params->nTriangles, nS = params->nSpheres;
@@ -380,6 +394,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
             bestPrim = select(bestPrim, (uint16)(prim), as_uint16(better));
         } else {
             /* Spheres and quadrics are rare in triangle scenes: lane by lane. */
+            RcLaneArrays16 a;
+            rc_store_lanes(&L, &a);
             float bt[16], bu[16], bv[16];
             uint bp[16];
             vstore16(bestT, 0, bt);
@@ -392,8 +408,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
                 h.prim = bp[k];
                 h.u = bu[k];
                 h.v = bv[k];
-                rc_intersect_primitive(prim, (float3)(ox[k], oy[k], oz[k]),
-                                       (float3)(dx[k], dy[k], dz[k]), tmins[k], tmaxs[k],
+                rc_intersect_primitive(prim, (float3)(a.ox[k], a.oy[k], a.oz[k]),
+                                       (float3)(a.dx[k], a.dy[k], a.dz[k]), a.tmin[k], a.tmax[k],
                                        triangles, spheres, quadrics, nT, nS, &h);
                 bt[k] = h.t;
                 bp[k] = h.prim;
@@ -437,11 +453,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     if (p >= nPackets) return;
     const RcLeaf leaf = leaves[packetLeaf[p]];
     const uint count = min(16u, leaf.rayCount - packetFirst[p]);
-    float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], tmins[16], tmaxs[16];
     uint ids[16];
     const RcLanes16 L = rc_load_packet((__global const float4*)rays, sizeof(rays[0]) / 16, rayIndex,
-                                       leaf, packetFirst[p], ids, ox, oy, oz, dx, dy, dz, tmins,
-                                       tmaxs);
+                                       leaf, packetFirst[p], ids);
     const float16 endX = L.x + L.tmax * L.speed;
     int16 hit = (int16)(0);
     const uint nT = params->nTriangles, nS = params->nSpheres;
@@ -458,14 +472,16 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
                                                     triangles[prim], &t, &u, &v);
             hit |= ~beyond & inside;
         } else {
+            RcLaneArrays16 a;
+            rc_store_lanes(&L, &a);
             int h[16], b[16];
             vstore16(hit, 0, h);
             vstore16(beyond, 0, b);
             for (uint k = 0; k < 16; ++k) {
                 if (h[k] || b[k]) continue;
-                RcHit best = rc_no_hit(tmaxs[k]);
-                h[k] = rc_intersect_primitive(prim, (float3)(ox[k], oy[k], oz[k]),
-                                              (float3)(dx[k], dy[k], dz[k]), tmins[k], tmaxs[k],
+                RcHit best = rc_no_hit(a.tmax[k]);
+                h[k] = rc_intersect_primitive(prim, (float3)(a.ox[k], a.oy[k], a.oz[k]),
+                                              (float3)(a.dx[k], a.dy[k], a.dz[k]), a.tmin[k], a.tmax[k],
                                               triangles, spheres, quadrics, nT, nS, &best)
                            ? -1
                            : 0;
