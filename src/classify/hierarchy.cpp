@@ -173,6 +173,50 @@ uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint3
     return l;
 }
 
+// Whether keys[begin, end) are already split at `value`: all keys below it first, or all keys
+// below it last. Then *first is the length of the first run and *firstLeft whether it holds the
+// keys below. Gives up at the second change of side, so an unordered range costs a block or
+// two. Rays that arrive in an order matching the splits (eye rays in pixel order, whose rows
+// are intervals of one slope) are then split without being moved.
+bool AlreadySplit(const float* key, float value, uint32_t begin, uint32_t end, uint32_t* first,
+                  bool* firstLeft) {
+    uint32_t changes = 0, run = end - begin;
+    int prev = -1;
+#if defined(__AVX512F__)
+    const __m512 m = _mm512_set1_ps(value);
+    for (uint32_t i = begin; i < end; i += 16) {
+        const uint32_t lanes = std::min(16u, end - i);
+        const __mmask16 live = __mmask16(lanes == 16 ? 0xFFFFu : (1u << lanes) - 1u);
+        const unsigned left = unsigned(
+            _mm512_mask_cmp_ps_mask(live, _mm512_maskz_loadu_ps(live, key + i), m, _CMP_LT_OQ));
+        if (prev < 0) *firstLeft = left & 1u;
+        if (prev >= 0 && int(left & 1u) != prev) {
+            if (changes++ == 0) run = i - begin;
+        }
+        // Bit j: lanes j and j + 1 lie on different sides.
+        const unsigned inner = (left ^ (left >> 1)) & ((1u << (lanes - 1)) - 1u);
+        if (inner) {
+            if (changes == 0) run = i - begin + uint32_t(std::countr_zero(inner)) + 1;
+            changes += uint32_t(std::popcount(inner));
+        }
+        if (changes > 1) return false;
+        prev = int((left >> (lanes - 1)) & 1u);
+    }
+#else
+    for (uint32_t i = begin; i < end; ++i) {
+        const int left = key[i] < value ? 1 : 0;
+        if (prev < 0) *firstLeft = left;
+        if (prev >= 0 && left != prev) {
+            if (changes++ == 0) run = i - begin;
+            if (changes > 1) return false;
+        }
+        prev = left;
+    }
+#endif
+    *first = run;
+    return true;
+}
+
 template <int kActive = 0>
 uint32_t DispatchPartition(int active, const PartitionIo& io, float value, uint32_t begin,
                            uint32_t end, Bounds6& leftBox, Bounds6& rightBox) {
@@ -955,32 +999,39 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
     }
     ListView own = filtered ? Filter(w, tight, list, spawns) : CutAtEnd(tight, list);
     int dim = 0;
-    uint32_t mid = begin;
-    Bounds6 leftBox, rightBox;
+    Split split{begin, buf, true};
+    Bounds6 childBox[2];  // left, right
     if (ChooseSplit(At(w, node), tight, end - begin, own, dim)) {
         const float value = SplitValue(w, dim, buf, begin, end, tight);
-        mid = Partition(w, face, dim, value, buf, begin, end, leftBox, rightBox);
+        split = Partition(w, face, dim, value, buf, begin, end, childBox[0], childBox[1]);
     }
+    const uint32_t mid = split.mid;
     if (mid == begin || mid == end) {
         if (!filtered) own = Filter(w, tight, list, false);
         EmitLeaf(w, node, begin, end, buf, own, tight.hi[kDims]);
         return;
     }
-    const uint32_t left = NewNode(w, leftBox.ToBox5(), face, depth + 1, false);
-    At(w, node).child[0] = left;
-    if (!(node & kLocal)) w.part->relinked.push_back(node);
+    // near: the child whose rays come first, in [begin, mid); the other one's are [mid, end).
+    const int near = split.leftFirst ? 0 : 1;
     const bool reuse = filtered && (depth + 1) % std::max(params_.splitsPerList, 1) != 0;
     if (spawns) {
+        const uint32_t id = NewNode(w, childBox[near].ToBox5(), face, depth + 1, false);
+        At(w, node).child[near] = id;
+        if (!(node & kLocal)) w.part->relinked.push_back(node);
         // Queued first, so that another thread can start on it at once.
-        const Box5 box = rightBox.ToBox5();
-        Spawn(w, node, 1, &box, mid, end, other, rightBox, own, reuse);
-        Process(w, left, begin, mid, other, leftBox, own, reuse);
+        const Box5 box = childBox[1 - near].ToBox5();
+        Spawn(w, node, 1 - near, &box, mid, end, split.buf, childBox[1 - near], own, reuse);
+        Process(w, id, begin, mid, split.buf, childBox[near], own, reuse);
         return;
     }
-    const uint32_t right = NewNode(w, rightBox.ToBox5(), face, depth + 1, false);
+    const uint32_t left = NewNode(w, childBox[0].ToBox5(), face, depth + 1, false);
+    At(w, node).child[0] = left;
+    if (!(node & kLocal)) w.part->relinked.push_back(node);
+    const uint32_t right = NewNode(w, childBox[1].ToBox5(), face, depth + 1, false);
     At(w, node).child[1] = right;
-    Process(w, left, begin, mid, other, leftBox, own, reuse);
-    Process(w, right, mid, end, other, rightBox, own, reuse);
+    const uint32_t ids[2] = {left, right};
+    Process(w, ids[near], begin, mid, split.buf, childBox[near], own, reuse);
+    Process(w, ids[1 - near], mid, end, split.buf, childBox[1 - near], own, reuse);
 }
 
 bool Hierarchy::ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays,
@@ -1037,27 +1088,46 @@ float Hierarchy::SplitValue(Worker& w, int dim, int buf, uint32_t begin, uint32_
     return m > lo ? m : hi;
 }
 
-uint32_t Hierarchy::Partition(Worker& w, int face, int dim, float value, int buf, uint32_t begin,
-                              uint32_t end, Bounds6& leftBox, Bounds6& rightBox) {
-    const int other = buf ^ 1;
-    w.counters.rayMoves += end - begin;
-    PartitionIo io;
-    int mask = 0;
-    for (int k = 0; k < kCoords; ++k) {
-        io.src[k] = coord_[buf][k].data();
-        io.dst[k] = coord_[other][k].data();
-        mask |= active_[face][k] ? 1 << k : 0;
+Hierarchy::Split Hierarchy::Partition(Worker& w, int face, int dim, float value, int buf,
+                                      uint32_t begin, uint32_t end, Bounds6& leftBox,
+                                      Bounds6& rightBox) {
+    Split split{begin, buf, true};
+    uint32_t first = 0;
+    bool firstLeft = true;
+    if (AlreadySplit(coord_[buf][dim].data(), value, begin, end, &first, &firstLeft)) {
+        split.leftFirst = firstLeft;
+        // Only the children's bounds to find: the same minima and maxima a move would gather.
+        split.mid = begin + first;
+        Bounds6& a = split.leftFirst ? leftBox : rightBox;
+        Bounds6& b = split.leftFirst ? rightBox : leftBox;
+        for (int k = 0; k < kCoords; ++k) {
+            if (!active_[face][k]) continue;
+            const float* x = coord_[buf][k].data();
+            MinMax(x + begin, first, a.lo[k], a.hi[k]);
+            MinMax(x + split.mid, end - split.mid, b.lo[k], b.hi[k]);
+        }
+    } else {
+        const int other = buf ^ 1;
+        w.counters.rayMoves += end - begin;
+        PartitionIo io;
+        int mask = 0;
+        for (int k = 0; k < kCoords; ++k) {
+            io.src[k] = coord_[buf][k].data();
+            io.dst[k] = coord_[other][k].data();
+            mask |= active_[face][k] ? 1 << k : 0;
+        }
+        io.srcId = id_[buf].data();
+        io.dstId = id_[other].data();
+        io.key = coord_[buf][dim].data();
+        split.mid = DispatchPartition(mask, io, value, begin, end, leftBox, rightBox);
+        split.buf = other;
     }
-    io.srcId = id_[buf].data();
-    io.dstId = id_[other].data();
-    io.key = coord_[buf][dim].data();
-    const uint32_t mid = DispatchPartition(mask, io, value, begin, end, leftBox, rightBox);
     for (int k = 0; k < kCoords; ++k) {
         if (!active_[face][k]) {
             leftBox.lo[k] = leftBox.hi[k] = rightBox.lo[k] = rightBox.hi[k] = constant_[face][k];
         }
     }
-    return mid;
+    return split;
 }
 
 void Hierarchy::EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,

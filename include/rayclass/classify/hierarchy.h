@@ -219,8 +219,15 @@ class Hierarchy {
     Bounds6 Bounds(int face, int buf, uint32_t begin, uint32_t end) const;
     float SplitValue(Worker& w, int dim, int buf, uint32_t begin, uint32_t end,
                      const Bounds6& tight);
-    uint32_t Partition(Worker& w, int face, int dim, float value, int buf, uint32_t begin,
-                       uint32_t end, Bounds6& left, Bounds6& right);
+    // Where a split leaves a node's rays: in buffer `buf`, the child whose rays come first in
+    // [begin, mid) (the left one, key < value, when leftFirst), the other in [mid, end).
+    struct Split {
+        uint32_t mid;
+        int buf;
+        bool leftFirst;
+    };
+    Split Partition(Worker& w, int face, int dim, float value, int buf, uint32_t begin,
+                    uint32_t end, Bounds6& left, Bounds6& right);
     uint32_t NewNode(Worker& w, const Box5& box, int face, int depth, bool isRemainder);
     Node& At(Worker& w, uint32_t id) {
         return (id & kLocal) ? w.nodes[w.part->nodeBegin + (id & ~kLocal)] : nodes_[id];
