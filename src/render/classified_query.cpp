@@ -85,6 +85,11 @@ class ClassifiedQuery final : public RayQuery {
         return out;
     }
 
+    void Reset() override {
+        hierarchy_.Reset();
+        shadowHierarchy_.Reset();
+    }
+
     void Recycle(std::unique_ptr<PreparedBatch> batch) override {
         if (!batch) return;
         std::lock_guard<std::mutex> lock(mutex_);

@@ -501,6 +501,21 @@ TEST(Hierarchy, RaysAlreadyInSplitOrderAreNotMoved) {
     ExpectSameHits(Query(s, a, rows), BruteForce(s, rows));
 }
 
+// Reset forgets every split (a new frame, as raybench --warm uses it): the next generation
+// classifies exactly as in a fresh hierarchy, node ids included.
+TEST(Hierarchy, ResetClassifiesLikeAFreshHierarchy) {
+    const scene::Scene s = RandomScene(91, 300, 6, 2);
+    const auto first = RandomRays(92, 6000), second = RandomRays(93, 5000);
+    Hierarchy used(s, DeepParams(s)), fresh(s, DeepParams(s));
+    used.Classify(first);
+    used.Classify(second);
+    ASSERT_GT(used.Nodes().size(), size_t(kFaceCount));
+    used.Reset();
+    EXPECT_EQ(used.Nodes().size(), size_t(kFaceCount));
+    ExpectSameLeaves(used.Classify(second), fresh.Classify(second), true);
+    ExpectSameNodes(used, fresh);
+}
+
 TEST(Hierarchy, MemoryOfInnerListsIsScratch) {
     const scene::Scene s = RandomScene(71, 300, 0, 0);
     const auto rays = RandomRays(72, 3000);

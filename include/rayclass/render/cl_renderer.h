@@ -73,6 +73,10 @@ class RayQuery {
     virtual void Recycle(std::unique_ptr<PreparedBatch> batch) { (void)batch; }
     // Host time spent so far (classification, building the batch arrays), summed over threads.
     virtual double HostSeconds() const { return 0.0; }
+    // Forgets what earlier batches built (the classification's splits) but keeps every
+    // allocation: the next batch is answered as if by a new query whose memory is warm, as in
+    // a renderer's later frames.
+    virtual void Reset() {}
     // Nearest hit of rays[0, n) (RcRay) into hits (RcHit). Query styles whose kernels shade
     // the hits they find (vertex style) also write `shade` and say so.
     virtual QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
