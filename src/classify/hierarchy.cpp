@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "filter.h"
+#include "rayclass/core/radix_sort.h"
 
 #if defined(__AVX512F__)
 #include "avx512.h"
@@ -278,18 +279,14 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
     // The faces' lists are independent: sorted on every core (Conference's 331k primitives take
     // a quarter of a second on one).
     auto buildFace = [&](int face) {
-        std::vector<Box5> inFace(nPrims);
-        for (uint32_t id = 0; id < nPrims; ++id) inFace[id] = BoxInFace(face, boxes[id]);
+        std::vector<float> nearX(nPrims);
+        for (uint32_t id = 0; id < nPrims; ++id) nearX[id] = BoxInFace(face, boxes[id]).lo[0];
         // The distance order: near side along the face's main axis, ties by id for determinism.
-        std::vector<uint32_t> order(nPrims);
-        std::iota(order.begin(), order.end(), 0u);
-        std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-            return inFace[a].lo[0] < inFace[b].lo[0] || (inFace[a].lo[0] == inFace[b].lo[0] && a < b);
-        });
+        const std::vector<uint32_t> order = SortedOrder(nearX);
         FaceList& l = (*lists)[face];
         l.Resize(nPrims);
         for (uint32_t i = 0; i < nPrims; ++i) {
-            const Box5& b = inFace[order[i]];
+            const Box5 b = BoxInFace(face, boxes[order[i]]);
             l.x0[i] = b.lo[0];
             l.x1[i] = b.hi[0];
             l.y0[i] = b.lo[1];

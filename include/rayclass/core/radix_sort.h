@@ -1,0 +1,51 @@
+// Stable sorting of ids by a float key in three least-significant-digit radix passes over the
+// keys' bits made orderable as unsigned integers: linear in n, and no comparison reads a key
+// through an index (std::sort with such a comparator took a quarter of a second for Conference's
+// six presorted face lists).
+#pragma once
+
+#include <array>
+#include <bit>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace rayclass {
+
+// The ids 0 .. n-1 ordered by keys[id], equal keys by id (so -0 and +0, which compare equal,
+// keep id order too). No key may be NaN.
+inline std::vector<uint32_t> SortedOrder(std::span<const float> keys) {
+    const size_t n = keys.size();
+    std::vector<uint32_t> bits(n), order(n), nextBits(n), nextOrder(n);
+    for (size_t i = 0; i < n; ++i) {
+        // Adding +0 turns -0 into +0. Negative floats order by the complement of their bits,
+        // positive ones after them with the sign bit set.
+        const uint32_t u = std::bit_cast<uint32_t>(keys[i] + 0.0f);
+        bits[i] = (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+        order[i] = uint32_t(i);
+    }
+    constexpr int kDigitBits = 11;
+    constexpr uint32_t kBuckets = 1u << kDigitBits;
+    for (int shift = 0; shift < 32; shift += kDigitBits) {
+        std::array<uint32_t, kBuckets> start{};
+        for (size_t i = 0; i < n; ++i) ++start[(bits[i] >> shift) & (kBuckets - 1)];
+        // A digit every key shares leaves the order as it is.
+        if (n > 0 && start[(bits[0] >> shift) & (kBuckets - 1)] == n) continue;
+        uint32_t at = 0;
+        for (uint32_t& s : start) {
+            const uint32_t count = s;
+            s = at;
+            at += count;
+        }
+        for (size_t i = 0; i < n; ++i) {
+            const uint32_t to = start[(bits[i] >> shift) & (kBuckets - 1)]++;
+            nextBits[to] = bits[i];
+            nextOrder[to] = order[i];
+        }
+        bits.swap(nextBits);
+        order.swap(nextOrder);
+    }
+    return order;
+}
+
+}  // namespace rayclass
