@@ -891,6 +891,11 @@ float SampledKeepFraction(const Bounds6& tight, const ListView& list) {
     return float(kept) / float(tested);
 }
 
+// Whether the beam of `tight` would keep most of a long list (on a sample of it).
+bool KeepsMost(const Bounds6& tight, const ListView& list) {
+    return list.n >= kSampledFilterMin && SampledKeepFraction(tight, list) > kSkipKeep;
+}
+
 }  // namespace
 
 namespace {
@@ -943,7 +948,9 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
     const bool spawns = end - begin > w.schedule->cut;
     if (!At(w, node).IsLeaf()) {
         // A node split by an earlier generation: route by containment, the rest to the remainder.
-        const ListView own = Filter(w, tight, list, spawns);
+        // Its list is filtered as a leaf's would be: not when the beam keeps most of it.
+        const ListView own =
+            KeepsMost(tight, list) ? CutAtEnd(tight, list) : Filter(w, tight, list, spawns);
         const Box5 box0 = At(w, At(w, node).child[0]).box;
         const Box5 box1 = At(w, At(w, node).child[1]).box;
         const bool* active = active_[face];
@@ -990,10 +997,7 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
     // A long list that the node's beam would barely shorten (estimated on a sample) is not
     // copied: the children filter it instead. Near the roots of wide generations (mirror rays)
     // filters keep almost everything, and copying lists of 100k+ boxes is what costs there.
-    bool filtered = !reuseList;
-    if (filtered && list.n >= kSampledFilterMin && SampledKeepFraction(tight, list) > kSkipKeep) {
-        filtered = false;
-    }
+    const bool filtered = !reuseList && !KeepsMost(tight, list);
     ListView own = filtered ? Filter(w, tight, list, spawns) : CutAtEnd(tight, list);
     int dim = 0;
     Split split{begin, buf, true};
