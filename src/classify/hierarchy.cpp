@@ -930,6 +930,88 @@ ListView Hierarchy::Filter(Worker& w, const Bounds6& tight, const ListView& list
     return {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1, out.prim, kept};
 }
 
+void Hierarchy::RouteRays(int face, const Box5& box0, const Box5& box1, int buf, uint32_t begin,
+                          uint32_t end, uint32_t count[3]) {
+    const bool* active = active_[face];
+    const float* constant = constant_[face];
+    const int other = buf ^ 1;
+    float* const src[kCoords] = {coord_[buf][0].data(), coord_[buf][1].data(),
+                                 coord_[buf][2].data(), coord_[buf][3].data(),
+                                 coord_[buf][4].data(), coord_[buf][5].data()};
+    float* const dst[kCoords] = {coord_[other][0].data(), coord_[other][1].data(),
+                                 coord_[other][2].data(), coord_[other][3].data(),
+                                 coord_[other][4].data(), coord_[other][5].data()};
+    const uint32_t* srcId = id_[buf].data();
+    uint32_t* dstId = id_[other].data();
+#if defined(__AVX512F__)
+    // Pass 1: each block of 16 rays' groups as two masks, kept in dest_ at the block's first
+    // position (positions are the task's own, so threads do not share them).
+    __mmask16 in0 = 0xFFFF, in1 = 0xFFFF;  // what the coordinates that never vary allow
+    for (int k = 0; k < kDims; ++k) {
+        if (active[k]) continue;
+        if (!(constant[k] >= box0.lo[k] && constant[k] <= box0.hi[k])) in0 = 0;
+        if (!(constant[k] >= box1.lo[k] && constant[k] <= box1.hi[k])) in1 = 0;
+    }
+    for (uint32_t i = begin; i < end; i += 16) {
+        const __mmask16 live = LiveLanes16(end, i);
+        __mmask16 c0 = __mmask16(live & in0), c1 = __mmask16(live & in1);
+        for (int k = 0; k < kDims; ++k) {
+            if (!active[k]) continue;
+            const __m512 v = _mm512_maskz_loadu_ps(live, src[k] + i);
+            c0 = _mm512_mask_cmp_ps_mask(c0, v, _mm512_set1_ps(box0.lo[k]), _CMP_GE_OQ);
+            c0 = _mm512_mask_cmp_ps_mask(c0, v, _mm512_set1_ps(box0.hi[k]), _CMP_LE_OQ);
+            c1 = _mm512_mask_cmp_ps_mask(c1, v, _mm512_set1_ps(box1.lo[k]), _CMP_GE_OQ);
+            c1 = _mm512_mask_cmp_ps_mask(c1, v, _mm512_set1_ps(box1.hi[k]), _CMP_LE_OQ);
+        }
+        c1 = __mmask16(c1 & ~c0);
+        count[0] += uint32_t(std::popcount(unsigned(c0)));
+        count[1] += uint32_t(std::popcount(unsigned(c1)));
+        count[2] += uint32_t(std::popcount(unsigned(live & ~c0 & ~c1)));
+        dest_[i] = uint32_t(c0) | uint32_t(c1) << 16;
+    }
+    // Pass 2: every group in ray order after the groups before it.
+    uint32_t next[3] = {begin, begin + count[0], begin + count[0] + count[1]};
+    for (uint32_t i = begin; i < end; i += 16) {
+        const __mmask16 live = LiveLanes16(end, i);
+        const __mmask16 group[3] = {__mmask16(dest_[i]), __mmask16(dest_[i] >> 16),
+                                    __mmask16(live & ~(dest_[i] | dest_[i] >> 16))};
+        for (int k = 0; k < kCoords; ++k) {
+            if (!active[k]) continue;
+            const __m512 v = _mm512_maskz_loadu_ps(live, src[k] + i);
+            for (int g = 0; g < 3; ++g) {
+                if (!group[g]) continue;
+                const uint32_t n = uint32_t(std::popcount(unsigned(group[g])));
+                _mm512_mask_storeu_ps(dst[k] + next[g], __mmask16((1u << n) - 1u),
+                                      _mm512_maskz_compress_ps(group[g], v));
+            }
+        }
+        const __m512i id = _mm512_maskz_loadu_epi32(live, srcId + i);
+        for (int g = 0; g < 3; ++g) {
+            if (!group[g]) continue;
+            const uint32_t n = uint32_t(std::popcount(unsigned(group[g])));
+            _mm512_mask_storeu_epi32(dstId + next[g], __mmask16((1u << n) - 1u),
+                                     _mm512_maskz_compress_epi32(group[g], id));
+            next[g] += n;
+        }
+    }
+#else
+    for (uint32_t i = begin; i < end; ++i) {
+        std::array<float, kDims> p;
+        for (int k = 0; k < kDims; ++k) p[k] = active[k] ? src[k][i] : constant[k];
+        const uint32_t g = box0.Contains(p) ? 0 : (box1.Contains(p) ? 1 : 2);
+        dest_[i] = g;
+        ++count[g];
+    }
+    uint32_t next[3] = {begin, begin + count[0], begin + count[0] + count[1]};
+    for (uint32_t i = begin; i < end; ++i) dest_[i] = next[dest_[i]]++;
+    for (int k = 0; k < kCoords; ++k) {
+        if (!active[k]) continue;
+        for (uint32_t i = begin; i < end; ++i) dst[k][dest_[i]] = src[k][i];
+    }
+    for (uint32_t i = begin; i < end; ++i) dstId[dest_[i]] = srcId[i];
+#endif
+}
+
 void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
                         const Bounds6& tight, const ListView& list, bool reuseList) {
     const int depth = At(w, node).depth;
@@ -953,24 +1035,9 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
             KeepsMost(tight, list) ? CutAtEnd(tight, list) : Filter(w, tight, list, spawns);
         const Box5 box0 = At(w, At(w, node).child[0]).box;
         const Box5 box1 = At(w, At(w, node).child[1]).box;
-        const bool* active = active_[face];
-        const float* constant = constant_[face];
         uint32_t count[3] = {};
-        for (uint32_t i = begin; i < end; ++i) {
-            std::array<float, kDims> p;
-            for (int k = 0; k < kDims; ++k) p[k] = active[k] ? coord_[buf][k][i] : constant[k];
-            const uint32_t g = box0.Contains(p) ? 0 : (box1.Contains(p) ? 1 : 2);
-            dest_[i] = g;
-            ++count[g];
-        }
+        RouteRays(face, box0, box1, buf, begin, end, count);
         const uint32_t start[3] = {begin, begin + count[0], begin + count[0] + count[1]};
-        uint32_t next[3] = {start[0], start[1], start[2]};
-        for (uint32_t i = begin; i < end; ++i) dest_[i] = next[dest_[i]]++;
-        for (int k = 0; k < kCoords; ++k) {
-            if (!active[k]) continue;
-            for (uint32_t i = begin; i < end; ++i) coord_[other][k][dest_[i]] = coord_[buf][k][i];
-        }
-        for (uint32_t i = begin; i < end; ++i) id_[other][dest_[i]] = id_[buf][i];
         w.counters.rayMoves += end - begin;
         // The later groups first, so that the queue gets them at once.
         const int firstGroup = count[0] ? 0 : (count[1] ? 1 : 2);

@@ -211,6 +211,11 @@ class Hierarchy {
     void Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, uint32_t begin,
                uint32_t end, int buf, const Bounds6& tight, const ListView& list, bool reuseList);
     void Work(Worker& w, int index);
+    // Moves the rays [begin, end) of buffer `buf` into the other one by the child of an earlier
+    // split whose interval contains them: box0's, else box1's, else the remainder (groups 0, 1,
+    // 2, each in ray order, one after the other); count[g] gets each group's size.
+    void RouteRays(int face, const Box5& box0, const Box5& box1, int buf, uint32_t begin,
+                   uint32_t end, uint32_t count[3]);
     void EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
                   const ListView& list, float endHi);
     ListView Filter(Worker& w, const Bounds6& tight, const ListView& list, bool keep);
