@@ -5,6 +5,7 @@
 #include <future>
 
 #include "rayclass/classify/params.h"
+#include "rayclass/clrt/mapped.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/launch.h"
@@ -282,7 +283,6 @@ image::Image ClRenderer::Render(RenderStats& stats) {
 
     std::vector<RcHit> hostHits(batch);
     std::vector<rc_float4> hostRadiance(batch), hostNormals(batch);
-    std::vector<RcShadowRay> hostShadow(batch * nLights);
     std::vector<uint8_t> hostBlocked(batch * nLights), hostSpawned(2 * batch);
     std::vector<uint32_t> hostLive;
 
@@ -358,15 +358,11 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                         normals, shadow, secondary, spawned);
                 Launch(ctx_, shadeKernel, n, timer);
             }
+            // Read in place by the shadow query's classification and the accumulation below.
             const uint32_t nShadow = n * nLights;
-            clrt::Check("clEnqueueReadBuffer", [&] {
-                if (nShadow > 0) {
-                    q.enqueueReadBuffer(shadow, CL_TRUE, 0, nShadow * sizeof(RcShadowRay),
-                                        hostShadow.data());
-                }
-            });
-            stats.intersectionTests += query->Occluded(
-                shadow, std::span<const RcShadowRay>(hostShadow.data(), nShadow), blocked, timer);
+            clrt::MappedRead<RcShadowRay> shadowRays(q, shadow, nShadow);
+            const RcShadowRay* hostShadow = shadowRays.data();
+            stats.intersectionTests += query->Occluded(shadow, shadowRays.span(), blocked, timer);
             clrt::Check("clEnqueueReadBuffer", [&] {
                 q.enqueueReadBuffer(radiance, CL_FALSE, 0, n * sizeof(rc_float4),
                                     hostRadiance.data());
@@ -413,6 +409,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                 }
             }
             hostSeconds += SecondsSince(tHost);
+            shadowRays.Unmap();  // before the next batch's shading writes the buffer
 
             AppendToPages(ctx_, compactKernel, secondary, liveSlots, hostLive,
                           nextPixels.size() - hostLive.size(), pool, nextPages, timer);

@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "rayclass/classify/hierarchy.h"
+#include "rayclass/clrt/mapped.h"
 #include "rayclass/core/error.h"
 #include "rayclass/render/launch.h"
 
@@ -70,18 +71,10 @@ class ClassifiedQuery final : public RayQuery {
         // Classified in place: an RcRay starts with the fields of a classify::Ray, and mapping
         // costs no copy on a device that shares host memory.
         static_assert(sizeof(classify::Ray) == offsetof(RcRay, weight));
-        if (n > 0) {
-            void* mapped = clrt::Check("clEnqueueMapBuffer", [&] {
-                return queue.enqueueMapBuffer(rays, CL_TRUE, CL_MAP_READ, 0, n * sizeof(RcRay));
-            });
-            Classify(hierarchy_, classify::RayView(mapped, n, sizeof(RcRay)), *out, style_);
-            clrt::Check("clEnqueueUnmapMemObject", [&] {
-                queue.enqueueUnmapMemObject(rays, mapped);
-                queue.finish();
-            });
-        } else {
-            Classify(hierarchy_, classify::RayView(), *out, style_);
-        }
+        clrt::MappedRead<RcRay> mapped(queue, rays, n);
+        Classify(hierarchy_, classify::RayView(mapped.data(), n, sizeof(RcRay)), *out, style_);
+        mapped.Unmap();
+        clrt::Check("clFinish", [&] { queue.finish(); });
         return out;
     }
 
