@@ -503,8 +503,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
                 if (h[k] || b[k]) continue;
                 RcHit best = rc_no_hit(a.tmax[k]);
                 h[k] = rc_intersect_primitive(prim, (float3)(a.ox[k], a.oy[k], a.oz[k]),
-                                              (float3)(a.dx[k], a.dy[k], a.dz[k]), a.tmin[k], a.tmax[k],
-                                              triangles, spheres, quadrics, nT, nS, &best)
+                                              (float3)(a.dx[k], a.dy[k], a.dz[k]), a.tmin[k],
+                                              a.tmax[k], triangles, spheres, quadrics, nT, nS,
+                                              &best)
                            ? -1
                            : 0;
             }

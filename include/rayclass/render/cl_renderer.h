@@ -74,8 +74,8 @@ class RayQuery {
     // Host time spent so far (classification, building the batch arrays), summed over threads.
     virtual double HostSeconds() const { return 0.0; }
     // Forgets what earlier batches built (the classification's splits) but keeps every
-    // allocation: the next batch is answered as if by a new query whose memory is warm, as in
-    // a renderer's later frames.
+    // allocation: the next batch is answered as if by a new query whose memory is already
+    // faulted in (raybench --warm measures the steady state this way).
     virtual void Reset() {}
     // Nearest hit of rays[0, n) (RcRay) into hits (RcHit). Query styles whose kernels shade
     // the hits they find (vertex style) also write `shade` and say so.
