@@ -584,7 +584,9 @@ void Hierarchy::ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out)
     std::vector<Piece> pieces;
     uint32_t firstId = 0;
     for (const RayView& rays : inserted_) {
-        const size_t step = (rays.size() + size_t(threads) - 1) / size_t(threads);
+        // Pieces start at multiples of 16 rays: Convert places the rays its slow path maps
+        // after the others of their run of 16, so the runs must not depend on the thread count.
+        const size_t step = (rays.size() + size_t(threads) * 16 - 1) / (size_t(threads) * 16) * 16;
         for (size_t at = 0; at < rays.size(); at += step) {
             Piece& p = pieces.emplace_back();
             p.rays = rays.Sub(at, std::min(step, rays.size() - at));
