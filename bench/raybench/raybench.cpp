@@ -11,7 +11,7 @@
 // hierarchy is built lazily per render, so its construction is part of the host classification
 // time) and answers the whole set. --warm 1 keeps one query per method and Resets it before each
 // run: the hierarchy is still built from scratch every run, but in memory that earlier runs
-// faulted in, as a renderer's later frames and batches see it (a fresh query's scratch pages
+// faulted in, as a render's later batches see it (a fresh query's scratch pages
 // are faulted in inside the timed stage). CSV on stdout, one row per kind x method:
 //   kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,setup_s,
 //   tests_per_ray,hits

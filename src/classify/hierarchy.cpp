@@ -276,8 +276,7 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
         nodes_.push_back(n);
         for (int k = 0; k < kDims; ++k) rootExtent_[face][k] = std::max(root.hi[k] - root.lo[k], 0.0f);
     }
-    // The faces' lists are independent: sorted on every core (Conference's 331k primitives take
-    // a quarter of a second on one).
+    // The faces' lists are independent: built on every core.
     auto buildFace = [&](int face) {
         std::vector<float> nearX(nPrims);
         for (uint32_t id = 0; id < nPrims; ++id) nearX[id] = BoxInFace(face, boxes[id]).lo[0];
@@ -937,12 +936,12 @@ void Hierarchy::RouteRays(int face, const Box5& box0, const Box5& box1, int buf,
     const bool* active = active_[face];
     const float* constant = constant_[face];
     const int other = buf ^ 1;
-    float* const src[kCoords] = {coord_[buf][0].data(), coord_[buf][1].data(),
-                                 coord_[buf][2].data(), coord_[buf][3].data(),
-                                 coord_[buf][4].data(), coord_[buf][5].data()};
-    float* const dst[kCoords] = {coord_[other][0].data(), coord_[other][1].data(),
-                                 coord_[other][2].data(), coord_[other][3].data(),
-                                 coord_[other][4].data(), coord_[other][5].data()};
+    const float* src[kCoords];
+    float* dst[kCoords];
+    for (int k = 0; k < kCoords; ++k) {
+        src[k] = coord_[buf][k].data();
+        dst[k] = coord_[other][k].data();
+    }
     const uint32_t* srcId = id_[buf].data();
     uint32_t* dstId = id_[other].data();
 #if defined(__AVX512F__)
@@ -1165,33 +1164,27 @@ Hierarchy::Split Hierarchy::Partition(Worker& w, int face, int dim, float value,
     uint32_t first = 0;
     bool firstLeft = true;
     if (AlreadySplit(coord_[buf][dim].data(), value, begin, end, &first, &firstLeft)) {
-        split.leftFirst = firstLeft;
         // Only the children's bounds to find: the same minima and maxima a move would gather.
+        split.leftFirst = firstLeft;
         split.mid = begin + first;
-        Bounds6& a = split.leftFirst ? leftBox : rightBox;
-        Bounds6& b = split.leftFirst ? rightBox : leftBox;
-        for (int k = 0; k < kCoords; ++k) {
-            if (!active_[face][k]) continue;
-            const float* x = coord_[buf][k].data();
-            MinMax(x + begin, first, a.lo[k], a.hi[k]);
-            MinMax(x + split.mid, end - split.mid, b.lo[k], b.hi[k]);
-        }
-    } else {
-        const int other = buf ^ 1;
-        w.counters.rayMoves += end - begin;
-        PartitionIo io;
-        int mask = 0;
-        for (int k = 0; k < kCoords; ++k) {
-            io.src[k] = coord_[buf][k].data();
-            io.dst[k] = coord_[other][k].data();
-            mask |= active_[face][k] ? 1 << k : 0;
-        }
-        io.srcId = id_[buf].data();
-        io.dstId = id_[other].data();
-        io.key = coord_[buf][dim].data();
-        split.mid = DispatchPartition(mask, io, value, begin, end, leftBox, rightBox);
-        split.buf = other;
+        (firstLeft ? leftBox : rightBox) = Bounds(face, buf, begin, split.mid);
+        (firstLeft ? rightBox : leftBox) = Bounds(face, buf, split.mid, end);
+        return split;
     }
+    const int other = buf ^ 1;
+    w.counters.rayMoves += end - begin;
+    PartitionIo io;
+    int mask = 0;
+    for (int k = 0; k < kCoords; ++k) {
+        io.src[k] = coord_[buf][k].data();
+        io.dst[k] = coord_[other][k].data();
+        mask |= active_[face][k] ? 1 << k : 0;
+    }
+    io.srcId = id_[buf].data();
+    io.dstId = id_[other].data();
+    io.key = coord_[buf][dim].data();
+    split.mid = DispatchPartition(mask, io, value, begin, end, leftBox, rightBox);
+    split.buf = other;
     for (int k = 0; k < kCoords; ++k) {
         if (!active_[face][k]) {
             leftBox.lo[k] = leftBox.hi[k] = rightBox.lo[k] = rightBox.hi[k] = constant_[face][k];
