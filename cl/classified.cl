@@ -25,6 +25,14 @@ inline float rc_face_component(float3 v, uint face) {
     return (face & 1) ? -c : c;
 }
 
+/* The largest X a shadow ray's segment (tmin, tmax) reaches in the frame of its leaf's face:
+ * its end, or its start when the classification took it from its far end, the light
+ * (classify::CommonEnds); candidates whose box starts beyond it cannot block it. */
+inline float rc_segment_end_x(float3 o, float3 d, float tmin, float tmax, uint face) {
+    const float dx = rc_face_component(d, face);
+    return rc_face_component(o, face) + (dx > 0.0f ? tmax : tmin) * dx;
+}
+
 /* --- scalar ------------------------------------------------------------------------------- */
 
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_scalar(
@@ -67,7 +75,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const RcLeaf leaf = leaves[rayLeaf[slot]];
     const float3 o = rays[id].origin.xyz, d = rays[id].direction.xyz;
     const float tmin = rays[id].origin.w, tmax = rays[id].direction.w;
-    const float endX = rc_face_component(o, leaf.face) + tmax * fabs(rc_face_component(d, leaf.face));
+    const float endX = rc_segment_end_x(o, d, tmin, tmax, leaf.face);
     RcHit best = rc_no_hit(tmax);
     uchar hit = 0;
     uint c = 0;
@@ -247,8 +255,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const RcLeaf leaf = leaves[leafId];
     const float3 o = rays[id].origin.xyz, d = rays[id].direction.xyz;
     const float tmin = rays[id].origin.w, tmax = rays[id].direction.w;
-    const float endX =
-        rc_face_component(o, leaf.face) + tmax * fabs(rc_face_component(d, leaf.face));
+    const float endX = rc_segment_end_x(o, d, tmin, tmax, leaf.face);
     const uint first = leafFirstBlock[leafId];
     const uint nBlocks = (leaf.candCount + 15) / 16;
     uchar hit = 0;
@@ -478,7 +485,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
                                        leaf, packetFirst[p], ids);
     rc_prefetch_packet((__global const float4*)rays, sizeof(rays[0]) / 16, rayIndex, leaves,
                        packetLeaf, packetFirst, p + 1, nPackets);
-    const float16 endX = L.x + L.tmax * L.speed;
+    const float16 dX = (leaf.face & 1 ? -1.0f : 1.0f) *
+                       (leaf.face >> 1 == 0 ? L.dx : (leaf.face >> 1 == 1 ? L.dy : L.dz));
+    const float16 endX = L.x + select(L.tmin, L.tmax, dX > 0.0f) * dX;
     int16 hit = (int16)(0);
     const uint nT = params->nTriangles, nS = params->nSpheres;
     uint c = 0;

@@ -84,16 +84,16 @@ RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
         n = glm::normalize(n);
         if (glm::dot(n, d) > 0.0f) n = -n;  // facing the eye
         const glm::vec3 front = p + offset * n, back = p - offset * n;
-        // Shadow: towards the light, from the side facing it.
+        // Shadow: from the side facing the light to the light (the segment ends there, as the
+        // renderer's shadow rays do).
         {
             const glm::vec3 toLight = light - p;
-            const float dist = glm::length(toLight);
-            if (dist > 0.0f) {
-                const glm::vec3 l = toLight / dist;
+            if (glm::length(toLight) > 0.0f) {
                 BenchRay s;
-                s.origin = glm::dot(l, n) >= 0.0f ? front : back;
-                s.direction = l;
-                s.tMax = glm::length(light - s.origin);
+                s.origin = glm::dot(toLight, n) >= 0.0f ? front : back;
+                const glm::vec3 toLightFromOrigin = light - s.origin;
+                s.tMax = glm::length(toLightFromOrigin);
+                s.direction = toLightFromOrigin / s.tMax;
                 out.sets[1].push_back(s);
             }
         }

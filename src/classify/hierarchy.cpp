@@ -327,8 +327,12 @@ int Hierarchy::Threads(uint32_t nRays) const {
     return int(std::clamp(std::thread::hardware_concurrency(), 1u, 64u));
 }
 
-void Hierarchy::Insert(RayView rays) {
-    inserted_.push_back(rays);
+void Hierarchy::Insert(RayView rays, RayUse use) {
+    Inserted in{rays, {}};
+    if (use == RayUse::kAnyHit && !sceneBox_.Empty()) {
+        in.ends = FindCommonEnds(rays, sceneBox_, 0.25f * params_.padding);
+    }
+    inserted_.push_back(in);
     nInserted_ += uint32_t(rays.size());
 }
 
@@ -395,8 +399,71 @@ Axis16 DominantAxis16(__m512 dx, __m512 dy, __m512 dz) {
     return a;
 }
 
+// 16 rays' fields, gathered from a RayView.
+struct Rays16 {
+    __m512 ox, oy, oz, tmin, dx, dy, dz, tmax;
+};
+
+Rays16 Gather16(const float* at, __m512i idx, __mmask16 live) {
+    const __m512 zero = _mm512_setzero_ps();
+    Rays16 r;
+    r.ox = _mm512_mask_i32gather_ps(zero, live, idx, at + 0, 4);
+    r.oy = _mm512_mask_i32gather_ps(zero, live, idx, at + 1, 4);
+    r.oz = _mm512_mask_i32gather_ps(zero, live, idx, at + 2, 4);
+    r.tmin = _mm512_mask_i32gather_ps(zero, live, idx, at + 3, 4);
+    r.dx = _mm512_mask_i32gather_ps(zero, live, idx, at + 4, 4);
+    r.dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
+    r.dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
+    r.tmax = _mm512_mask_i32gather_ps(zero, live, idx, at + 7, 4);
+    return r;
+}
+
+// CommonEnds::Oriented for the live lanes of r, with the same float operations, so both paths
+// take a ray alike. Returns the lanes taken from an end.
+__mmask16 Orient16(const CommonEnds& ends, __mmask16 live, Rays16& r) {
+    if (ends.n == 0) return 0;
+    const __m512 zero = _mm512_setzero_ps();
+    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
+    const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
+    const __m512 tol = _mm512_set1_ps(ends.tolerance);
+    const __mmask16 noDir = _mm512_cmp_ps_mask(r.dx, zero, _CMP_EQ_OQ) &
+                            _mm512_cmp_ps_mask(r.dy, zero, _CMP_EQ_OQ) &
+                            _mm512_cmp_ps_mask(r.dz, zero, _CMP_EQ_OQ);
+    const __mmask16 segment = __mmask16(
+        live & ~noDir & _mm512_cmp_ps_mask(r.tmin, r.tmax, _CMP_LT_OQ) &
+        _mm512_cmp_ps_mask(_mm512_and_ps(r.tmax, absMask), _mm512_set1_ps(kFloatMax), _CMP_LE_OQ));
+    if (!segment) return 0;
+    const __m512 ex = _mm512_add_ps(r.ox, _mm512_mul_ps(r.tmax, r.dx));
+    const __m512 ey = _mm512_add_ps(r.oy, _mm512_mul_ps(r.tmax, r.dy));
+    const __m512 ez = _mm512_add_ps(r.oz, _mm512_mul_ps(r.tmax, r.dz));
+    auto near = [&](__m512 e, float p) {
+        return _mm512_cmp_ps_mask(_mm512_and_ps(_mm512_sub_ps(e, _mm512_set1_ps(p)), absMask), tol,
+                                  _CMP_LE_OQ);
+    };
+    __mmask16 matched = 0;
+    __m512 px = zero, py = zero, pz = zero;
+    for (int k = 0; k < ends.n; ++k) {
+        const glm::vec3& p = ends.point[size_t(k)];
+        const __mmask16 m =
+            __mmask16(segment & ~matched & near(ex, p.x) & near(ey, p.y) & near(ez, p.z));
+        px = _mm512_mask_blend_ps(m, px, _mm512_set1_ps(p.x));
+        py = _mm512_mask_blend_ps(m, py, _mm512_set1_ps(p.y));
+        pz = _mm512_mask_blend_ps(m, pz, _mm512_set1_ps(p.z));
+        matched |= m;
+    }
+    r.ox = _mm512_mask_blend_ps(matched, r.ox, px);
+    r.oy = _mm512_mask_blend_ps(matched, r.oy, py);
+    r.oz = _mm512_mask_blend_ps(matched, r.oz, pz);
+    r.tmax = _mm512_mask_blend_ps(matched, r.tmax, _mm512_sub_ps(r.tmax, r.tmin));
+    r.tmin = _mm512_mask_blend_ps(matched, r.tmin, zero);
+    r.dx = _mm512_mask_xor_ps(r.dx, matched, r.dx, signMask);
+    r.dy = _mm512_mask_xor_ps(r.dy, matched, r.dy, signMask);
+    r.dz = _mm512_mask_xor_ps(r.dz, matched, r.dz, signMask);
+    return matched;
+}
+
 // Counts the rays of each face (kFaceCount: no usable direction), 16 at a time.
-void CountFaces(RayView rays, uint32_t* count) {
+void CountFaces(RayView rays, const CommonEnds& ends, uint32_t* count) {
     const __m512i idx = RayOffsets16(rays);
     const __m512 fmax = _mm512_set1_ps(kFloatMax);
     const __m512 zero = _mm512_setzero_ps();
@@ -404,9 +471,18 @@ void CountFaces(RayView rays, uint32_t* count) {
     for (size_t i = 0; i < n; i += 16) {
         const __mmask16 live = LiveLanes16(n, i);
         const float* at = rays.Floats(i);
-        const __m512 dx = _mm512_mask_i32gather_ps(zero, live, idx, at + 4, 4);
-        const __m512 dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
-        const __m512 dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
+        __m512 dx, dy, dz;
+        if (ends.n > 0) {
+            Rays16 r = Gather16(at, idx, live);
+            Orient16(ends, live, r);
+            dx = r.dx;
+            dy = r.dy;
+            dz = r.dz;
+        } else {
+            dx = _mm512_mask_i32gather_ps(zero, live, idx, at + 4, 4);
+            dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
+            dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
+        }
         const auto [isX, isY, isZ, neg, ax, ay, az, da] = DominantAxis16(dx, dy, dz);
         const __mmask16 finite = _mm512_cmp_ps_mask(ax, fmax, _CMP_LE_OQ) &
                                  _mm512_cmp_ps_mask(ay, fmax, _CMP_LE_OQ) &
@@ -422,15 +498,18 @@ void CountFaces(RayView rays, uint32_t* count) {
     }
 }
 #else
-void CountFaces(RayView rays, uint32_t* count) {
-    for (size_t i = 0; i < rays.size(); ++i) ++count[DirectionFace(rays[i].direction)];
+void CountFaces(RayView rays, const CommonEnds& ends, uint32_t* count) {
+    for (size_t i = 0; i < rays.size(); ++i) {
+        ++count[DirectionFace(ends.Oriented(rays[i]).direction)];
+    }
 }
 #endif
 
 }  // namespace
 
-void Hierarchy::Convert(RayView rays, uint32_t firstId, uint32_t* next, Bounds6* faceBounds,
-                        std::vector<rc_uint>& missed) {
+uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t firstId, uint32_t* next,
+                            Bounds6* faceBounds, std::vector<rc_uint>& missed) {
+    uint64_t fromEnd = 0;
     float* c[kCoords];
     for (int k = 0; k < kCoords; ++k) c[k] = coord_[0][k].data();
     uint32_t* ids = id_[0].data();
@@ -472,15 +551,9 @@ void Hierarchy::Convert(RayView rays, uint32_t firstId, uint32_t* next, Bounds6*
     }
     for (; i < n; i += 16) {
         const __mmask16 live = LiveLanes16(n, i);
-        const float* at = rays.Floats(i);
-        const __m512 ox = _mm512_mask_i32gather_ps(zero, live, idx, at + 0, 4);
-        const __m512 oy = _mm512_mask_i32gather_ps(zero, live, idx, at + 1, 4);
-        const __m512 oz = _mm512_mask_i32gather_ps(zero, live, idx, at + 2, 4);
-        const __m512 tmin = _mm512_mask_i32gather_ps(zero, live, idx, at + 3, 4);
-        const __m512 dx = _mm512_mask_i32gather_ps(zero, live, idx, at + 4, 4);
-        const __m512 dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
-        const __m512 dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
-        const __m512 tmax = _mm512_mask_i32gather_ps(zero, live, idx, at + 7, 4);
+        Rays16 r = Gather16(rays.Floats(i), idx, live);
+        fromEnd += uint64_t(std::popcount(unsigned(Orient16(ends, live, r))));
+        const auto [ox, oy, oz, tmin, dx, dy, dz, tmax] = r;
         const auto [isX, isY, isZ, neg, ax, ay, az, da] = DominantAxis16(dx, dy, dz);
         // start = tMin == 0 ? origin : origin + tMin d
         const __mmask16 t0 = _mm512_cmp_ps_mask(tmin, zero, _CMP_EQ_OQ);
@@ -534,10 +607,10 @@ void Hierarchy::Convert(RayView rays, uint32_t firstId, uint32_t* next, Bounds6*
         while (slow) {
             const int j = std::countr_zero(slow);
             slow &= slow - 1;
-            const Ray ray = rays[i + size_t(j)];
-            Ray5 r;
-            if (DirectionFace(ray.direction) < kFaceCount && ToRay5Clipped(ray, sceneBox_, r)) {
-                put(r, firstId + uint32_t(i) + uint32_t(j));
+            const Ray ray = ends.Oriented(rays[i + size_t(j)]);
+            Ray5 r5;
+            if (DirectionFace(ray.direction) < kFaceCount && ToRay5Clipped(ray, sceneBox_, r5)) {
+                put(r5, firstId + uint32_t(i) + uint32_t(j));
             } else {
                 missed.push_back(firstId + uint32_t(i) + uint32_t(j));
             }
@@ -552,13 +625,15 @@ void Hierarchy::Convert(RayView rays, uint32_t firstId, uint32_t* next, Bounds6*
 #endif
     for (; i < n; ++i) {
         Ray5 r;
-        const Ray ray = rays[i];
+        const Ray ray = ends.Oriented(rays[i]);
+        fromEnd += ends.n > 0 && ends.Match(rays[i]) >= 0 ? 1 : 0;
         if (DirectionFace(ray.direction) < kFaceCount && ToRay5(ray, sceneBox_, r)) {
             put(r, firstId + uint32_t(i));
         } else {
             missed.push_back(firstId + uint32_t(i));
         }
     }
+    return fromEnd;
 }
 
 void Hierarchy::ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out) {
@@ -574,7 +649,9 @@ void Hierarchy::ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out)
     const int threads = Threads(nInserted_);
     struct Piece {
         RayView rays;
+        const CommonEnds* ends;
         uint32_t firstId;
+        uint64_t fromEnd = 0;
         uint32_t count[kFaceCount + 1] = {};
         uint32_t start[kFaceCount], next[kFaceCount];
         Bounds6 bounds[kFaceCount];
@@ -582,20 +659,21 @@ void Hierarchy::ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out)
     };
     std::vector<Piece> pieces;
     uint32_t firstId = 0;
-    for (const RayView& rays : inserted_) {
+    for (const auto& [rays, ends] : inserted_) {
         // Pieces start at multiples of 16 rays: Convert places the rays its slow path maps
         // after the others of their run of 16, so the runs must not depend on the thread count.
         const size_t step = (rays.size() + size_t(threads) * 16 - 1) / (size_t(threads) * 16) * 16;
         for (size_t at = 0; at < rays.size(); at += step) {
             Piece& p = pieces.emplace_back();
             p.rays = rays.Sub(at, std::min(step, rays.size() - at));
+            p.ends = &ends;
             p.firstId = firstId + uint32_t(at);
         }
         firstId += uint32_t(rays.size());
     }
     OnThreads(threads, [&](int t) {
         for (size_t i = size_t(t); i < pieces.size(); i += size_t(threads)) {
-            CountFaces(pieces[i].rays, pieces[i].count);
+            CountFaces(pieces[i].rays, *pieces[i].ends, pieces[i].count);
         }
     });
     uint32_t at = 0;
@@ -614,7 +692,7 @@ void Hierarchy::ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out)
         for (size_t i = size_t(t); i < pieces.size(); i += size_t(threads)) {
             Piece& p = pieces[i];
             for (auto& b : p.bounds) b = EmptyBounds();
-            Convert(p.rays, p.firstId, p.next, p.bounds, p.missed);
+            p.fromEnd = Convert(p.rays, *p.ends, p.firstId, p.next, p.bounds, p.missed);
         }
     });
     // Rays that the slow path found to miss the box leave holes at the ends of their pieces'
@@ -637,7 +715,10 @@ void Hierarchy::ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out)
         }
     }
     begin[kFaceCount] = to;
-    for (Piece& p : pieces) out.missed.insert(out.missed.end(), p.missed.begin(), p.missed.end());
+    for (Piece& p : pieces) {
+        out.missed.insert(out.missed.end(), p.missed.begin(), p.missed.end());
+        counters_.fromEnd += p.fromEnd;
+    }
     std::sort(out.missed.begin(), out.missed.end());
 }
 

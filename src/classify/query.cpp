@@ -16,9 +16,14 @@ uint64_t QueryLeafHost(const scene::Scene& scene, const LeafBatch& batch, const 
         const geometry::Ray<float> ray = ToGeometryRay(rays[id]);
         const float originX = FaceX(face, ray.o);
         const float speed = std::abs(ray.d[axis]);  // dX/dt along the main axis
+        // An any-hit segment may run either way along the leaf's X (CommonEnds): boxes that
+        // start beyond its largest X cannot block it.
+        const float dX = FaceSign(face) * ray.d[axis];
+        const float endX = originX + (dX > 0.0f ? ray.tMax : ray.tMin) * dX;
         geometry::Hit<float> best;
         best.t = ray.tMax;
         for (uint32_t c = 0; c < leaf.candCount; ++c) {
+            if (anyHit && cand[c].nearX > endX) break;
             // Strictly nearer only: a box starting exactly at the hit may hold an equal-t hit
             // with a lower id.
             if (best.Valid() && originX + best.t * speed < cand[c].nearX) break;

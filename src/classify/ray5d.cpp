@@ -69,4 +69,76 @@ bool ToRay5Clipped(const Ray& ray, const Bounds3f& sceneBox, Ray5& out) {
     return true;
 }
 
+namespace {
+
+// Where a live segment ends (finite), else false.
+bool SegmentEnd(const Ray& ray, glm::vec3& end) {
+    if (!(ray.tMin < ray.tMax) || !std::isfinite(ray.tMax)) return false;
+    if (ray.direction == glm::vec3(0.0f)) return false;
+    end = ray.origin + ray.tMax * ray.direction;
+    return std::isfinite(end.x) && std::isfinite(end.y) && std::isfinite(end.z);
+}
+
+bool Near(const glm::vec3& a, const glm::vec3& b, float tolerance) {
+    return std::abs(a.x - b.x) <= tolerance && std::abs(a.y - b.y) <= tolerance &&
+           std::abs(a.z - b.z) <= tolerance;
+}
+
+}  // namespace
+
+int CommonEnds::Match(const Ray& ray) const {
+    glm::vec3 end;
+    if (n == 0 || !SegmentEnd(ray, end)) return -1;
+    for (int k = 0; k < n; ++k) {
+        if (Near(end, point[size_t(k)], tolerance)) return k;
+    }
+    return -1;
+}
+
+Ray CommonEnds::Oriented(const Ray& ray) const {
+    const int k = Match(ray);
+    if (k < 0) return ray;
+    Ray r;
+    r.origin = point[size_t(k)];
+    r.tMin = 0.0f;
+    r.direction = -ray.direction;
+    r.tMax = ray.tMax - ray.tMin;
+    return r;
+}
+
+CommonEnds FindCommonEnds(RayView rays, const Bounds3f& box, float tolerance) {
+    constexpr size_t kSample = 256;
+    constexpr int kSeen = 2 * CommonEnds::kMax;
+    const size_t n = rays.size(), samples = std::min(n, kSample);
+    // Each distinct end seen, with the range of the sampled ends near it.
+    glm::vec3 first[kSeen], lo[kSeen], hi[kSeen];
+    int count[kSeen] = {};
+    int seen = 0, live = 0;
+    for (size_t j = 0; j < samples; ++j) {
+        glm::vec3 end;
+        if (!SegmentEnd(rays[j * n / samples], end)) continue;
+        ++live;
+        int k = 0;
+        while (k < seen && !Near(end, first[k], tolerance)) ++k;
+        if (k == seen) {
+            if (seen == kSeen) continue;
+            first[k] = lo[k] = hi[k] = end;
+            ++seen;
+        }
+        ++count[k];
+        lo[k] = glm::min(lo[k], end);
+        hi[k] = glm::max(hi[k], end);
+    }
+    CommonEnds out;
+    out.tolerance = tolerance;
+    for (int k = 0; k < seen && out.n < CommonEnds::kMax; ++k) {
+        if (count[k] < 2 || 32 * count[k] < live) continue;
+        // The middle of the sample's ends: nearer the true point than any one of them.
+        const glm::vec3 p = 0.5f * (lo[k] + hi[k]);
+        if (!box.Contains(p)) continue;
+        out.point[size_t(out.n++)] = p;
+    }
+    return out;
+}
+
 }  // namespace rayclass::classify

@@ -122,7 +122,7 @@ ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
         h.Reset();
         const auto a = Clock::now();
         const double c = ThreadCpuSeconds();
-        h.Classify(rays, batch);
+        h.Classify(rays, batch, anyHit ? RayUse::kAnyHit : RayUse::kNearestHit);
         cpuTimes.push_back(ThreadCpuSeconds() - c);
         times.push_back(Seconds(a, Clock::now()));
     }

@@ -149,6 +149,7 @@ void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& q
     const auto& ks = timer.Seconds();
     for (const auto& [name, s] : ks) stats.timeS["kernel_" + name] = s;
     stats.queryTimeS = query.HostSeconds();
+    stats.shadowRaysFromLight = query.ShadowRaysFromLight();
     for (const auto& [name, seconds] : ks) {
         if (name.starts_with("rc_query") || name.starts_with("rc_occluded") ||
             name.starts_with("rc_intersect") || name == "rc_gather_blocks") {

@@ -56,6 +56,7 @@ class ClassifiedQuery final : public RayQuery {
         std::lock_guard<std::mutex> lock(mutex_);
         return hostSeconds_;
     }
+    uint64_t ShadowRaysFromLight() const override { return shadowFromLight_; }
 
     std::unique_ptr<PreparedBatch> Prepare(const cl::Buffer& rays, uint32_t n,
                                            const cl::CommandQueue& queue) override {
@@ -72,7 +73,8 @@ class ClassifiedQuery final : public RayQuery {
         // costs no copy on a device that shares host memory.
         static_assert(sizeof(classify::Ray) == offsetof(RcRay, weight));
         clrt::MappedRead<RcRay> mapped(queue, rays, n);
-        Classify(hierarchy_, classify::RayView(mapped.data(), n, sizeof(RcRay)), *out, style_);
+        Classify(hierarchy_, classify::RayView(mapped.data(), n, sizeof(RcRay)),
+                 classify::RayUse::kNearestHit, *out, style_);
         mapped.Unmap();
         clrt::Check("clFinish", [&] { queue.finish(); });
         return out;
@@ -114,7 +116,8 @@ class ClassifiedQuery final : public RayQuery {
         // Every slot: empty ones have no direction and miss at once.
         static_assert(sizeof(classify::Ray) == offsetof(RcShadowRay, contribution));
         Classify(shadowHierarchy_, classify::RayView(hostRays.data(), n, sizeof(RcShadowRay)),
-                 shadowBatch_, ShadowStyle());
+                 classify::RayUse::kAnyHit, shadowBatch_, ShadowStyle());
+        shadowFromLight_ += shadowHierarchy_.Counters().fromEnd;
         return Query(shadowBatch_, shadowRays, blocked, nullptr, timer).tests;
     }
 
@@ -129,10 +132,10 @@ class ClassifiedQuery final : public RayQuery {
 
     // Classifies `rays` into out's leaves and sorts the leaves by kernel style (`style`: the
     // query's, or vertex for shadow rays).
-    void Classify(classify::Hierarchy& hierarchy, classify::RayView rays, ClassifiedBatch& out,
-                  KernelStyle style) {
+    void Classify(classify::Hierarchy& hierarchy, classify::RayView rays, classify::RayUse use,
+                  ClassifiedBatch& out, KernelStyle style) {
         const auto t0 = Clock::now();
-        hierarchy.Classify(rays, out.batch);
+        hierarchy.Classify(rays, out.batch, use);
         // Leaves lie in ray order and cover every slot, so when one per-ray kernel answers them
         // all, its slots are batch.rayIndex itself and only their leaves are needed.
         const bool perRay = style == KernelStyle::kScalar || style == KernelStyle::kVertex;
@@ -351,6 +354,7 @@ class ClassifiedQuery final : public RayQuery {
         fragmentTestsBuf_, unshadedBuf_;
     mutable std::mutex mutex_;  // guards hostSeconds_ and pool_
     double hostSeconds_ = 0;
+    uint64_t shadowFromLight_ = 0;  // Occluded's, which runs on the render thread only
     std::vector<std::unique_ptr<ClassifiedBatch>> pool_;  // recycled batches
 };
 

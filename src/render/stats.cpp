@@ -24,6 +24,7 @@ nlohmann::json RenderStats::ToJson() const {
     }
     j["rays_by_generation"] = gens;
     j["intersection_tests"] = intersectionTests;
+    j["shadow_rays_from_light"] = shadowRaysFromLight;
     j["mrays_per_s"] = queryTimeS > 0 ? double(RaysTotal()) / queryTimeS * 1e-6 : 0.0;
     j["time_s"] = timeS;
     return j;

@@ -602,5 +602,145 @@ TEST(Hierarchy, CostFunctionSplitsSmallGroupsWithLongLists) {
     ExpectSameHits(Query(small, few, rays), BruteForce(small, rays));
 }
 
+// Shadow rays as the renderer makes them: slot i * lights.size() + l runs from just above the
+// surface that eye-like ray i hits to light l; every seventh slot is empty (no direction), as for
+// a light behind the surface.
+std::vector<Ray> ShadowSlots(const scene::Scene& s, const std::vector<glm::vec3>& lights,
+                             uint32_t seed, int n) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> pos(-1.2f, 1.2f);
+    std::vector<Ray> out;
+    for (int i = 0; out.size() < size_t(n) * lights.size(); ++i) {
+        Ray eye;
+        eye.origin = glm::vec3(pos(rng), pos(rng), -1.5f);
+        eye.direction = RandomDirection(rng);
+        const Hit<float> h = geometry::IntersectBruteForce(s, ToGeometryRay(eye));
+        if (!h.Valid()) continue;
+        const glm::vec3 p = eye.origin + h.t * eye.direction;
+        for (size_t l = 0; l < lights.size(); ++l) {
+            Ray r;
+            r.tMax = 0.0f;
+            r.direction = glm::vec3(0.0f);
+            if ((out.size() % 7) != 3) {
+                r.origin = geometry::OffsetRayOrigin(p, -eye.direction);
+                const glm::vec3 toLight = lights[l] - r.origin;
+                r.tMax = glm::length(toLight);
+                r.direction = toLight / r.tMax;
+            }
+            out.push_back(r);
+        }
+    }
+    return out;
+}
+
+std::vector<bool> Blocked(const scene::Scene& s, const LeafBatch& batch,
+                          const std::vector<Ray>& rays) {
+    std::vector<Hit<float>> hits(rays.size());
+    QueryHost(s, batch, rays, hits, /*anyHit=*/true);
+    std::vector<bool> out;
+    for (const auto& h : hits) out.push_back(h.Valid());
+    return out;
+}
+
+std::vector<bool> BlockedBruteForce(const scene::Scene& s, const std::vector<Ray>& rays) {
+    std::vector<bool> out;
+    for (const Ray& r : rays) out.push_back(geometry::Occluded(s, ToGeometryRay(r)));
+    return out;
+}
+
+TEST(Hierarchy, AnyHitRaysEndingAtALightAreClassifiedFromIt) {
+    const scene::Scene s = RandomScene(61, 400, 6, 3);
+    const std::vector<glm::vec3> lights = {
+        {0.2f, 0.9f, 0.1f}, {-0.7f, 0.3f, 0.5f}, {0.5f, -0.6f, -0.4f}};
+    const std::vector<Ray> rays = ShadowSlots(s, lights, 62, 700);
+    uint64_t live = 0;
+    for (const Ray& r : rays) live += r.tMax > 0.0f ? 1 : 0;
+    const std::vector<bool> truth = BlockedBruteForce(s, rays);
+    ASSERT_GT(std::count(truth.begin(), truth.end(), true), 100);
+    ASSERT_GT(std::count(truth.begin(), truth.end(), false), 100);
+
+    Hierarchy h(s, DeepParams(s));
+    const LeafBatch batch = h.Classify(rays, RayUse::kAnyHit);
+    EXPECT_EQ(h.Counters().fromEnd, live);
+    ExpectEveryRayOnce(batch, uint32_t(rays.size()));
+    EXPECT_EQ(batch.missed.size(), rays.size() - live);  // the empty slots
+    // Each leaf holds one light's rays, in the face of their direction from the light.
+    for (const RcLeaf& leaf : batch.leaves) {
+        for (uint32_t j = 0; j < leaf.rayCount; ++j) {
+            const uint32_t id = batch.rayIndex[leaf.rayBegin + j];
+            ASSERT_EQ(int(leaf.face), FaceOf(-rays[id].direction)) << "ray " << id;
+        }
+    }
+    EXPECT_EQ(Blocked(s, batch, rays), truth);
+
+    // The same rays as nearest-hit rays are classified as they run: no ray from its end.
+    Hierarchy forward(s, DeepParams(s));
+    const LeafBatch f = forward.Classify(rays);
+    EXPECT_EQ(forward.Counters().fromEnd, 0u);
+    for (const RcLeaf& leaf : f.leaves) {
+        const uint32_t id = f.rayIndex[leaf.rayBegin];
+        EXPECT_EQ(int(leaf.face), FaceOf(rays[id].direction)) << "ray " << id;
+    }
+    EXPECT_EQ(Blocked(s, f, rays), truth);
+
+    // A light outside the scene box: its rays would start outside and be clipped, so they are
+    // classified as they run; the lights inside still are from their end.
+    const std::vector<glm::vec3> outside = {{0.2f, 4.0f, 0.1f}, lights[1]};
+    const std::vector<Ray> mixed = ShadowSlots(s, outside, 63, 400);
+    uint64_t liveInside = 0;
+    for (size_t i = 1; i < mixed.size(); i += 2) liveInside += mixed[i].tMax > 0.0f ? 1 : 0;
+    const LeafBatch m = h.Classify(mixed, RayUse::kAnyHit);
+    EXPECT_EQ(h.Counters().fromEnd, liveInside);
+    EXPECT_EQ(Blocked(s, m, mixed), BlockedBruteForce(s, mixed));
+}
+
+TEST(Hierarchy, CommonEndsNeedManySegmentsEndingWithinTheTolerance) {
+    const Bounds3f box{glm::vec3(-2.0f), glm::vec3(2.0f)};
+    const glm::vec3 light(0.5f, 1.0f, -0.25f), lamp(-1.0f, 0.0f, 0.75f);
+    std::mt19937 rng(71);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 1000; ++i) {
+        Ray r;
+        r.origin = glm::vec3(0.0f, -1.0f, 0.0f) + 0.5f * RandomDirection(rng);
+        // Five rays go to the lamp: under 1/32 of the sample, however many it picks.
+        const glm::vec3 to = (i % 200 == 7 ? lamp : light) - r.origin;
+        r.tMax = glm::length(to);
+        r.direction = to / r.tMax;
+        rays.push_back(r);
+    }
+    const float tolerance = 1e-5f;
+    const CommonEnds ends = FindCommonEnds(rays, box, tolerance);
+    ASSERT_EQ(ends.n, 1);
+    EXPECT_LE(glm::length(ends.point[0] - light), tolerance);
+    EXPECT_EQ(ends.Match(rays[0]), 0);
+    EXPECT_EQ(ends.Match(rays[7]), -1);
+    // Taken from the end: starts at the point, runs back along the same segment.
+    Ray shifted = rays[0];
+    shifted.tMin = 0.25f;
+    const Ray o = ends.Oriented(shifted);
+    EXPECT_EQ(o.origin, ends.point[0]);
+    EXPECT_EQ(o.direction, -shifted.direction);
+    EXPECT_EQ(o.tMin, 0.0f);
+    EXPECT_EQ(o.tMax, shifted.tMax - 0.25f);
+    // An end 3 tolerances off in one coordinate, an unbounded ray and an empty segment: no match.
+    Ray off = rays[0];
+    off.origin.y += 3.0f * tolerance;
+    EXPECT_EQ(ends.Match(off), -1);
+    Ray unbounded = rays[0];
+    unbounded.tMax = INFINITY;
+    EXPECT_EQ(ends.Match(unbounded), -1);
+    Ray empty = rays[0];
+    empty.tMin = empty.tMax;
+    EXPECT_EQ(ends.Match(empty), -1);
+    EXPECT_EQ(ends.Oriented(off).origin, off.origin);
+
+    // Every ray to its own end (an area light's samples): no common end. Nor outside the box.
+    std::vector<Ray> spread = rays;
+    for (Ray& r : spread) r.tMax *= 0.5f + 0.5f * float(&r - spread.data()) / 1000.0f;
+    EXPECT_EQ(FindCommonEnds(spread, box, tolerance).n, 0);
+    const Bounds3f small{glm::vec3(-2.0f), glm::vec3(0.25f)};
+    EXPECT_EQ(FindCommonEnds(rays, small, tolerance).n, 0);
+}
+
 }  // namespace
 }  // namespace rayclass::classify

@@ -86,10 +86,14 @@ struct LeafBatch {
     uint32_t nRays = 0;                   // rays of the generation (leaf rays + missed)
 };
 
+// What a generation's rays ask for: the nearest hit, or any hit (shadow rays).
+enum class RayUse : uint8_t { kNearestHit, kAnyHit };
+
 // Counters of the last Subdivide().
 struct BuildCounters {
     uint64_t boxTests = 0;    // candidate tests made while filtering lists
     uint64_t rayMoves = 0;    // rays moved by partitions (sum over levels)
+    uint64_t fromEnd = 0;     // any-hit rays classified from their common end (CommonEnds)
     uint32_t maxDepth = 0;    // deepest leaf
     size_t scratchBytes = 0;  // peak bytes of the per-depth list and ray buffers
 };
@@ -100,8 +104,11 @@ class Hierarchy {
 
     // Adds rays to the current generation. Several calls append; the generation's ray indices are
     // positions in the concatenation of all rays inserted since the last Subdivide(). The rays
-    // are read by Subdivide(), so they must stay alive until it returns.
-    void Insert(RayView rays);
+    // are read by Subdivide(), so they must stay alive until it returns. Any-hit rays that end
+    // at a common point (CommonEnds: a point light) are classified from there, so their leaves'
+    // face is that of -direction: a query cuts a ray's list at the largest X its segment
+    // reaches in the leaf's frame, its start or its end.
+    void Insert(RayView rays, RayUse use = RayUse::kNearestHit);
 
     // Routes the generation's rays through the hierarchy, splits where the cost function says so
     // and writes the generation's leaves into `out` (its arrays are reused, so a caller that keeps
@@ -115,12 +122,12 @@ class Hierarchy {
     }
 
     // Insert then Subdivide.
-    void Classify(RayView rays, LeafBatch& out) {
-        Insert(rays);
+    void Classify(RayView rays, LeafBatch& out, RayUse use = RayUse::kNearestHit) {
+        Insert(rays, use);
         Subdivide(out);
     }
-    LeafBatch Classify(RayView rays) {
-        Insert(rays);
+    LeafBatch Classify(RayView rays, RayUse use = RayUse::kNearestHit) {
+        Insert(rays, use);
         return Subdivide();
     }
 
@@ -204,8 +211,10 @@ class Hierarchy {
         ListArena kept;   // lists of nodes whose later children are tasks
     };
 
-    void Convert(RayView rays, uint32_t firstId, uint32_t* next, Bounds6* faceBounds,
-                 std::vector<rc_uint>& missed);
+    // Maps rays (taken from their common ends where `ends` has any) to the 5D buffer; returns
+    // how many were taken from an end.
+    uint64_t Convert(RayView rays, const CommonEnds& ends, uint32_t firstId, uint32_t* next,
+                     Bounds6* faceBounds, std::vector<rc_uint>& missed);
     void Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
                  const Bounds6& tight, const ListView& list, bool reuseList);
     void Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, uint32_t begin,
@@ -253,7 +262,11 @@ class Hierarchy {
     // The current generation: the inserted rays, and their 5D points by face in two ping-pong
     // buffers of structure-of-arrays: X, Y, Z, u, v and the X where the ray ends (its start's X
     // plus its reach, which cuts beams: shadow rays end at the light).
-    std::vector<RayView> inserted_;
+    struct Inserted {
+        RayView rays;
+        CommonEnds ends;  // none for nearest-hit rays
+    };
+    std::vector<Inserted> inserted_;
     uint32_t nInserted_ = 0;
     ScratchVector<float> coord_[2][kCoords];
     ScratchVector<uint32_t> id_[2];

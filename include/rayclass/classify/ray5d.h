@@ -69,6 +69,32 @@ class RayView {
     size_t stride_ = sizeof(Ray);
 };
 
+// Points where many segments of a generation end: point lights, which shadow rays run to. An
+// any-hit query answers a segment the same whichever way it runs, so the classification takes
+// a segment that ends at one of them from that end (Oriented): the rays of a light then share
+// one origin, which partitions never move, and their beams are cones from the light instead of
+// boxes of origins swept towards it. Kernels trace the segment as given.
+struct CommonEnds {
+    static constexpr int kMax = 8;
+    int n = 0;
+    std::array<glm::vec3, kMax> point{};
+    // A segment whose end o + tMax d lies within this of a point, in every coordinate, ends
+    // there. It is a quarter of the classification's padding: taking the segment from the point
+    // moves it by no more than that, and the padding keeps the rest for the beam test.
+    float tolerance = 0.0f;
+
+    // The point `ray` ends at, or -1.
+    int Match(const Ray& ray) const;
+    // `ray` as the classification takes it: from the point it ends at (origin there, tMin 0,
+    // direction and segment reversed), else unchanged.
+    Ray Oriented(const Ray& ray) const;
+};
+
+// The common ends of `rays`, found on an even sample of up to 256 of them: the ends shared by
+// at least 1/32 of the sample's segments (and two), lying in `box` (where an origin must be to
+// be mapped directly). Deterministic: it depends on the rays alone.
+CommonEnds FindCommonEnds(RayView rays, const Bounds3f& box, float tolerance);
+
 // An axis-aligned interval in the 5 coordinates of one face's frame.
 struct Box5 {
     std::array<float, kDims> lo;

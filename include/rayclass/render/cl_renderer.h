@@ -73,6 +73,8 @@ class RayQuery {
     virtual void Recycle(std::unique_ptr<PreparedBatch> batch) { (void)batch; }
     // Host time spent so far (classification, building the batch arrays), summed over threads.
     virtual double HostSeconds() const { return 0.0; }
+    // Shadow rays answered so far that the classification took from their light.
+    virtual uint64_t ShadowRaysFromLight() const { return 0; }
     // Forgets what earlier batches built (the classification's splits) but keeps every
     // allocation: the next batch is answered as if by a new query whose memory is already
     // faulted in (raybench --warm measures the steady state this way).

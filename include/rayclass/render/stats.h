@@ -25,6 +25,7 @@ struct RenderStats {
         {"eye", 0}, {"shadow", 0}, {"reflection", 0}, {"refraction", 0}};
     std::vector<GenerationStats> generations;
     uint64_t intersectionTests = 0;
+    uint64_t shadowRaysFromLight = 0;  // classified from their light (classify::CommonEnds)
     double queryTimeS = 0;  // time of the ray-query kernels (nearest hit and shadow)
     // Named stages in seconds: "scene_load", "program_build", "kernel_<name>", "host", "total".
     std::map<std::string, double> timeS;
