@@ -281,7 +281,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
 
 typedef struct RcLanes16 {
     float16 ox, oy, oz, dx, dy, dz, tmin, tmax;
-    float16 x, speed;  /* the origins' X and the directions' |component| along the leaf's face */
+    float16 x, dX, speed; /* the origins' X, the directions' component and its size along the
+                            * leaf's face */
 } RcLanes16;
 
 /* The rays of a packet as lanes: the leaf's rays [first, first + 16), unused lanes repeating the
@@ -318,7 +319,8 @@ RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const float4* rays, uint strid
     const uint axis = leaf.face >> 1;
     const float sign = (leaf.face & 1) ? -1.0f : 1.0f;
     l.x = sign * (axis == 0 ? l.ox : (axis == 1 ? l.oy : l.oz));
-    l.speed = fabs(axis == 0 ? l.dx : (axis == 1 ? l.dy : l.dz));
+    l.dX = sign * (axis == 0 ? l.dx : (axis == 1 ? l.dy : l.dz));
+    l.speed = fabs(l.dX);
     return l;
 }
 
@@ -485,9 +487,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
                                        leaf, packetFirst[p], ids);
     rc_prefetch_packet((__global const float4*)rays, sizeof(rays[0]) / 16, rayIndex, leaves,
                        packetLeaf, packetFirst, p + 1, nPackets);
-    const float16 dX = (leaf.face & 1 ? -1.0f : 1.0f) *
-                       (leaf.face >> 1 == 0 ? L.dx : (leaf.face >> 1 == 1 ? L.dy : L.dz));
-    const float16 endX = L.x + select(L.tmin, L.tmax, dX > 0.0f) * dX;
+    const float16 endX = L.x + select(L.tmin, L.tmax, L.dX > 0.0f) * L.dX;
     int16 hit = (int16)(0);
     const uint nT = params->nTriangles, nS = params->nSpheres;
     uint c = 0;
