@@ -625,8 +625,9 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
 #endif
     for (; i < n; ++i) {
         Ray5 r;
-        const Ray ray = ends.Oriented(rays[i]);
-        fromEnd += ends.n > 0 && ends.Match(rays[i]) >= 0 ? 1 : 0;
+        const int match = ends.Match(rays[i]);
+        const Ray ray = ends.Oriented(rays[i], match);
+        fromEnd += match >= 0 ? 1 : 0;
         if (DirectionFace(ray.direction) < kFaceCount && ToRay5(ray, sceneBox_, r)) {
             put(r, firstId + uint32_t(i));
         } else {

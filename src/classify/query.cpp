@@ -15,10 +15,10 @@ uint64_t QueryLeafHost(const scene::Scene& scene, const LeafBatch& batch, const 
         const uint32_t id = batch.rayIndex[leaf.rayBegin + j];
         const geometry::Ray<float> ray = ToGeometryRay(rays[id]);
         const float originX = FaceX(face, ray.o);
-        const float speed = std::abs(ray.d[axis]);  // dX/dt along the main axis
-        // An any-hit segment may run either way along the leaf's X (CommonEnds): boxes that
-        // start beyond its largest X cannot block it.
+        // dX/dt along the main axis. An any-hit segment may run either way along the leaf's X
+        // (CommonEnds): boxes that start beyond its largest X cannot block it.
         const float dX = FaceSign(face) * ray.d[axis];
+        const float speed = std::abs(dX);
         const float endX = originX + (dX > 0.0f ? ray.tMax : ray.tMin) * dX;
         geometry::Hit<float> best;
         best.t = ray.tMax;

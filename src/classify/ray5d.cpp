@@ -95,11 +95,10 @@ int CommonEnds::Match(const Ray& ray) const {
     return -1;
 }
 
-Ray CommonEnds::Oriented(const Ray& ray) const {
-    const int k = Match(ray);
-    if (k < 0) return ray;
+Ray CommonEnds::Oriented(const Ray& ray, int match) const {
+    if (match < 0) return ray;
     Ray r;
-    r.origin = point[size_t(k)];
+    r.origin = point[size_t(match)];
     r.tMin = 0.0f;
     r.direction = -ray.direction;
     r.tMax = ray.tMax - ray.tMin;

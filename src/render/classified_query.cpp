@@ -131,7 +131,7 @@ class ClassifiedQuery final : public RayQuery {
     }
 
     // Classifies `rays` into out's leaves and sorts the leaves by kernel style (`style`: the
-    // query's, or vertex for shadow rays).
+    // query's, or ShadowStyle() for shadow rays).
     void Classify(classify::Hierarchy& hierarchy, classify::RayView rays, classify::RayUse use,
                   ClassifiedBatch& out, KernelStyle style) {
         const auto t0 = Clock::now();

@@ -86,8 +86,9 @@ struct CommonEnds {
     // The point `ray` ends at, or -1.
     int Match(const Ray& ray) const;
     // `ray` as the classification takes it: from the point it ends at (origin there, tMin 0,
-    // direction and segment reversed), else unchanged.
-    Ray Oriented(const Ray& ray) const;
+    // direction and segment reversed), else unchanged. The second form takes Match's answer.
+    Ray Oriented(const Ray& ray) const { return Oriented(ray, Match(ray)); }
+    Ray Oriented(const Ray& ray, int match) const;
 };
 
 // The common ends of `rays`, found on an even sample of up to 256 of them: the ends shared by
