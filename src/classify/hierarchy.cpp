@@ -759,7 +759,7 @@ void Hierarchy::Subdivide(LeafBatch& out) {
         if (begin[f] == begin[f + 1]) continue;
         const FaceList& all = (*faceLists_)[f];
         schedule.queue.push_back({FaceRoot(f), begin[f], begin[f + 1], 0, faceBounds[f],
-                                  View(all, all.Size()), false, &NewPart(begin[f])});
+                                  View(all, all.Size()), false, PlanAt(), &NewPart(begin[f])});
     }
     const int threads = Threads(n);
     if (workers_.size() < size_t(threads)) workers_.resize(size_t(threads));
@@ -770,6 +770,7 @@ void Hierarchy::Subdivide(LeafBatch& out) {
         w.candidates.clear();
         w.nodes.clear();
         w.kept.chunk = w.kept.used = w.stack.chunk = w.stack.used = 0;
+        w.plans.clear();
     }
     OnThreads(threads, [&](int t) { Work(workers_[size_t(t)], t); });
     Join(out);
@@ -779,6 +780,7 @@ void Hierarchy::Subdivide(LeafBatch& out) {
     for (Worker& w : workers_) {
         counters_.boxTests += w.counters.boxTests;
         counters_.rayMoves += w.counters.rayMoves;
+        counters_.plans += w.counters.plans;
         counters_.maxDepth = std::max(counters_.maxDepth, w.counters.maxDepth);
         scratch += w.keys.capacity() * 4 + w.leaves.capacity() * sizeof(RcLeaf) +
                    w.candidates.capacity() * sizeof(RcCandidate) +
@@ -813,8 +815,8 @@ void Hierarchy::Work(Worker& w, int index) {
         part.leafBegin = w.leaves.size();
         part.nodeBegin = w.nodes.size();
         if (part.newRoot) w.nodes.push_back(part.root);  // local id kLocal | 0
-        Process(w, task.node, task.begin, task.end, task.buf, task.tight, task.list,
-                task.reuseList);
+        Process(w, task.node, task.begin, task.end, task.buf, task.tight, task.list, task.reuseList,
+                task.plan);
         part.leafEnd = w.leaves.size();
         part.nodeEnd = w.nodes.size();
         std::lock_guard lock(s.mutex);
@@ -839,7 +841,7 @@ Hierarchy::Part& Hierarchy::NewPart(uint32_t begin) {
 
 void Hierarchy::Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, uint32_t begin,
                       uint32_t end, int buf, const Bounds6& tight, const ListView& list,
-                      bool reuseList) {
+                      bool reuseList, PlanAt plan) {
     Schedule& s = *w.schedule;
     {
         std::lock_guard lock(s.mutex);
@@ -863,7 +865,8 @@ void Hierarchy::Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, u
             Link(parent, field) = kPending;
         }
         // `list` views a kept list or the face's list: both outlive the task.
-        s.queue.push_back({root, begin, end, buf, tight, list, reuseList, &part});
+        // So does a plan: workers keep theirs until the next Subdivide.
+        s.queue.push_back({root, begin, end, buf, tight, list, reuseList, plan, &part});
     }
     s.changed.notify_one();
 }
@@ -1096,7 +1099,7 @@ void Hierarchy::RouteRays(int face, const Box5& box0, const Box5& box1, int buf,
 }
 
 void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
-                        const Bounds6& tight, const ListView& list, bool reuseList) {
+                        const Bounds6& tight, const ListView& list, bool reuseList, PlanAt plan) {
     const int depth = At(w, node).depth;
     const int face = At(w, node).face;
     const int other = buf ^ 1;
@@ -1131,7 +1134,7 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
             if (spawns && g != firstGroup) {
                 const Box5 box = At(w, node).box;
                 Spawn(w, node, g, create ? &box : nullptr, b, e, other, Bounds(face, other, b, e),
-                      own, false);
+                      own, false, {});
                 continue;
             }
             if (create) {
@@ -1139,7 +1142,8 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
                 At(w, node).remainder = r;
                 if (!(node & kLocal)) w.part->relinked.push_back(node);
             }
-            Process(w, Link(At(w, node), g), b, e, other, Bounds(face, other, b, e), own, false);
+            Process(w, Link(At(w, node), g), b, e, other, Bounds(face, other, b, e), own, false,
+                    {});
         }
         return;
     }
@@ -1152,9 +1156,20 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
     int dim = 0;
     Split split{begin, buf, true};
     Bounds6 childBox[2];  // left, right
+    PlanAt childAt[2];
     if (ChooseSplit(At(w, node), tight, end - begin, own, dim)) {
-        const float value = SplitValue(w, dim, buf, begin, end, tight);
-        split = Partition(w, face, dim, value, buf, begin, end, childBox[0], childBox[1]);
+        if (!plan.plan && params_.planRays > 0 && end - begin >= params_.planRays &&
+            params_.splitRule == SplitRule::kMidpoint) {
+            const Plan& made = MakePlan(w, face, dim, buf, begin, end, tight);
+            plan = {&made, 0, 0, 1 << made.levels};
+        }
+        if (plan.plan && PlannedSplit(plan, begin, end, split.mid, childBox, childAt)) {
+            split.buf = plan.plan->buf;
+        } else {
+            childAt[0] = childAt[1] = {};
+            const float value = SplitValue(w, dim, buf, begin, end, tight);
+            split = Partition(w, face, dim, value, buf, begin, end, childBox[0], childBox[1]);
+        }
     }
     const uint32_t mid = split.mid;
     if (mid == begin || mid == end) {
@@ -1171,8 +1186,9 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
         if (!(node & kLocal)) w.part->relinked.push_back(node);
         // Queued first, so that another thread can start on it at once.
         const Box5 box = childBox[1 - near].ToBox5();
-        Spawn(w, node, 1 - near, &box, mid, end, split.buf, childBox[1 - near], own, reuse);
-        Process(w, id, begin, mid, split.buf, childBox[near], own, reuse);
+        Spawn(w, node, 1 - near, &box, mid, end, split.buf, childBox[1 - near], own, reuse,
+              childAt[1 - near]);
+        Process(w, id, begin, mid, split.buf, childBox[near], own, reuse, childAt[near]);
         return;
     }
     const uint32_t left = NewNode(w, childBox[0].ToBox5(), face, depth + 1, false);
@@ -1181,28 +1197,18 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
     const uint32_t right = NewNode(w, childBox[1].ToBox5(), face, depth + 1, false);
     At(w, node).child[1] = right;
     const uint32_t ids[2] = {left, right};
-    Process(w, ids[near], begin, mid, split.buf, childBox[near], own, reuse);
-    Process(w, ids[1 - near], mid, end, split.buf, childBox[1 - near], own, reuse);
+    Process(w, ids[near], begin, mid, split.buf, childBox[near], own, reuse, childAt[near]);
+    Process(w, ids[1 - near], mid, end, split.buf, childBox[1 - near], own, reuse,
+            childAt[1 - near]);
 }
 
 bool Hierarchy::ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays,
                             const ListView& list, int& dim) const {
     const Params& p = params_;
     if (nRays < 2 || list.n <= p.minCandidates || node.depth >= p.maxDepth) return false;
-    float best = 0.0f;
-    dim = -1;
-    for (int k = 0; k < kDims; ++k) {
-        const float root = rootExtent_[node.face][k];
-        const float extent = tight.hi[k] - tight.lo[k];
-        const bool isDir = k >= 3;
-        const float minExtent = root * (isDir ? p.minDirFraction : p.minOriginFraction);
-        if (!(extent > minExtent)) continue;
-        const float rel = extent / root * (isDir ? p.dirWeight : 1.0f);
-        if (rel > best) {
-            best = rel;
-            dim = k;
-        }
-    }
+    float extent[kDims];
+    for (int k = 0; k < kDims; ++k) extent[k] = tight.hi[k] - tight.lo[k];
+    dim = SplitDim(node.face, extent);
     if (dim < 0) return false;
     double listCost = 0.0;
     if (scene_.spheres.empty() && scene_.quadrics.empty()) {
@@ -1224,6 +1230,33 @@ bool Hierarchy::ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRa
     return saved > cost;
 }
 
+int Hierarchy::SplitDim(int face, const float* extent) const {
+    const Params& p = params_;
+    float best = 0.0f;
+    int dim = -1;
+    for (int k = 0; k < kDims; ++k) {
+        const float root = rootExtent_[face][k];
+        const bool isDir = k >= 3;
+        const float minExtent = root * (isDir ? p.minDirFraction : p.minOriginFraction);
+        if (!(extent[k] > minExtent)) continue;
+        const float rel = extent[k] / root * (isDir ? p.dirWeight : 1.0f);
+        if (rel > best) {
+            best = rel;
+            dim = k;
+        }
+    }
+    return dim;
+}
+
+namespace {
+// The midpoint split of [lo, hi]. When lo and hi are adjacent floats the middle rounds onto lo;
+// hi still splits them.
+float Midpoint(float lo, float hi) {
+    const float m = 0.5f * (lo + hi);
+    return m > lo ? m : hi;
+}
+}  // namespace
+
 float Hierarchy::SplitValue(Worker& w, int dim, int buf, uint32_t begin, uint32_t end,
                             const Bounds6& tight) {
     const float lo = tight.lo[dim], hi = tight.hi[dim];
@@ -1234,9 +1267,7 @@ float Hierarchy::SplitValue(Worker& w, int dim, int buf, uint32_t begin, uint32_
         std::nth_element(w.keys.begin(), m, w.keys.end());
         return *m > lo ? *m : std::nextafter(lo, kInf);
     }
-    const float m = 0.5f * (lo + hi);
-    // When lo and hi are adjacent floats the middle rounds onto lo; hi still splits them.
-    return m > lo ? m : hi;
+    return Midpoint(lo, hi);
 }
 
 Hierarchy::Split Hierarchy::Partition(Worker& w, int face, int dim, float value, int buf,
@@ -1273,6 +1304,206 @@ Hierarchy::Split Hierarchy::Partition(Worker& w, int face, int dim, float value,
         }
     }
     return split;
+}
+
+namespace {
+
+// What BucketRays reads: the plan's levels, the dimension each splits and the splits' values in
+// heap order (plan node h's children are 2h + 1 and 2h + 2; the cells are the last level's).
+struct CellRule {
+    int levels;
+    const int* dim;
+    const float* value;
+};
+
+// Puts the rays [begin, end) of `io` into the cells of `rule`, each cell's rays in ray order,
+// cells one after another from `begin` (cellBegin[c] is where cell c starts), and gathers each
+// cell's bounds of the active coordinates on the way. A ray goes right at a level when its key is
+// not below the split value, as Partition decides.
+void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule, uint32_t begin,
+                uint32_t end, uint32_t* cellBegin, Bounds6* cell) {
+    const int nCells = 1 << rule.levels;
+    const int firstCell = nCells - 1;  // heap index of cell 0
+    uint32_t count[16] = {};
+#if defined(__AVX512F__)
+    float values[16] = {};
+    std::copy(rule.value, rule.value + firstCell, values);
+    const __m512 split = _mm512_loadu_ps(values);
+    const __m512i one = _mm512_set1_epi32(1);
+    auto cellsOf = [&](uint32_t i, __mmask16 live) {
+        __m512i h = _mm512_setzero_si512();
+        for (int l = 0; l < rule.levels; ++l) {
+            const __m512 key = _mm512_maskz_loadu_ps(live, io.src[rule.dim[l]] + i);
+            // (maskz: GCC 12 warns of the plain form's undefined pass-through)
+            const __m512 value = _mm512_maskz_permutexvar_ps(__mmask16(0xFFFF), h, split);
+            const __mmask16 left = _mm512_cmp_ps_mask(key, value, _CMP_LT_OQ);
+            h = _mm512_add_epi32(_mm512_add_epi32(h, h), one);
+            h = _mm512_mask_add_epi32(h, __mmask16(~left), h, one);
+        }
+        return _mm512_sub_epi32(h, _mm512_set1_epi32(firstCell));
+    };
+    // Calls f(c, lanes) for each cell c among the live lanes, with the lanes in it.
+    auto eachCell = [](__m512i cells, __mmask16 live, const auto& f) {
+        alignas(64) int32_t lane[16];
+        _mm512_store_si512(lane, cells);
+        unsigned rest = live;
+        while (rest) {
+            const int c = lane[std::countr_zero(rest)];
+            const __mmask16 m =
+                _mm512_mask_cmpeq_epi32_mask(__mmask16(rest), cells, _mm512_set1_epi32(c));
+            f(c, m);
+            rest &= ~unsigned(m);
+        }
+    };
+    for (uint32_t i = begin; i < end; i += 16) {
+        const __mmask16 live = LiveLanes16(end, i);
+        eachCell(cellsOf(i, live), live,
+                 [&](int c, __mmask16 m) { count[c] += uint32_t(std::popcount(unsigned(m))); });
+    }
+    uint32_t next[16];
+    cellBegin[0] = begin;
+    for (int c = 0; c < nCells; ++c) cellBegin[c + 1] = (next[c] = cellBegin[c]) + count[c];
+    __m512 lo[16][kCoords], hi[16][kCoords];
+    for (int c = 0; c < nCells; ++c) {
+        for (int k = 0; k < kCoords; ++k) {
+            lo[c][k] = _mm512_set1_ps(kInf);
+            hi[c][k] = _mm512_set1_ps(-kInf);
+        }
+    }
+    for (uint32_t i = begin; i < end; i += 16) {
+        const __mmask16 live = LiveLanes16(end, i);
+        __m512 v[kCoords];
+        for (int k = 0; k < kCoords; ++k) {
+            v[k] = active[k] ? _mm512_maskz_loadu_ps(live, io.src[k] + i) : _mm512_setzero_ps();
+        }
+        const __m512i id = _mm512_maskz_loadu_epi32(live, io.srcId + i);
+        eachCell(cellsOf(i, live), live, [&](int c, __mmask16 m) {
+            const uint32_t n = uint32_t(std::popcount(unsigned(m)));
+            const __mmask16 dst = __mmask16((1u << n) - 1u);
+            for (int k = 0; k < kCoords; ++k) {
+                if (!active[k]) continue;
+                _mm512_mask_storeu_ps(io.dst[k] + next[c], dst, _mm512_maskz_compress_ps(m, v[k]));
+                lo[c][k] = _mm512_mask_min_ps(lo[c][k], m, lo[c][k], v[k]);
+                hi[c][k] = _mm512_mask_max_ps(hi[c][k], m, hi[c][k], v[k]);
+            }
+            _mm512_mask_storeu_epi32(io.dstId + next[c], dst, _mm512_maskz_compress_epi32(m, id));
+            next[c] += n;
+        });
+    }
+    for (int c = 0; c < nCells; ++c) {
+        for (int k = 0; k < kCoords; ++k) {
+            if (!active[k]) continue;
+            cell[c].lo[k] = ReduceMin(lo[c][k]);
+            cell[c].hi[k] = ReduceMax(hi[c][k]);
+        }
+    }
+#else
+    auto cellOf = [&](uint32_t i) {
+        int h = 0;
+        for (int l = 0; l < rule.levels; ++l) {
+            h = 2 * h + (io.src[rule.dim[l]][i] < rule.value[h] ? 1 : 2);
+        }
+        return h - firstCell;
+    };
+    for (uint32_t i = begin; i < end; ++i) ++count[cellOf(i)];
+    uint32_t next[16];
+    cellBegin[0] = begin;
+    for (int c = 0; c < nCells; ++c) cellBegin[c + 1] = (next[c] = cellBegin[c]) + count[c];
+    for (int c = 0; c < nCells; ++c) cell[c] = EmptyBounds();
+    for (uint32_t i = begin; i < end; ++i) {
+        const int c = cellOf(i);
+        const uint32_t at = next[c]++;
+        for (int k = 0; k < kCoords; ++k) {
+            if (!active[k]) continue;
+            const float x = io.src[k][i];
+            io.dst[k][at] = x;
+            cell[c].lo[k] = std::min(cell[c].lo[k], x);
+            cell[c].hi[k] = std::max(cell[c].hi[k], x);
+        }
+        io.dstId[at] = io.srcId[i];
+    }
+#endif
+}
+
+// The union of bounds cell[lo, hi).
+Bounds6 Union(const Bounds6* cell, int lo, int hi) {
+    Bounds6 b = EmptyBounds();
+    for (int c = lo; c < hi; ++c) {
+        for (int k = 0; k < kCoords; ++k) {
+            b.lo[k] = std::min(b.lo[k], cell[c].lo[k]);
+            b.hi[k] = std::max(b.hi[k], cell[c].hi[k]);
+        }
+    }
+    return b;
+}
+
+}  // namespace
+
+const Hierarchy::Plan& Hierarchy::MakePlan(Worker& w, int face, int dim, int buf, uint32_t begin,
+                                           uint32_t end, const Bounds6& tight) {
+    Plan p;
+    // The dimensions: the node's own choice, then ChooseSplit's on the halved interval.
+    float extent[kDims];
+    for (int k = 0; k < kDims; ++k) extent[k] = tight.hi[k] - tight.lo[k];
+    for (p.levels = 0; p.levels < kPlanLevels && dim >= 0; ++p.levels) {
+        p.dim[p.levels] = dim;
+        extent[dim] *= 0.5f;
+        dim = SplitDim(face, extent);
+    }
+    // The values: each plan node splits its part of the interval in the middle.
+    Box5 box[(1 << kPlanLevels) - 1];
+    box[0] = tight.ToBox5();
+    const int nInner = (1 << p.levels) - 1;
+    for (int h = 0; h < nInner; ++h) {
+        const int level = std::bit_width(unsigned(h + 1)) - 1;
+        const int d = p.dim[level];
+        p.value[h] = Midpoint(box[h].lo[d], box[h].hi[d]);
+        if (2 * h + 2 < nInner) {
+            box[2 * h + 1] = box[2 * h + 2] = box[h];
+            box[2 * h + 1].hi[d] = box[2 * h + 2].lo[d] = p.value[h];
+        }
+    }
+    p.buf = buf ^ 1;
+    PartitionIo io;
+    for (int k = 0; k < kCoords; ++k) {
+        io.src[k] = coord_[buf][k].data();
+        io.dst[k] = coord_[p.buf][k].data();
+    }
+    io.srcId = id_[buf].data();
+    io.dstId = id_[p.buf].data();
+    io.key = nullptr;
+    BucketRays(io, active_[face], {p.levels, p.dim, p.value}, begin, end, p.cellBegin, p.cell);
+    for (int c = 0; c < 1 << p.levels; ++c) {
+        for (int k = 0; k < kCoords; ++k) {
+            if (!active_[face][k]) p.cell[c].lo[k] = p.cell[c].hi[k] = constant_[face][k];
+        }
+    }
+    w.counters.rayMoves += end - begin;
+    ++w.counters.plans;
+    return w.plans.emplace_back(p);
+}
+
+bool Hierarchy::PlannedSplit(const PlanAt& at, uint32_t begin, uint32_t end, uint32_t& split,
+                             Bounds6 childBox[2], PlanAt childAt[2]) const {
+    const Plan& p = *at.plan;
+    int lo = at.cellLo, hi = at.cellHi;
+    for (int level = at.level; level < p.levels; ++level) {
+        const int mid = (lo + hi) / 2;
+        if (p.cellBegin[mid] == begin) {
+            lo = mid;
+        } else if (p.cellBegin[mid] == end) {
+            hi = mid;
+        } else {
+            split = p.cellBegin[mid];
+            childBox[0] = Union(p.cell, lo, mid);
+            childBox[1] = Union(p.cell, mid, hi);
+            const bool last = level + 1 == p.levels;
+            childAt[0] = last ? PlanAt{} : PlanAt{&p, level + 1, lo, mid};
+            childAt[1] = last ? PlanAt{} : PlanAt{&p, level + 1, mid, hi};
+            return true;
+        }
+    }
+    return false;
 }
 
 void Hierarchy::EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,

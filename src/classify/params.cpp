@@ -58,7 +58,7 @@ float ParseFloat(const std::string& name, const std::string& value, float lo, fl
 
 const char* ParamNames() {
     return "min-rays, min-candidates, splits-per-list, split, min-origin-fraction, "
-           "min-dir-fraction, dir-weight, threads, task-rays";
+           "min-dir-fraction, dir-weight, threads, task-rays, plan-rays";
 }
 
 void SetParam(Params& params, const std::string& name, const std::string& value) {
@@ -85,6 +85,8 @@ void SetParam(Params& params, const std::string& name, const std::string& value)
         params.dirWeight = ParseFloat(name, value, 0.0f, 1e30f, true, "a number > 0");
     } else if (name == "task-rays") {
         params.taskRays = ParseCount(name, value, 0);
+    } else if (name == "plan-rays") {
+        params.planRays = ParseCount(name, value, 0);
     } else if (name == "threads") {
         params.threads = std::min<uint32_t>(ParseCount(name, value, 0), 256);
     } else {

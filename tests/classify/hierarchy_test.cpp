@@ -88,9 +88,11 @@ std::vector<Ray> RandomRays(uint32_t seed, int n) {
     return rays;
 }
 
-// Parameters that split small ray sets deeply, so that small tests exercise deep hierarchies.
+// Parameters that split small ray sets deeply, so that small tests exercise deep hierarchies,
+// with planned splits near the roots.
 Params DeepParams(const scene::Scene& s) {
     Params p = Params::ForScene(s);
+    p.planRays = 256;
     p.minRays = 4;
     p.minCandidates = 2;
     p.splitGain = 1.0f;
@@ -468,7 +470,9 @@ TEST(Hierarchy, RaysAlreadyInSplitOrderAreNotMoved) {
     std::vector<Ray> shuffled;
     for (uint32_t i : order) shuffled.push_back(rows[i]);
 
-    Hierarchy inOrder(s, DeepParams(s)), mixed(s, DeepParams(s));
+    Params p = DeepParams(s);
+    p.planRays = 0;  // a plan's bucketing moves every ray, in order or not
+    Hierarchy inOrder(s, p), mixed(s, p);
     const LeafBatch a = inOrder.Classify(rows), b = mixed.Classify(shuffled);
     EXPECT_EQ(Shape(inOrder), Shape(mixed));
     // Per leaf: its node's box, its list and its rays (as indices into `rows`).
@@ -550,6 +554,55 @@ TEST(Hierarchy, ResetClassifiesLikeAFreshHierarchy) {
     EXPECT_EQ(used.Nodes().size(), size_t(kFaceCount));
     ExpectSameLeaves(used.Classify(second), fresh.Classify(second), true);
     ExpectSameNodes(used, fresh);
+}
+
+// Nodes with many rays plan their next levels of splits and bucket the rays into the plan's
+// cells in one pass. The planned hierarchy keeps every invariant of the plain one: each ray in
+// one leaf whose interval contains it, children inside their parents, exact answers, over two
+// generations (the second routed through the first's splits). Rays in clusters with gaps between
+// them leave planned halves empty, which the planned nodes skip.
+TEST(Hierarchy, PlannedSplitsKeepTheInvariantsAndMoveRaysLess) {
+    const scene::Scene s = RandomScene(111, 400, 6, 2);
+    std::vector<Ray> first = RandomRays(112, 9000);
+    std::mt19937 rng(113);
+    std::uniform_real_distribution<float> jitter(-0.02f, 0.02f), cone(-0.3f, 0.3f);
+    for (int i = 0; i < 3000; ++i) {
+        const float clusters[3] = {-0.95f, -0.85f, 0.9f};
+        Ray r;
+        r.origin = glm::vec3(-1.0f, clusters[i % 3] + jitter(rng), jitter(rng));
+        r.direction = glm::normalize(glm::vec3(1.0f, cone(rng), cone(rng)));
+        first.push_back(r);
+    }
+    std::vector<Ray> second = RandomRays(114, 8000);
+    uint64_t moves[2] = {};
+    for (const uint32_t planRays : {0u, 256u}) {
+        SCOPED_TRACE(planRays);
+        Params p = DeepParams(s);
+        p.planRays = planRays;
+        Hierarchy h(s, p);
+        for (std::vector<Ray>* rays : {&first, &second}) {
+            const LeafBatch batch = h.Classify(*rays);
+            if (rays == &first) {
+                EXPECT_EQ(h.Counters().plans > 0, planRays > 0);
+            }
+            moves[planRays > 0] += h.Counters().rayMoves;
+            ExpectEveryRayOnce(batch, uint32_t(rays->size()));
+            ExpectSameHits(Query(s, batch, *rays), BruteForce(s, *rays));
+            for (const RcLeaf& leaf : batch.leaves) {
+                for (uint32_t j = 0; j < leaf.rayCount; ++j) {
+                    const uint32_t id = batch.rayIndex[leaf.rayBegin + j];
+                    Ray5 r;
+                    ASSERT_TRUE(ToRay5((*rays)[id], h.SceneBox(), r));
+                    ASSERT_TRUE(h.Nodes()[leaf.node].box.Contains(r.p)) << "ray " << id;
+                }
+            }
+        }
+        for (const Node& n : h.Nodes()) {
+            if (n.IsLeaf()) continue;
+            for (uint32_t c : n.child) EXPECT_TRUE(n.box.Contains(h.Nodes()[c].box));
+        }
+    }
+    EXPECT_LT(moves[1], moves[0] * 3 / 4);
 }
 
 TEST(Hierarchy, MemoryOfInnerListsIsScratch) {

@@ -20,8 +20,10 @@ TEST(SetParam, SetsEveryNamedParameter) {
     SetParam(p, "dir-weight", "0.5");
     SetParam(p, "threads", "3");
     SetParam(p, "task-rays", "5000");
+    SetParam(p, "plan-rays", "0");
     EXPECT_EQ(p.threads, 3u);
     EXPECT_EQ(p.taskRays, 5000u);
+    EXPECT_EQ(p.planRays, 0u);
     EXPECT_EQ(p.minRays, 8u);
     EXPECT_EQ(p.minCandidates, 0u);
     EXPECT_EQ(p.splitsPerList, 2);

@@ -94,6 +94,7 @@ struct BuildCounters {
     uint64_t boxTests = 0;    // candidate tests made while filtering lists
     uint64_t rayMoves = 0;    // rays moved by partitions (sum over levels)
     uint64_t fromEnd = 0;     // any-hit rays classified from their common end (CommonEnds)
+    uint32_t plans = 0;       // nodes whose next levels of splits were planned at once
     uint32_t maxDepth = 0;    // deepest leaf
     size_t scratchBytes = 0;  // peak bytes of the per-depth list and ray buffers
 };
@@ -186,6 +187,25 @@ class Hierarchy {
         uint32_t linkNode = kNoNode;
         int linkField = 0;  // 0, 1: child, 2: remainder
     };
+    // Levels of midpoint splits planned at once for a node with many rays (Params::planRays):
+    // its interval halved up to kPlanLevels times, dimensions chosen as ChooseSplit would on the
+    // halves. One bucketing pass puts the rays into the 2^levels cells in order, left before
+    // right at every level; the planned nodes then split at cell boundaries without moving a
+    // ray, and skip a level whose split leaves one side empty.
+    static constexpr int kPlanLevels = 4;
+    struct Plan {
+        int levels = 0;
+        int buf = 0;  // the buffer that holds the cells' rays
+        int dim[kPlanLevels];
+        float value[(1 << kPlanLevels) - 1];  // plan node h splits at value[h] (heap order)
+        uint32_t cellBegin[(1 << kPlanLevels) + 1];
+        Bounds6 cell[1 << kPlanLevels];
+    };
+    // A node inside a plan: its rays are the plan's cells [cellLo, cellHi), split at `level`.
+    struct PlanAt {
+        const Plan* plan = nullptr;
+        int level = 0, cellLo = 0, cellHi = 0;
+    };
     // A subtree to build: a face root, or a later child of a node with many rays.
     struct Task {
         uint32_t node, begin, end;
@@ -193,6 +213,7 @@ class Hierarchy {
         Bounds6 tight;
         ListView list;  // the parent's list: a face list or a kept one
         bool reuseList;
+        PlanAt plan;
         Part* part;
     };
     struct Schedule;  // the task queue of one Subdivide (private to the module)
@@ -209,6 +230,7 @@ class Hierarchy {
         std::vector<Node> nodes;
         ListArena stack;  // the lists of the nodes on the path being built
         ListArena kept;   // lists of nodes whose later children are tasks
+        std::deque<Plan> plans;  // this generation's (tasks of any thread may read them)
     };
 
     // Maps rays (taken from their common ends where `ends` has any) to the 5D buffer; returns
@@ -216,9 +238,10 @@ class Hierarchy {
     uint64_t Convert(RayView rays, const CommonEnds& ends, uint32_t firstId, uint32_t* next,
                      Bounds6* faceBounds, std::vector<rc_uint>& missed);
     void Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
-                 const Bounds6& tight, const ListView& list, bool reuseList);
+                 const Bounds6& tight, const ListView& list, bool reuseList, PlanAt plan);
     void Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, uint32_t begin,
-               uint32_t end, int buf, const Bounds6& tight, const ListView& list, bool reuseList);
+               uint32_t end, int buf, const Bounds6& tight, const ListView& list, bool reuseList,
+               PlanAt plan);
     void Work(Worker& w, int index);
     // Moves the rays [begin, end) of buffer `buf` into the other one by the child of an earlier
     // split whose interval contains them: box0's, else box1's, else the remainder (groups 0, 1,
@@ -230,6 +253,16 @@ class Hierarchy {
     ListView Filter(Worker& w, const Bounds6& tight, const ListView& list, bool keep);
     bool ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays, const ListView& list,
                      int& dim) const;
+    // The dimension to split by the extents of a node's interval (-1: none is long enough).
+    int SplitDim(int face, const float* extent) const;
+    // Plans the splits of a node's rays from `dim` on and buckets the rays into the plan's
+    // cells (in the other buffer).
+    const Plan& MakePlan(Worker& w, int face, int dim, int buf, uint32_t begin, uint32_t end,
+                         const Bounds6& tight);
+    // The next planned split of a node at `at` with rays [begin, end): the left child's rays
+    // are [begin, split). False when every level left would leave one side empty.
+    bool PlannedSplit(const PlanAt& at, uint32_t begin, uint32_t end, uint32_t& split,
+                      Bounds6 childBox[2], PlanAt childAt[2]) const;
     Bounds6 Bounds(int face, int buf, uint32_t begin, uint32_t end) const;
     float SplitValue(Worker& w, int dim, int buf, uint32_t begin, uint32_t end,
                      const Bounds6& tight);

@@ -61,6 +61,12 @@ struct Params {
     // A node with more rays than this queues its later children as tasks for the threads
     // (0: max(32768, rays / 32)). The result does not depend on it either, except for node ids.
     uint32_t taskRays = 0;
+    // A node with at least this many rays plans its next levels of midpoint splits at once
+    // (halving its interval up to 4 times) and puts its rays into the plan's cells in one pass,
+    // instead of moving every ray once per level (0: never; only with the midpoint rule).
+    // The top levels of a generation then stream the rays through memory once: below about
+    // 64k rays a node's rays stay in the core's cache and single splits cost less.
+    uint32_t planRays = 65536;
 
     // Minimum hypercube size: a dimension is split only while its extent exceeds this fraction of
     // the face root's extent (scene box side for X, Y, Z; 2 for u, v). Below it the nearest
@@ -80,7 +86,7 @@ struct Params {
 // Sets one parameter by its command-line name (`--classify NAME=VALUE`):
 //   min-rays N, min-candidates N, splits-per-list N (N >= 1), split midpoint|median,
 //   min-origin-fraction F, min-dir-fraction F (0 <= F <= 1), dir-weight W (W > 0),
-//   threads N (0: one per core), task-rays N (0: automatic).
+//   threads N (0: one per core), task-rays N (0: automatic), plan-rays N (0: never).
 // Throws rayclass::UsageError naming the valid names or values when `name` is unknown or `value`
 // does not parse completely or is out of range.
 void SetParam(Params& params, const std::string& name, const std::string& value);
