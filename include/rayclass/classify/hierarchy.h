@@ -18,6 +18,10 @@
 // while a generation is being subdivided: inner lists are scratch on a per-thread stack, leaf
 // lists go into the returned LeafBatch.
 //
+// Near the roots, where a node's rays do not fit the core's cache, a node plans its next levels
+// of splits at once (Plan; Params::planRays) so that one pass over its rays does the work of
+// several partitions.
+//
 // Subdivide runs on Params::threads cores. The work is a tree of tasks that depends on the rays
 // alone: each face root is a task, and a node with many rays builds its first child itself and
 // queues the others (their list is kept until Subdivide returns). A task's leaves and new nodes
@@ -92,7 +96,7 @@ enum class RayUse : uint8_t { kNearestHit, kAnyHit };
 // Counters of the last Subdivide().
 struct BuildCounters {
     uint64_t boxTests = 0;    // candidate tests made while filtering lists
-    uint64_t rayMoves = 0;    // rays moved by partitions (sum over levels)
+    uint64_t rayMoves = 0;    // rays moved by partitions and plans (sum over levels)
     uint64_t fromEnd = 0;     // any-hit rays classified from their common end (CommonEnds)
     uint32_t plans = 0;       // nodes whose next levels of splits were planned at once
     uint32_t maxDepth = 0;    // deepest leaf
