@@ -462,47 +462,6 @@ __mmask16 Orient16(const CommonEnds& ends, __mmask16 live, Rays16& r) {
     return matched;
 }
 
-// Counts the rays of each face (kFaceCount: no usable direction), 16 at a time.
-void CountFaces(RayView rays, const CommonEnds& ends, uint32_t* count) {
-    const __m512i idx = RayOffsets16(rays);
-    const __m512 fmax = _mm512_set1_ps(kFloatMax);
-    const __m512 zero = _mm512_setzero_ps();
-    const size_t n = rays.size();
-    for (size_t i = 0; i < n; i += 16) {
-        const __mmask16 live = LiveLanes16(n, i);
-        const float* at = rays.Floats(i);
-        __m512 dx, dy, dz;
-        if (ends.n > 0) {
-            Rays16 r = Gather16(at, idx, live);
-            Orient16(ends, live, r);
-            dx = r.dx;
-            dy = r.dy;
-            dz = r.dz;
-        } else {
-            dx = _mm512_mask_i32gather_ps(zero, live, idx, at + 4, 4);
-            dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
-            dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
-        }
-        const auto [isX, isY, isZ, neg, ax, ay, az, da] = DominantAxis16(dx, dy, dz);
-        const __mmask16 finite = _mm512_cmp_ps_mask(ax, fmax, _CMP_LE_OQ) &
-                                 _mm512_cmp_ps_mask(ay, fmax, _CMP_LE_OQ) &
-                                 _mm512_cmp_ps_mask(az, fmax, _CMP_LE_OQ);
-        const __mmask16 ok = __mmask16(live & finite & _mm512_cmp_ps_mask(da, zero, _CMP_GT_OQ));
-        count[0] += uint32_t(std::popcount(unsigned(ok & isX & ~neg)));
-        count[1] += uint32_t(std::popcount(unsigned(ok & isX & neg)));
-        count[2] += uint32_t(std::popcount(unsigned(ok & isY & ~neg)));
-        count[3] += uint32_t(std::popcount(unsigned(ok & isY & neg)));
-        count[4] += uint32_t(std::popcount(unsigned(ok & isZ & ~neg)));
-        count[5] += uint32_t(std::popcount(unsigned(ok & isZ & neg)));
-        count[kFaceCount] += uint32_t(std::popcount(unsigned(live & ~ok)));
-    }
-}
-#else
-void CountFaces(RayView rays, const CommonEnds& ends, uint32_t* count) {
-    for (size_t i = 0; i < rays.size(); ++i) {
-        ++count[DirectionFace(ends.Oriented(rays[i]).direction)];
-    }
-}
 #endif
 
 }  // namespace
@@ -637,23 +596,27 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
     return fromEnd;
 }
 
-void Hierarchy::ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out) {
+void Hierarchy::ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* faceBounds,
+                           LeafBatch& out) {
     for (int f = 0; f < kFaceCount; ++f) faceBounds[f] = EmptyBounds();
+    const uint32_t n = nInserted_;
+    for (int f = 0; f < kFaceCount; ++f) faceBegin[f] = faceEnd[f] = f * n;
     if (sceneBox_.Empty()) {
-        for (uint32_t i = 0; i < nInserted_; ++i) out.missed.push_back(i);
-        std::fill(begin, begin + kFaceCount + 1, 0u);
+        for (uint32_t i = 0; i < n; ++i) out.missed.push_back(i);
         return;
     }
-    // Every inserted array in `threads` pieces. Pass 1 counts each piece's faces; pass 2 maps
-    // every ray straight into its place in its face's range of the structure-of-arrays buffer
-    // (no intermediate array), faces in order, pieces in order within a face.
-    const int threads = Threads(nInserted_);
+    // Every inserted array in `threads` pieces, each mapping its rays straight into the
+    // structure-of-arrays buffer in one pass over them. Face f's rays go to the slab
+    // [f n, (f + 1) n), where a piece writes from its first ray's id on: room for all of its
+    // rays, so no pass is needed to count the faces first. The pieces' runs are then moved down
+    // to follow each other: faces in their slabs, pieces in order within a face. The slabs are
+    // address space: only the pages rays are written to are ever touched.
+    const int threads = Threads(n);
     struct Piece {
         RayView rays;
         const CommonEnds* ends;
         uint32_t firstId;
         uint64_t fromEnd = 0;
-        uint32_t count[kFaceCount + 1] = {};
         uint32_t start[kFaceCount], next[kFaceCount];
         Bounds6 bounds[kFaceCount];
         std::vector<rc_uint> missed;
@@ -669,26 +632,16 @@ void Hierarchy::ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out)
             p.rays = rays.Sub(at, std::min(step, rays.size() - at));
             p.ends = &ends;
             p.firstId = firstId + uint32_t(at);
+            for (int f = 0; f < kFaceCount; ++f) p.start[f] = p.next[f] = f * n + p.firstId;
         }
         firstId += uint32_t(rays.size());
     }
-    OnThreads(threads, [&](int t) {
-        for (size_t i = size_t(t); i < pieces.size(); i += size_t(threads)) {
-            CountFaces(pieces[i].rays, *pieces[i].ends, pieces[i].count);
-        }
-    });
-    uint32_t at = 0;
-    for (int f = 0; f < kFaceCount; ++f) {
-        for (Piece& p : pieces) {
-            p.start[f] = p.next[f] = at;
-            at += p.count[f];
-        }
-    }
+    const size_t slabs = size_t(kFaceCount) * n;
     for (int b = 0; b < 2; ++b) {
-        for (auto& c : coord_[b]) Regrow(c, at);
-        Regrow(id_[b], at);
+        for (auto& c : coord_[b]) Regrow(c, slabs);
+        Regrow(id_[b], slabs);
     }
-    Regrow(dest_, at);
+    Regrow(dest_, slabs);
     OnThreads(threads, [&](int t) {
         for (size_t i = size_t(t); i < pieces.size(); i += size_t(threads)) {
             Piece& p = pieces[i];
@@ -696,26 +649,41 @@ void Hierarchy::ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out)
             p.fromEnd = Convert(p.rays, *p.ends, p.firstId, p.next, p.bounds, p.missed);
         }
     });
-    // Rays that the slow path found to miss the box leave holes at the ends of their pieces'
-    // ranges: close them (rare: only for origins outside the box).
-    uint32_t to = 0;
+    bool moves = false;
     for (int f = 0; f < kFaceCount; ++f) {
-        begin[f] = to;
-        for (Piece& p : pieces) {
-            const uint32_t from = p.start[f], len = p.next[f] - p.start[f];
-            if (to != from) {
-                for (auto& c : coord_[0])
-                    std::copy(c.begin() + from, c.begin() + from + len, c.begin() + to);
-                std::copy(id_[0].begin() + from, id_[0].begin() + from + len, id_[0].begin() + to);
-            }
-            to += len;
+        for (const Piece& p : pieces) {
+            moves = moves || (p.next[f] > p.start[f] && p.start[f] != faceEnd[f]);
+            faceEnd[f] += p.next[f] - p.start[f];
             for (int k = 0; k < kCoords; ++k) {
                 faceBounds[f].lo[k] = std::min(faceBounds[f].lo[k], p.bounds[f].lo[k]);
                 faceBounds[f].hi[k] = std::max(faceBounds[f].hi[k], p.bounds[f].hi[k]);
             }
         }
     }
-    begin[kFaceCount] = to;
+    if (moves) {
+        // Each face's arrays apart (the coordinates and the ids), spread over the threads.
+        constexpr int kArrays = kCoords + 1;
+        OnThreads(threads, [&](int t) {
+            for (int job = t; job < kFaceCount * kArrays; job += threads) {
+                const int f = job / kArrays, k = job % kArrays;
+                auto move = [&](auto* a) {
+                    uint32_t to = faceBegin[f];
+                    for (const Piece& p : pieces) {
+                        const uint32_t len = p.next[f] - p.start[f];
+                        // Runs only move down: the runs before one hold at most their pieces'
+                        // rays, so a forward copy never overwrites what it has still to read.
+                        if (to != p.start[f]) std::copy_n(a + p.start[f], len, a + to);
+                        to += len;
+                    }
+                };
+                if (k < kCoords) {
+                    move(coord_[0][k].data());
+                } else {
+                    move(id_[0].data());
+                }
+            }
+        });
+    }
     for (Piece& p : pieces) {
         out.missed.insert(out.missed.end(), p.missed.begin(), p.missed.end());
         counters_.fromEnd += p.fromEnd;
@@ -738,12 +706,12 @@ void Hierarchy::Subdivide(LeafBatch& out) {
     out.candidates.clear();
     out.missed.clear();
     out.nRays = nInserted_;
-    uint32_t begin[kFaceCount + 1];
+    uint32_t begin[kFaceCount], end[kFaceCount];
     Bounds6 faceBounds[kFaceCount];
-    ConvertAll(begin, faceBounds, out);
-    const uint32_t n = begin[kFaceCount];
-    out.rayIndex.resize(n);
-    rayIndex_ = out.rayIndex.data();
+    ConvertAll(begin, end, faceBounds, out);
+    uint32_t n = 0;
+    for (int f = 0; f < kFaceCount; ++f) n += end[f] - begin[f];
+    Regrow(leafRays_, id_[0].size());
     // Coordinates that do not vary among a face's rays (the origin of eye rays, the end of
     // unbounded rays) are never moved.
     for (int f = 0; f < kFaceCount; ++f) {
@@ -756,9 +724,9 @@ void Hierarchy::Subdivide(LeafBatch& out) {
     schedule.cut = params_.taskRays > 0 ? params_.taskRays : std::max(kTaskRaysMin, n / kTasks);
     nParts_ = 0;
     for (int f = 0; f < kFaceCount; ++f) {
-        if (begin[f] == begin[f + 1]) continue;
+        if (begin[f] == end[f]) continue;
         const FaceList& all = (*faceLists_)[f];
-        schedule.queue.push_back({FaceRoot(f), begin[f], begin[f + 1], 0, faceBounds[f],
+        schedule.queue.push_back({FaceRoot(f), begin[f], end[f], 0, faceBounds[f],
                                   View(all, all.Size()), false, PlanAt(), &NewPart(begin[f])});
     }
     const int threads = Threads(n);
@@ -773,10 +741,11 @@ void Hierarchy::Subdivide(LeafBatch& out) {
         w.plans.clear();
     }
     OnThreads(threads, [&](int t) { Work(workers_[size_t(t)], t); });
-    Join(out);
-    size_t scratch = dest_.capacity() * 4;
-    for (int b = 0; b < 2; ++b)
-        scratch += (id_[b].capacity() + coord_[b][0].capacity() * kCoords) * 4;
+    Join(out, n);
+    // The ray buffers by the rays they hold (two ping-pong buffers, the routing destinations
+    // and the leaves' ids): their face slabs reserve kFaceCount times as much address space, of
+    // which only the pages rays are written to are touched.
+    size_t scratch = size_t(n) * (2 * (kCoords + 1) + 2) * 4;
     for (Worker& w : workers_) {
         counters_.boxTests += w.counters.boxTests;
         counters_.rayMoves += w.counters.rayMoves;
@@ -794,7 +763,6 @@ void Hierarchy::Subdivide(LeafBatch& out) {
     counters_.scratchBytes = scratch;
     inserted_.clear();
     nInserted_ = 0;
-    rayIndex_ = nullptr;
 }
 
 void Hierarchy::Work(Worker& w, int index) {
@@ -871,7 +839,7 @@ void Hierarchy::Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, u
     s.changed.notify_one();
 }
 
-void Hierarchy::Join(LeafBatch& out) {
+void Hierarchy::Join(LeafBatch& out, uint32_t nRays) {
     // Parts in ray order, their nodes appended in that order.
     std::vector<Part*> parts(nParts_);
     for (size_t p = 0; p < nParts_; ++p) parts[p] = &parts_[p];
@@ -928,12 +896,16 @@ void Hierarchy::Join(LeafBatch& out) {
               [](const Placed& a, const Placed& b) { return a.leaf.rayBegin < b.leaf.rayBegin; });
     out.leaves.resize(leaves.size());
     out.candidates.resize(nCandidates);
-    uint32_t at = 0;
+    out.rayIndex.resize(nRays);
+    uint32_t at = 0, rayAt = 0;
     for (size_t i = 0; i < leaves.size(); ++i) {
         RcLeaf leaf = leaves[i].leaf;
         std::copy_n(leaves[i].candidates, leaf.candCount, out.candidates.begin() + at);
         leaf.candBegin = at;
         at += leaf.candCount;
+        std::copy_n(leafRays_.begin() + leaf.rayBegin, leaf.rayCount, out.rayIndex.begin() + rayAt);
+        leaf.rayBegin = rayAt;
+        rayAt += leaf.rayCount;
         out.leaves[i] = leaf;
     }
 }
@@ -1509,10 +1481,11 @@ bool Hierarchy::PlannedSplit(const PlanAt& at, uint32_t begin, uint32_t end, uin
 void Hierarchy::EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
                          const ListView& list, float endHi) {
     RcLeaf leaf{};
-    // Faces and leaves fill the range in order, so a leaf's rays keep their buffer positions.
+    // Leaves fill their faces' ranges in order: Join lays the leaves out in the order of their
+    // rays' buffer positions.
     leaf.rayBegin = begin;
     leaf.rayCount = end - begin;
-    std::copy(id_[buf].begin() + begin, id_[buf].begin() + end, rayIndex_ + begin);
+    std::copy(id_[buf].begin() + begin, id_[buf].begin() + end, leafRays_.begin() + begin);
     // The current nearest-hit bound: no ray of the leaf gets past X = endHi, and the list is
     // sorted by near X, so everything after that is cut at once (Filter has already cut it when
     // the leaf filtered its own list).

@@ -307,18 +307,28 @@ TEST(Hierarchy, SecondGenerationMatchesAFreshHierarchy) {
     ExpectSameHits(Query(s, shared.Classify(first), first), BruteForce(s, first));
 }
 
+void ExpectSameLeaves(const LeafBatch& a, const LeafBatch& b, bool sameNodeIds);
+
 TEST(Hierarchy, InsertAppendsRaysOfOneGeneration) {
     const scene::Scene s = RandomScene(61, 200, 0, 0);
     const auto a = RandomRays(62, 1000);
     const auto b = RandomRays(63, 1000);
     std::vector<Ray> both = a;
     both.insert(both.end(), b.begin(), b.end());
-    Hierarchy h(s, DeepParams(s));
-    h.Insert(a);
-    h.Insert(b);
-    const LeafBatch batch = h.Subdivide();
-    ExpectEveryRayOnce(batch, uint32_t(both.size()));
-    ExpectSameHits(Query(s, batch, both), BruteForce(s, both));
+    // On several threads each array is cut into pieces, whose runs in each face's slab are
+    // then moved together: the same leaves as on one thread.
+    std::vector<LeafBatch> got;
+    for (const uint32_t threads : {1u, 2u, 3u}) {
+        Params p = DeepParams(s);
+        p.threads = threads;
+        Hierarchy h(s, p);
+        h.Insert(a);
+        h.Insert(b);
+        got.push_back(h.Subdivide());
+        ExpectEveryRayOnce(got.back(), uint32_t(both.size()));
+        ExpectSameHits(Query(s, got.back(), both), BruteForce(s, both));
+        ExpectSameLeaves(got.back(), got[0], false);
+    }
 }
 
 // The renderer classifies rays in place inside RcRay and RcShadowRay records: a strided view

@@ -283,8 +283,10 @@ class Hierarchy {
     Node& At(Worker& w, uint32_t id) {
         return (id & kLocal) ? w.nodes[w.part->nodeBegin + (id & ~kLocal)] : nodes_[id];
     }
-    void ConvertAll(uint32_t* begin, Bounds6* faceBounds, LeafBatch& out);
-    void Join(LeafBatch& out);
+    // Maps the generation's rays into buffer 0: face f's rays are [faceBegin[f], faceEnd[f]).
+    void ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* faceBounds, LeafBatch& out);
+    // Joins the tasks' parts into `out`, whose leaves hold nRays rays.
+    void Join(LeafBatch& out, uint32_t nRays);
     Part& NewPart(uint32_t begin);
     int Threads(uint32_t nRays) const;
 
@@ -298,7 +300,8 @@ class Hierarchy {
 
     // The current generation: the inserted rays, and their 5D points by face in two ping-pong
     // buffers of structure-of-arrays: X, Y, Z, u, v and the X where the ray ends (its start's X
-    // plus its reach, which cuts beams: shadow rays end at the light).
+    // plus its reach, which cuts beams: shadow rays end at the light). Of n inserted rays, face
+    // f's lie at the start of the slab [f n, (f + 1) n) (see ConvertAll).
     struct Inserted {
         RayView rays;
         CommonEnds ends;  // none for nearest-hit rays
@@ -308,7 +311,7 @@ class Hierarchy {
     ScratchVector<float> coord_[2][kCoords];
     ScratchVector<uint32_t> id_[2];
     ScratchVector<uint32_t> dest_;
-    uint32_t* rayIndex_ = nullptr;  // the output's rayIndex while subdividing
+    ScratchVector<uint32_t> leafRays_;  // the leaves' ray ids at their buffer positions
     // Per face: coordinates that vary among its rays, and the value of those that do not.
     bool active_[kFaceCount][kCoords] = {};
     float constant_[kFaceCount][kCoords] = {};
