@@ -7,6 +7,9 @@
 //   --width W --height H   eye-ray image size (1024 x 768)
 //   --repeat N             classifications timed per generation; the median counts (5)
 //   --gen LIST             generations to run, comma-separated: eye,mirror,shadow,shared (all)
+//   --bounces N            mirror generations: the mirror rays of the previous one's hits, each in
+//                          a fresh hierarchy, printed as "mirror 2", "mirror 3", ... (1). Later
+//                          bounces are less coherent: their lists filter ever longer.
 //   --light-f F            shadow light at box centre + F size_y (0, 1, 0) (0.1, sibenik's)
 //   --param NAME=VALUE     any classify::SetParam parameter (min-rays, min-candidates, ...)
 //   --split midpoint|median, --min-rays N, --min-cand N, --splits-per-list N, --dir-weight W
@@ -60,6 +63,7 @@ int Run(int argc, char** argv) {
     int repeat = 5;
     float lightF = 0.1f;
     std::string gens = "eye,mirror,shadow,shared";
+    int bounces = 1;
     const scene::Scene scene = scene::LoadScene(argv[1]);
     classify::Params params = classify::Params::ForScene(scene);
     for (int i = 2; i + 1 < argc; i += 2) {
@@ -68,6 +72,8 @@ int Run(int argc, char** argv) {
         else if (opt == "--height") height = uint32_t(std::stoul(val));
         else if (opt == "--repeat") repeat = std::stoi(val);
         else if (opt == "--gen") gens = val;
+        else if (opt == "--bounces")
+            bounces = std::stoi(val);
         else if (opt == "--light-f") lightF = std::stof(val);
         else if (opt == "--param") {
             const size_t eq = val.find('=');
@@ -95,7 +101,17 @@ int Run(int argc, char** argv) {
     }
 
     const auto mirror = classify::MirrorRays(scene, eye, eyeHits);
-    if (Wants(gens, "mirror")) Print("mirror", classify::ComputeStats(scene, mirror, params, repeat));
+    if (Wants(gens, "mirror")) {
+        std::vector<geometry::Hit<float>> hits(mirror.size());
+        Print("mirror", classify::ComputeStats(scene, mirror, params, repeat, hits));
+        auto rays = mirror;
+        for (int b = 2; b <= bounces; ++b) {
+            rays = classify::MirrorRays(scene, rays, hits);
+            hits.assign(rays.size(), {});
+            const std::string name = "mirror " + std::to_string(b);
+            Print(name.c_str(), classify::ComputeStats(scene, rays, params, repeat, hits));
+        }
+    }
 
     if (Wants(gens, "shadow")) {
         const glm::vec3 light = classify::AnchorLight(scene, lightF);
