@@ -94,6 +94,20 @@ struct PartitionIo {
     const float* key;
 };
 
+// Reads buffer `from` (coordinates and ids) and writes `to`; the key is the caller's.
+PartitionIo Between(const ScratchVector<float>* from, ScratchVector<float>* to,
+                    const ScratchVector<uint32_t>& fromId, ScratchVector<uint32_t>& toId) {
+    PartitionIo io;
+    for (int k = 0; k < kCoords; ++k) {
+        io.src[k] = from[k].data();
+        io.dst[k] = to[k].data();
+    }
+    io.srcId = fromId.data();
+    io.dstId = toId.data();
+    io.key = nullptr;
+    return io;
+}
+
 // Moves the rays with key < value to the front of [begin, end) of the destination (in order) and
 // the others to the back (reversed), for the dimensions in kActive only, and gathers both sides'
 // bounds on the way (the other dimensions' bounds are left to the caller). Returns the first
@@ -345,6 +359,14 @@ inline int DirectionFace(const glm::vec3& d) {
     const int a = DominantAxis(d);
     if (!(std::abs(d[a]) > 0.0f)) return kFaceCount;
     return 2 * a + (d[a] < 0.0f ? 1 : 0);
+}
+
+// b grows to contain `other`.
+void Merge(Bounds6& b, const Bounds6& other) {
+    for (int k = 0; k < kCoords; ++k) {
+        b.lo[k] = std::min(b.lo[k], other.lo[k]);
+        b.hi[k] = std::max(b.hi[k], other.hi[k]);
+    }
 }
 
 void GrowBounds(Bounds6& b, const float* p) {
@@ -654,10 +676,7 @@ void Hierarchy::ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* face
         for (const Piece& p : pieces) {
             moves = moves || (p.next[f] > p.start[f] && p.start[f] != faceEnd[f]);
             faceEnd[f] += p.next[f] - p.start[f];
-            for (int k = 0; k < kCoords; ++k) {
-                faceBounds[f].lo[k] = std::min(faceBounds[f].lo[k], p.bounds[f].lo[k]);
-                faceBounds[f].hi[k] = std::max(faceBounds[f].hi[k], p.bounds[f].hi[k]);
-            }
+            Merge(faceBounds[f], p.bounds[f]);
         }
     }
     if (moves) {
@@ -913,13 +932,16 @@ void Hierarchy::Join(LeafBatch& out, uint32_t nRays) {
 Bounds6 Hierarchy::Bounds(int face, int buf, uint32_t begin, uint32_t end) const {
     Bounds6 b;
     for (int k = 0; k < kCoords; ++k) {
-        if (active_[face][k]) {
-            MinMax(coord_[buf][k].data() + begin, end - begin, b.lo[k], b.hi[k]);
-        } else {
-            b.lo[k] = b.hi[k] = constant_[face][k];
-        }
+        if (active_[face][k]) MinMax(coord_[buf][k].data() + begin, end - begin, b.lo[k], b.hi[k]);
     }
+    SetConstants(face, b);
     return b;
+}
+
+void Hierarchy::SetConstants(int face, Bounds6& b) const {
+    for (int k = 0; k < kCoords; ++k) {
+        if (!active_[face][k]) b.lo[k] = b.hi[k] = constant_[face][k];
+    }
 }
 
 namespace {
@@ -1258,23 +1280,14 @@ Hierarchy::Split Hierarchy::Partition(Worker& w, int face, int dim, float value,
     }
     const int other = buf ^ 1;
     w.counters.rayMoves += end - begin;
-    PartitionIo io;
-    int mask = 0;
-    for (int k = 0; k < kCoords; ++k) {
-        io.src[k] = coord_[buf][k].data();
-        io.dst[k] = coord_[other][k].data();
-        mask |= active_[face][k] ? 1 << k : 0;
-    }
-    io.srcId = id_[buf].data();
-    io.dstId = id_[other].data();
+    PartitionIo io = Between(coord_[buf], coord_[other], id_[buf], id_[other]);
     io.key = coord_[buf][dim].data();
+    int mask = 0;
+    for (int k = 0; k < kCoords; ++k) mask |= active_[face][k] ? 1 << k : 0;
     split.mid = DispatchPartition(mask, io, value, begin, end, leftBox, rightBox);
     split.buf = other;
-    for (int k = 0; k < kCoords; ++k) {
-        if (!active_[face][k]) {
-            leftBox.lo[k] = leftBox.hi[k] = rightBox.lo[k] = rightBox.hi[k] = constant_[face][k];
-        }
-    }
+    SetConstants(face, leftBox);
+    SetConstants(face, rightBox);
     return split;
 }
 
@@ -1400,12 +1413,7 @@ void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule,
 // The union of bounds cell[lo, hi).
 Bounds6 Union(const Bounds6* cell, int lo, int hi) {
     Bounds6 b = EmptyBounds();
-    for (int c = lo; c < hi; ++c) {
-        for (int k = 0; k < kCoords; ++k) {
-            b.lo[k] = std::min(b.lo[k], cell[c].lo[k]);
-            b.hi[k] = std::max(b.hi[k], cell[c].hi[k]);
-        }
-    }
+    for (int c = lo; c < hi; ++c) Merge(b, cell[c]);
     return b;
 }
 
@@ -1436,20 +1444,9 @@ const Hierarchy::Plan& Hierarchy::MakePlan(Worker& w, int face, int dim, int buf
         }
     }
     p.buf = buf ^ 1;
-    PartitionIo io;
-    for (int k = 0; k < kCoords; ++k) {
-        io.src[k] = coord_[buf][k].data();
-        io.dst[k] = coord_[p.buf][k].data();
-    }
-    io.srcId = id_[buf].data();
-    io.dstId = id_[p.buf].data();
-    io.key = nullptr;
-    BucketRays(io, active_[face], {p.levels, p.dim, p.value}, begin, end, p.cellBegin, p.cell);
-    for (int c = 0; c < 1 << p.levels; ++c) {
-        for (int k = 0; k < kCoords; ++k) {
-            if (!active_[face][k]) p.cell[c].lo[k] = p.cell[c].hi[k] = constant_[face][k];
-        }
-    }
+    BucketRays(Between(coord_[buf], coord_[p.buf], id_[buf], id_[p.buf]), active_[face],
+               {p.levels, p.dim, p.value}, begin, end, p.cellBegin, p.cell);
+    for (int c = 0; c < 1 << p.levels; ++c) SetConstants(face, p.cell[c]);
     w.counters.rayMoves += end - begin;
     ++w.counters.plans;
     return w.plans.emplace_back(p);

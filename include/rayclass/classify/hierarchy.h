@@ -268,6 +268,8 @@ class Hierarchy {
     bool PlannedSplit(const PlanAt& at, uint32_t begin, uint32_t end, uint32_t& split,
                       Bounds6 childBox[2], PlanAt childAt[2]) const;
     Bounds6 Bounds(int face, int buf, uint32_t begin, uint32_t end) const;
+    // Sets the coordinates that do not vary among the face's rays to their value.
+    void SetConstants(int face, Bounds6& b) const;
     float SplitValue(Worker& w, int dim, int buf, uint32_t begin, uint32_t end,
                      const Bounds6& tight);
     // Where a split leaves a node's rays: in buffer `buf`, the child whose rays come first in
