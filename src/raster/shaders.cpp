@@ -14,7 +14,8 @@ uniform vec3 uEye, uForward, uRight, uUp;
 uniform vec2 uTanHalfFov;
 uniform uvec2 uSize;
 uniform float uDepthScale;
-uniform float uZNear;    // hulls nearer to the eye plane than this cover the whole screen
+uniform float uZNear;    // hulls reaching nearer to the eye plane cover the whole screen (triangles: see
+                         // kTriangleGeometry)
 uniform float uMargin;   // screen-space inflation of every hull, pixels
 uniform uint uBase;      // global id of this kind's first primitive
 )GLSL";
@@ -63,8 +64,34 @@ void main() {
     float zmin = min(a.z, min(b.z, c.z)), zmax = max(a.z, max(b.z, c.z));
     if (zmax <= 0.0) return;  // every eye ray runs towards +z: nothing behind the eye is hit
     gNear = 0.9999 * max(zmin, 0.0);  // a hit's distance is at least its view depth
+    vec3 n = cross(b - a, c - a);
     if (zmin < uZNear) {
-        EmitFullScreen();
+        // An eye ray meets view depths below uZNear only inside the frustum's tip, whose corners
+        // lie reach / 2 from the eye. A plane farther off than that (a wall or floor passing
+        // beside the eye) has all its hits beyond uZNear: bound the part of the triangle there.
+        float reach = 2.0 * uZNear * length(vec3(uTanHalfFov, 1.0));
+        if (abs(dot(n, a)) <= reach * length(n)) {
+            EmitFullScreen();
+            return;
+        }
+        vec3 v[3] = vec3[3](a, b, c);
+        vec2 lo = vec2(1e30), hi = vec2(-1e30);
+        for (int k = 0; k < 3; ++k) {
+            vec3 p = v[k], q = v[(k + 1) % 3];
+            if (p.z >= uZNear) {
+                vec2 s = ToPixel(p);
+                lo = min(lo, s);
+                hi = max(hi, s);
+            }
+            if ((p.z >= uZNear) != (q.z >= uZNear)) {
+                vec3 x = mix(p, q, (uZNear - p.z) / (q.z - p.z));
+                vec2 s = TangentToPixel(x.xy / uZNear);
+                lo = min(lo, s);
+                hi = max(hi, s);
+            }
+        }
+        if (hi.x < lo.x) return;  // wholly nearer than uZNear, outside the frustum's tip
+        EmitRect(lo - uMargin, hi + uMargin);
         return;
     }
     vec2 A = ToPixel(a), B = ToPixel(b), C = ToPixel(c);
@@ -72,7 +99,6 @@ void main() {
     // pure rounding noise, so the kernel can report "hits" anywhere along the plane's trace, far
     // outside the triangle. Cover the whole trace line across the screen, as thick as the
     // triangle's projection plus the margin.
-    vec3 n = cross(b - a, c - a);
     float rmax = max(length(a), max(length(b), length(c)));
     if (abs(dot(n, a)) < 1e-3 * length(n) * rmax && length(n.xy) > 1e-6 * length(n)) {
         vec2 m = normalize(vec2(n.x, -n.y));  // the trace's normal in pixels (rows run down)

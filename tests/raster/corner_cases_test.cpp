@@ -1,6 +1,7 @@
 // Constructed scenes where hull projection is easy to get wrong: edge-on triangles, sub-pixel
-// spheres, objects behind or around the camera, geometry crossing the near plane, and more than
-// 2^16 primitives. Every case must give the kernel path's id buffer exactly.
+// spheres, objects behind or around the camera, geometry crossing the near plane (near the eye or
+// passing beside it), and more than 2^16 primitives. Every case must give the kernel path's id
+// buffer exactly.
 #include <random>
 
 #include "raster_support.h"
@@ -161,6 +162,57 @@ TEST(RasterCornerCases, ObjectsCrossingTheNearPlane) {
     scene.quadrics.push_back(Cylinder({-0.2f, -0.3f, -0.1f}, {0.0f, 0.0f, 0.1f}));
     scene.spheres.push_back({{0, 0, -10}, 3});
     ExpectSameIds(*gl, scene, 100);
+}
+
+// Two triangles of an axis-aligned rectangle in the plane `axis` = `at`, spanning lo..hi in the
+// next two axes, cyclically (axis 1: z, x).
+void AddRectangle(scene::Scene& scene, int axis, float at, glm::vec2 lo, glm::vec2 hi) {
+    auto corner = [&](float u, float w) {
+        glm::vec3 p;
+        p[axis] = at;
+        p[(axis + 1) % 3] = u;
+        p[(axis + 2) % 3] = w;
+        return p;
+    };
+    scene::Triangle a, b;
+    a.p = {corner(lo.x, lo.y), corner(hi.x, lo.y), corner(hi.x, hi.y)};
+    b.p = {corner(lo.x, lo.y), corner(hi.x, hi.y), corner(lo.x, hi.y)};
+    scene.triangles.push_back(a);
+    scene.triangles.push_back(b);
+}
+
+TEST(RasterCornerCases, WallsPassingBesideTheEyeAreClippedAtTheNearPlane) {
+    RC_REQUIRE_GL();
+    // Inside a corridor: floor, ceiling and side walls run from behind the eye to far ahead, so
+    // every one of their triangles crosses the eye plane. Their hits all lie beyond the near
+    // distance; only the part there is drawn, and the ids stay the kernel's.
+    scene::Scene corridor;
+    corridor.camera = MakeCamera({0.2f, 0.1f, 0}, {0.2f, 0.1f, -1}, 96, 72, 60);
+    AddRectangle(corridor, 1, -1, {-20, -1}, {5, 1});  // floor: z, x
+    AddRectangle(corridor, 1, 1, {-20, -1}, {5, 1});   // ceiling
+    AddRectangle(corridor, 0, -1, {-1, -20}, {1, 5});  // walls: y, z
+    AddRectangle(corridor, 0, 1, {-1, -20}, {1, 5});
+    AddRectangle(corridor, 2, -20, {-1, -1}, {1, 1});  // the far end
+    corridor.spheres.push_back({{0.3f, -0.5f, -6}, 0.4f});
+    ExpectSameIds(*gl, corridor, 96 * 72);
+
+    // A floor below a narrow view, crossing the eye plane without coming into view, costs no
+    // fragment; drawn over the whole screen, as a triangle crossing the eye plane once was, its
+    // two triangles would cost two per pixel.
+    scene::Scene floor;
+    floor.camera = MakeCamera({0, 0, 0}, {0, 0, -1}, 64, 48, 20);
+    AddRectangle(floor, 1, -1, {-2, -2}, {5, 2});  // z, x
+    floor.spheres.push_back({{0, 0, -10}, 0.5f});
+    RasterOptions options;
+    options.countFragments = true;
+    RasterPass pass(*gl, floor, options);
+    RasterStats stats;
+    const std::vector<RcHit> hits =
+        pass.Render(render::CameraBasis(floor.camera).ToDevice(), &stats);
+    EXPECT_EQ(CompareHits(hits, KernelHits(floor)).idMismatch, 0u);
+    // The sphere's square hull: about (0.5 / 10 / tan 10 deg)^2 = 8 % of the screen, plus margin.
+    EXPECT_LT(stats.fragments, 64u * 48u / 5u);
+    EXPECT_GT(stats.fragments, 0u);
 }
 
 TEST(RasterCornerCases, MoreThan65536PrimitivesKeepTheirIds) {
