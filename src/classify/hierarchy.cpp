@@ -1,7 +1,9 @@
 #include "rayclass/classify/hierarchy.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
+#include <barrier>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -39,6 +41,10 @@ constexpr int kCoords = kDims + 1;
 constexpr uint32_t kParallelSortMin = 16384;
 // Generations with fewer rays are subdivided on one thread, for the same reason.
 constexpr uint32_t kParallelRaysMin = 32768;
+// Plans for fewer rays move them on one thread.
+constexpr uint32_t kParallelPlanRays = 131072;
+// Batches with fewer candidates copy their leaves' lists on one thread.
+constexpr size_t kParallelCopyMin = size_t(1) << 17;
 // Nodes with more than max(kTaskRaysMin, rays / kTasks) rays hand their later children to the
 // task queue: enough tasks to balance the threads, few enough that their kept lists cost little
 // (Conference with mirror rays, batches of 2^18: render 1.29 s with a minimum of 4,096 rays,
@@ -714,23 +720,28 @@ struct Hierarchy::Schedule {
     std::mutex mutex;
     std::condition_variable changed;
     std::deque<Task> queue;
+    int threads = 1;
     int busy = 0;  // threads inside a task
     uint32_t cut;  // nodes with more rays hand their later children to the queue
 };
 
 void Hierarchy::Subdivide(LeafBatch& out) {
     counters_ = {};
+    // rayIndex and candidates are resized, not cleared: every slot is written again, and
+    // filling them with zeros first would cost a pass on one thread.
     out.leaves.clear();
-    out.rayIndex.clear();
-    out.candidates.clear();
     out.missed.clear();
     out.nRays = nInserted_;
     uint32_t begin[kFaceCount], end[kFaceCount];
     Bounds6 faceBounds[kFaceCount];
     ConvertAll(begin, end, faceBounds, out);
     uint32_t n = 0;
-    for (int f = 0; f < kFaceCount; ++f) n += end[f] - begin[f];
-    Regrow(leafRays_, id_[0].size());
+    for (int f = 0; f < kFaceCount; ++f) {
+        rayShift_[f] = n - begin[f];
+        n += end[f] - begin[f];
+    }
+    out.rayIndex.resize(n);
+    rayOut_ = out.rayIndex.data();
     // Coordinates that do not vary among a face's rays (the origin of eye rays, the end of
     // unbounded rays) are never moved.
     for (int f = 0; f < kFaceCount; ++f) {
@@ -749,6 +760,7 @@ void Hierarchy::Subdivide(LeafBatch& out) {
                                   View(all, all.Size()), false, PlanAt(), &NewPart(begin[f])});
     }
     const int threads = Threads(n);
+    schedule.threads = threads;
     if (workers_.size() < size_t(threads)) workers_.resize(size_t(threads));
     for (Worker& w : workers_) {
         w.counters = {};
@@ -760,15 +772,17 @@ void Hierarchy::Subdivide(LeafBatch& out) {
         w.plans.clear();
     }
     OnThreads(threads, [&](int t) { Work(workers_[size_t(t)], t); });
-    Join(out, n);
-    // The ray buffers by the rays they hold (two ping-pong buffers, the routing destinations
-    // and the leaves' ids): their face slabs reserve kFaceCount times as much address space, of
-    // which only the pages rays are written to are touched.
-    size_t scratch = size_t(n) * (2 * (kCoords + 1) + 2) * 4;
+    Join(out);
+    rayOut_ = nullptr;
+    // The ray buffers by the rays they hold (two ping-pong buffers and the routing
+    // destinations): their face slabs reserve kFaceCount times as much address space, of which
+    // only the pages rays are written to are touched.
+    size_t scratch = size_t(n) * (2 * (kCoords + 1) + 1) * 4;
     for (Worker& w : workers_) {
         counters_.boxTests += w.counters.boxTests;
         counters_.rayMoves += w.counters.rayMoves;
         counters_.plans += w.counters.plans;
+        counters_.sharedPlans += w.counters.sharedPlans;
         counters_.maxDepth = std::max(counters_.maxDepth, w.counters.maxDepth);
         scratch += w.keys.capacity() * 4 + w.leaves.capacity() * sizeof(RcLeaf) +
                    w.candidates.capacity() * sizeof(RcCandidate) +
@@ -858,7 +872,7 @@ void Hierarchy::Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, u
     s.changed.notify_one();
 }
 
-void Hierarchy::Join(LeafBatch& out, uint32_t nRays) {
+void Hierarchy::Join(LeafBatch& out) {
     // Parts in ray order, their nodes appended in that order.
     std::vector<Part*> parts(nParts_);
     for (size_t p = 0; p < nParts_; ++p) parts[p] = &parts_[p];
@@ -910,23 +924,34 @@ void Hierarchy::Join(LeafBatch& out, uint32_t nRays) {
                                     : part->linkNode;
         Link(nodes_[parent], part->linkField) = part->base;
     }
-    // Leaves in ray order (their ranges are disjoint), lists in leaf order.
+    // Leaves in ray order (their ranges are disjoint and cover rayIndex), lists in leaf order.
     std::sort(leaves.begin(), leaves.end(),
               [](const Placed& a, const Placed& b) { return a.leaf.rayBegin < b.leaf.rayBegin; });
     out.leaves.resize(leaves.size());
     out.candidates.resize(nCandidates);
-    out.rayIndex.resize(nRays);
-    uint32_t at = 0, rayAt = 0;
+    uint32_t at = 0;
     for (size_t i = 0; i < leaves.size(); ++i) {
-        RcLeaf leaf = leaves[i].leaf;
-        std::copy_n(leaves[i].candidates, leaf.candCount, out.candidates.begin() + at);
-        leaf.candBegin = at;
-        at += leaf.candCount;
-        std::copy_n(leafRays_.begin() + leaf.rayBegin, leaf.rayCount, out.rayIndex.begin() + rayAt);
-        leaf.rayBegin = rayAt;
-        rayAt += leaf.rayCount;
-        out.leaves[i] = leaf;
+        out.leaves[i] = leaves[i].leaf;
+        out.leaves[i].candBegin = at;
+        at += leaves[i].leaf.candCount;
     }
+    // The lists' copy, split between the threads at a leaf near the middle of the candidates.
+    const int threads = nCandidates >= kParallelCopyMin ? Threads(nInserted_) : 1;
+    std::vector<size_t> from(size_t(threads) + 1, leaves.size());
+    from[0] = 0;
+    for (int t = 1; t < threads; ++t) {
+        const uint32_t want = uint32_t(nCandidates * size_t(t) / size_t(threads));
+        from[size_t(t)] =
+            size_t(std::partition_point(out.leaves.begin(), out.leaves.end(),
+                                        [&](const RcLeaf& l) { return l.candBegin < want; }) -
+                   out.leaves.begin());
+    }
+    OnThreads(threads, [&](int t) {
+        for (size_t i = from[size_t(t)]; i < from[size_t(t) + 1]; ++i) {
+            std::copy_n(leaves[i].candidates, out.leaves[i].candCount,
+                        out.candidates.begin() + out.leaves[i].candBegin);
+        }
+    });
 }
 
 Bounds6 Hierarchy::Bounds(int face, int buf, uint32_t begin, uint32_t end) const {
@@ -1301,53 +1326,76 @@ struct CellRule {
     const float* value;
 };
 
-// Puts the rays [begin, end) of `io` into the cells of `rule`, each cell's rays in ray order,
-// cells one after another from `begin` (cellBegin[c] is where cell c starts), and gathers each
-// cell's bounds of the active coordinates on the way. A ray goes right at a level when its key is
-// not below the split value, as Partition decides.
-void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule, uint32_t begin,
-                uint32_t end, uint32_t* cellBegin, Bounds6* cell) {
-    const int nCells = 1 << rule.levels;
-    const int firstCell = nCells - 1;  // heap index of cell 0
-    uint32_t count[16] = {};
 #if defined(__AVX512F__)
-    float values[16] = {};
-    std::copy(rule.value, rule.value + firstCell, values);
-    const __m512 split = _mm512_loadu_ps(values);
+// The cells of `rule` of the 16 rays from i on, as cell numbers.
+__m512i CellsOf16(const PartitionIo& io, const CellRule& rule, __m512 split, uint32_t i,
+                  __mmask16 live) {
+    const int firstCell = (1 << rule.levels) - 1;  // heap index of cell 0
     const __m512i one = _mm512_set1_epi32(1);
-    auto cellsOf = [&](uint32_t i, __mmask16 live) {
-        __m512i h = _mm512_setzero_si512();
-        for (int l = 0; l < rule.levels; ++l) {
-            const __m512 key = _mm512_maskz_loadu_ps(live, io.src[rule.dim[l]] + i);
-            // (maskz: GCC 12 warns of the plain form's undefined pass-through)
-            const __m512 value = _mm512_maskz_permutexvar_ps(__mmask16(0xFFFF), h, split);
-            const __mmask16 left = _mm512_cmp_ps_mask(key, value, _CMP_LT_OQ);
-            h = _mm512_add_epi32(_mm512_add_epi32(h, h), one);
-            h = _mm512_mask_add_epi32(h, __mmask16(~left), h, one);
-        }
-        return _mm512_sub_epi32(h, _mm512_set1_epi32(firstCell));
-    };
-    // Calls f(c, lanes) for each cell c among the live lanes, with the lanes in it.
-    auto eachCell = [](__m512i cells, __mmask16 live, const auto& f) {
-        alignas(64) int32_t lane[16];
-        _mm512_store_si512(lane, cells);
-        unsigned rest = live;
-        while (rest) {
-            const int c = lane[std::countr_zero(rest)];
-            const __mmask16 m =
-                _mm512_mask_cmpeq_epi32_mask(__mmask16(rest), cells, _mm512_set1_epi32(c));
-            f(c, m);
-            rest &= ~unsigned(m);
-        }
-    };
+    __m512i h = _mm512_setzero_si512();
+    for (int l = 0; l < rule.levels; ++l) {
+        const __m512 key = _mm512_maskz_loadu_ps(live, io.src[rule.dim[l]] + i);
+        // (maskz: GCC 12 warns of the plain form's undefined pass-through)
+        const __m512 value = _mm512_maskz_permutexvar_ps(__mmask16(0xFFFF), h, split);
+        const __mmask16 left = _mm512_cmp_ps_mask(key, value, _CMP_LT_OQ);
+        h = _mm512_add_epi32(_mm512_add_epi32(h, h), one);
+        h = _mm512_mask_add_epi32(h, __mmask16(~left), h, one);
+    }
+    return _mm512_sub_epi32(h, _mm512_set1_epi32(firstCell));
+}
+
+// The split values of `rule` in heap order, for CellsOf16.
+__m512 SplitValues16(const CellRule& rule) {
+    float values[16] = {};
+    std::copy(rule.value, rule.value + (1 << rule.levels) - 1, values);
+    return _mm512_loadu_ps(values);
+}
+
+// Calls f(c, lanes) for each cell c among the live lanes, with the lanes in it.
+template <typename F>
+void EachCell(__m512i cells, __mmask16 live, const F& f) {
+    alignas(64) int32_t lane[16];
+    _mm512_store_si512(lane, cells);
+    unsigned rest = live;
+    while (rest) {
+        const int c = lane[std::countr_zero(rest)];
+        const __mmask16 m =
+            _mm512_mask_cmpeq_epi32_mask(__mmask16(rest), cells, _mm512_set1_epi32(c));
+        f(c, m);
+        rest &= ~unsigned(m);
+    }
+}
+#else
+int CellOf(const PartitionIo& io, const CellRule& rule, uint32_t i) {
+    int h = 0;
+    for (int l = 0; l < rule.levels; ++l)
+        h = 2 * h + (io.src[rule.dim[l]][i] < rule.value[h] ? 1 : 2);
+    return h - ((1 << rule.levels) - 1);
+}
+#endif
+
+// Adds the rays [begin, end) of `io` to the counts of their cells of `rule`.
+void CountCells(const PartitionIo& io, const CellRule& rule, uint32_t begin, uint32_t end,
+                uint32_t* count) {
+#if defined(__AVX512F__)
+    const __m512 split = SplitValues16(rule);
     for (uint32_t i = begin; i < end; i += 16) {
         const __mmask16 live = LiveLanes16(end, i);
-        eachCell(cellsOf(i, live), live,
+        EachCell(CellsOf16(io, rule, split, i, live), live,
                  [&](int c, __mmask16 m) { count[c] += uint32_t(std::popcount(unsigned(m))); });
     }
-    uint32_t next[16];
-    cellBegin[0] = begin;
-    for (int c = 0; c < nCells; ++c) cellBegin[c + 1] = (next[c] = cellBegin[c]) + count[c];
+#else
+    for (uint32_t i = begin; i < end; ++i) ++count[CellOf(io, rule, i)];
+#endif
+}
+
+// Writes the rays [begin, end) of `io` to their cells, cell c's from next[c] on in ray order, and
+// gathers each cell's bounds of the active coordinates (the others are left empty).
+void ScatterCells(const PartitionIo& io, const bool* active, const CellRule& rule, uint32_t begin,
+                  uint32_t end, uint32_t* next, Bounds6* cell) {
+    const int nCells = 1 << rule.levels;
+    for (int c = 0; c < nCells; ++c) cell[c] = EmptyBounds();
+#if defined(__AVX512F__)
     __m512 lo[16][kCoords], hi[16][kCoords];
     for (int c = 0; c < nCells; ++c) {
         for (int k = 0; k < kCoords; ++k) {
@@ -1355,6 +1403,7 @@ void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule,
             hi[c][k] = _mm512_set1_ps(-kInf);
         }
     }
+    const __m512 split = SplitValues16(rule);
     for (uint32_t i = begin; i < end; i += 16) {
         const __mmask16 live = LiveLanes16(end, i);
         __m512 v[kCoords];
@@ -1362,7 +1411,7 @@ void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule,
             v[k] = active[k] ? _mm512_maskz_loadu_ps(live, io.src[k] + i) : _mm512_setzero_ps();
         }
         const __m512i id = _mm512_maskz_loadu_epi32(live, io.srcId + i);
-        eachCell(cellsOf(i, live), live, [&](int c, __mmask16 m) {
+        EachCell(CellsOf16(io, rule, split, i, live), live, [&](int c, __mmask16 m) {
             const uint32_t n = uint32_t(std::popcount(unsigned(m)));
             const __mmask16 dst = __mmask16((1u << n) - 1u);
             for (int k = 0; k < kCoords; ++k) {
@@ -1383,20 +1432,8 @@ void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule,
         }
     }
 #else
-    auto cellOf = [&](uint32_t i) {
-        int h = 0;
-        for (int l = 0; l < rule.levels; ++l) {
-            h = 2 * h + (io.src[rule.dim[l]][i] < rule.value[h] ? 1 : 2);
-        }
-        return h - firstCell;
-    };
-    for (uint32_t i = begin; i < end; ++i) ++count[cellOf(i)];
-    uint32_t next[16];
-    cellBegin[0] = begin;
-    for (int c = 0; c < nCells; ++c) cellBegin[c + 1] = (next[c] = cellBegin[c]) + count[c];
-    for (int c = 0; c < nCells; ++c) cell[c] = EmptyBounds();
     for (uint32_t i = begin; i < end; ++i) {
-        const int c = cellOf(i);
+        const int c = CellOf(io, rule, i);
         const uint32_t at = next[c]++;
         for (int k = 0; k < kCoords; ++k) {
             if (!active[k]) continue;
@@ -1408,6 +1445,46 @@ void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule,
         io.dstId[at] = io.srcId[i];
     }
 #endif
+}
+
+// Puts the rays [begin, end) of `io` into the cells of `rule`, each cell's rays in ray order,
+// cells one after another from `begin` (cellBegin[c] is where cell c starts), and gathers each
+// cell's bounds of the active coordinates on the way. A ray goes right at a level when its key is
+// not below the split value, as Partition decides. `pieces` threads share the work, each counting
+// and then moving a run of the rays; the result does not depend on their number.
+void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule, uint32_t begin,
+                uint32_t end, uint32_t* cellBegin, Bounds6* cell, int pieces) {
+    const int nCells = 1 << rule.levels;
+    // Runs of a multiple of 16 rays, so that the vector path sees the same blocks.
+    const uint32_t step =
+        ((end - begin + uint32_t(pieces) * 16 - 1) / (uint32_t(pieces) * 16)) * 16;
+    std::vector<std::array<uint32_t, 16>> count(static_cast<size_t>(pieces));
+    std::vector<std::array<Bounds6, 16>> bounds(static_cast<size_t>(pieces));
+    std::barrier counted(pieces);
+    OnThreads(pieces, [&](int t) {
+        const uint32_t b = std::min(end, begin + uint32_t(t) * step);
+        const uint32_t e = std::min(end, b + step);
+        count[size_t(t)].fill(0);
+        CountCells(io, rule, b, e, count[size_t(t)].data());
+        counted.arrive_and_wait();
+        // Piece t's rays of cell c follow the cell's rays of the earlier pieces.
+        uint32_t next[16];
+        uint32_t at = begin;
+        for (int c = 0; c < nCells; ++c) {
+            next[c] = at;
+            for (int u = 0; u < pieces; ++u) {
+                if (u == t) next[c] = at;
+                at += count[size_t(u)][size_t(c)];
+            }
+            if (t == 0) cellBegin[c + 1] = at;
+        }
+        ScatterCells(io, active, rule, b, e, next, bounds[size_t(t)].data());
+    });
+    cellBegin[0] = begin;
+    for (int c = 0; c < nCells; ++c) {
+        cell[c] = bounds[0][size_t(c)];
+        for (int t = 1; t < pieces; ++t) Merge(cell[c], bounds[size_t(t)][size_t(c)]);
+    }
 }
 
 // The union of bounds cell[lo, hi).
@@ -1444,11 +1521,19 @@ const Hierarchy::Plan& Hierarchy::MakePlan(Worker& w, int face, int dim, int buf
         }
     }
     p.buf = buf ^ 1;
+    // A big node with threads waiting for work (a face's root, before its first split) shares
+    // the moves with them.
+    int pieces = 1;
+    if (end - begin >= kParallelPlanRays) {
+        std::lock_guard lock(w.schedule->mutex);
+        pieces = std::max(1, w.schedule->threads - w.schedule->busy + 1);
+    }
     BucketRays(Between(coord_[buf], coord_[p.buf], id_[buf], id_[p.buf]), active_[face],
-               {p.levels, p.dim, p.value}, begin, end, p.cellBegin, p.cell);
+               {p.levels, p.dim, p.value}, begin, end, p.cellBegin, p.cell, pieces);
     for (int c = 0; c < 1 << p.levels; ++c) SetConstants(face, p.cell[c]);
     w.counters.rayMoves += end - begin;
     ++w.counters.plans;
+    w.counters.sharedPlans += pieces > 1 ? 1 : 0;
     return w.plans.emplace_back(p);
 }
 
@@ -1478,11 +1563,11 @@ bool Hierarchy::PlannedSplit(const PlanAt& at, uint32_t begin, uint32_t end, uin
 void Hierarchy::EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
                          const ListView& list, float endHi) {
     RcLeaf leaf{};
-    // Leaves fill their faces' ranges in order: Join lays the leaves out in the order of their
-    // rays' buffer positions.
-    leaf.rayBegin = begin;
+    // Leaves fill their faces' ranges in order, and the faces follow each other in rayIndex:
+    // the ids go straight to their place there, and Join sorts the leaves by it.
+    leaf.rayBegin = begin + rayShift_[At(w, node).face];
     leaf.rayCount = end - begin;
-    std::copy(id_[buf].begin() + begin, id_[buf].begin() + end, leafRays_.begin() + begin);
+    std::copy(id_[buf].begin() + begin, id_[buf].begin() + end, rayOut_ + leaf.rayBegin);
     // The current nearest-hit bound: no ray of the leaf gets past X = endHi, and the list is
     // sorted by near X, so everything after that is cut at once (Filter has already cut it when
     // the leaf filtered its own list).

@@ -615,6 +615,37 @@ TEST(Hierarchy, PlannedSplitsKeepTheInvariantsAndMoveRaysLess) {
     EXPECT_LT(moves[1], moves[0] * 3 / 4);
 }
 
+// A face root with a large share of the rays plans its first splits while the other threads
+// wait for work: they share its moves, and the leaves, lists and nodes stay those of one thread.
+TEST(Hierarchy, PlansSharedBetweenThreadsGiveTheSameTree) {
+    const scene::Scene s = RandomScene(121, 300, 4, 2);
+    std::mt19937 rng(122);
+    std::uniform_real_distribution<float> cone(-0.9f, 0.9f), jitter(-0.01f, 0.01f);
+    std::vector<Ray> rays;  // all in face +x: one root, the only task at first
+    for (int i = 0; i < 150000; ++i) {
+        Ray r;
+        r.origin = glm::vec3(-1.0f, jitter(rng), jitter(rng));
+        r.direction = glm::normalize(glm::vec3(1.0f, cone(rng), cone(rng)));
+        rays.push_back(r);
+    }
+    Params serial;
+    serial.threads = 1;
+    Hierarchy reference(s, serial);
+    const LeafBatch ref = reference.Classify(rays);
+    EXPECT_EQ(reference.Counters().sharedPlans, 0u);
+    ExpectSameHits(Query(s, ref, rays), BruteForce(s, rays));
+    for (const uint32_t threads : {2u, 3u}) {
+        SCOPED_TRACE(threads);
+        Params p;
+        p.threads = threads;
+        Hierarchy h(s, p);
+        const LeafBatch got = h.Classify(rays);
+        EXPECT_GT(h.Counters().sharedPlans, 0u);
+        ExpectSameLeaves(got, ref, false);
+        ExpectSameNodes(h, reference);
+    }
+}
+
 TEST(Hierarchy, MemoryOfInnerListsIsScratch) {
     const scene::Scene s = RandomScene(71, 300, 0, 0);
     const auto rays = RandomRays(72, 3000);

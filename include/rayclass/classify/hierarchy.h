@@ -99,6 +99,7 @@ struct BuildCounters {
     uint64_t rayMoves = 0;    // rays moved by partitions and plans (sum over levels)
     uint64_t fromEnd = 0;     // any-hit rays classified from their common end (CommonEnds)
     uint32_t plans = 0;       // nodes whose next levels of splits were planned at once
+    uint32_t sharedPlans = 0;  // plans whose rays more than one thread moved
     uint32_t maxDepth = 0;    // deepest leaf
     size_t scratchBytes = 0;  // peak bytes of the per-depth list and ray buffers
 };
@@ -287,8 +288,8 @@ class Hierarchy {
     }
     // Maps the generation's rays into buffer 0: face f's rays are [faceBegin[f], faceEnd[f]).
     void ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* faceBounds, LeafBatch& out);
-    // Joins the tasks' parts into `out`, whose leaves hold nRays rays.
-    void Join(LeafBatch& out, uint32_t nRays);
+    // Joins the tasks' parts into `out` (whose rayIndex the leaves have filled).
+    void Join(LeafBatch& out);
     Part& NewPart(uint32_t begin);
     int Threads(uint32_t nRays) const;
 
@@ -313,7 +314,10 @@ class Hierarchy {
     ScratchVector<float> coord_[2][kCoords];
     ScratchVector<uint32_t> id_[2];
     ScratchVector<uint32_t> dest_;
-    ScratchVector<uint32_t> leafRays_;  // the leaves' ray ids at their buffer positions
+    // Where the leaves' ray ids go: the output's rayIndex, face after face, so that a buffer
+    // position p of face f lands at p + rayShift_[f] (modulo 2^32) in ray order.
+    rc_uint* rayOut_ = nullptr;
+    uint32_t rayShift_[kFaceCount] = {};
     // Per face: coordinates that vary among its rays, and the value of those that do not.
     bool active_[kFaceCount][kCoords] = {};
     float constant_[kFaceCount][kCoords] = {};
