@@ -1,0 +1,350 @@
+// The 5D conversion of a generation's rays: each ray to its face's structure-of-arrays buffer
+// (Hierarchy::Convert and ConvertAll).
+#include <algorithm>
+#include <bit>
+#include <cmath>
+
+#include "rayclass/classify/hierarchy.h"
+#include "support.h"
+
+#if defined(__AVX512F__)
+#include "avx512.h"
+#endif
+
+namespace rayclass::classify {
+
+namespace {
+
+// The face of a ray's direction, or kFaceCount when the direction is zero or not finite (such a
+// ray misses everything, whichever path ToRay5 takes). ToRay5 picks the same face for the rest.
+inline int DirectionFace(const glm::vec3& d) {
+    if (!std::isfinite(d.x) || !std::isfinite(d.y) || !std::isfinite(d.z)) return kFaceCount;
+    const int a = DominantAxis(d);
+    if (!(std::abs(d[a]) > 0.0f)) return kFaceCount;
+    return 2 * a + (d[a] < 0.0f ? 1 : 0);
+}
+
+#if defined(__AVX512F__)
+// Gather offsets (in floats) of 16 consecutive rays of `rays` from the first.
+__m512i RayOffsets16(const RayView& rays) {
+    return _mm512_mullo_epi32(
+        _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+        _mm512_set1_epi32(int(rays.Stride() / 4)));
+}
+
+// DominantAxis of 16 directions (ties to the lower axis): a mask per axis, the direction's
+// absolute components, |d_a| and whether d_a < 0.
+struct Axis16 {
+    __mmask16 isX, isY, isZ, neg;
+    __m512 ax, ay, az, da;
+};
+
+Axis16 DominantAxis16(__m512 dx, __m512 dy, __m512 dz) {
+    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
+    Axis16 a;
+    a.ax = _mm512_and_ps(dx, absMask);
+    a.ay = _mm512_and_ps(dy, absMask);
+    a.az = _mm512_and_ps(dz, absMask);
+    a.isX = _mm512_cmp_ps_mask(a.ax, a.ay, _CMP_GE_OQ) & _mm512_cmp_ps_mask(a.ax, a.az, _CMP_GE_OQ);
+    a.isY = __mmask16(~a.isX & _mm512_cmp_ps_mask(a.ay, a.az, _CMP_GE_OQ));
+    a.isZ = __mmask16(~a.isX & ~a.isY);
+    a.da = _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, a.az, a.ay), a.ax);
+    const __m512 sd = _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, dz, dy), dx);
+    a.neg = _mm512_cmp_ps_mask(sd, _mm512_setzero_ps(), _CMP_LT_OQ);
+    return a;
+}
+
+// 16 rays' fields, gathered from a RayView.
+struct Rays16 {
+    __m512 ox, oy, oz, tmin, dx, dy, dz, tmax;
+};
+
+Rays16 Gather16(const float* at, __m512i idx, __mmask16 live) {
+    const __m512 zero = _mm512_setzero_ps();
+    Rays16 r;
+    r.ox = _mm512_mask_i32gather_ps(zero, live, idx, at + 0, 4);
+    r.oy = _mm512_mask_i32gather_ps(zero, live, idx, at + 1, 4);
+    r.oz = _mm512_mask_i32gather_ps(zero, live, idx, at + 2, 4);
+    r.tmin = _mm512_mask_i32gather_ps(zero, live, idx, at + 3, 4);
+    r.dx = _mm512_mask_i32gather_ps(zero, live, idx, at + 4, 4);
+    r.dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
+    r.dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
+    r.tmax = _mm512_mask_i32gather_ps(zero, live, idx, at + 7, 4);
+    return r;
+}
+
+// CommonEnds::Oriented for the live lanes of r, with the same float operations, so both paths
+// take a ray alike. Returns the lanes taken from an end.
+__mmask16 Orient16(const CommonEnds& ends, __mmask16 live, Rays16& r) {
+    if (ends.n == 0) return 0;
+    const __m512 zero = _mm512_setzero_ps();
+    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
+    const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
+    const __m512 tol = _mm512_set1_ps(ends.tolerance);
+    const __mmask16 noDir = _mm512_cmp_ps_mask(r.dx, zero, _CMP_EQ_OQ) &
+                            _mm512_cmp_ps_mask(r.dy, zero, _CMP_EQ_OQ) &
+                            _mm512_cmp_ps_mask(r.dz, zero, _CMP_EQ_OQ);
+    const __mmask16 segment = __mmask16(
+        live & ~noDir & _mm512_cmp_ps_mask(r.tmin, r.tmax, _CMP_LT_OQ) &
+        _mm512_cmp_ps_mask(_mm512_and_ps(r.tmax, absMask), _mm512_set1_ps(kFloatMax), _CMP_LE_OQ));
+    if (!segment) return 0;
+    const __m512 ex = _mm512_add_ps(r.ox, _mm512_mul_ps(r.tmax, r.dx));
+    const __m512 ey = _mm512_add_ps(r.oy, _mm512_mul_ps(r.tmax, r.dy));
+    const __m512 ez = _mm512_add_ps(r.oz, _mm512_mul_ps(r.tmax, r.dz));
+    auto near = [&](__m512 e, float p) {
+        return _mm512_cmp_ps_mask(_mm512_and_ps(_mm512_sub_ps(e, _mm512_set1_ps(p)), absMask), tol,
+                                  _CMP_LE_OQ);
+    };
+    __mmask16 matched = 0;
+    __m512 px = zero, py = zero, pz = zero;
+    for (int k = 0; k < ends.n; ++k) {
+        const glm::vec3& p = ends.point[size_t(k)];
+        const __mmask16 m =
+            __mmask16(segment & ~matched & near(ex, p.x) & near(ey, p.y) & near(ez, p.z));
+        px = _mm512_mask_blend_ps(m, px, _mm512_set1_ps(p.x));
+        py = _mm512_mask_blend_ps(m, py, _mm512_set1_ps(p.y));
+        pz = _mm512_mask_blend_ps(m, pz, _mm512_set1_ps(p.z));
+        matched |= m;
+    }
+    r.ox = _mm512_mask_blend_ps(matched, r.ox, px);
+    r.oy = _mm512_mask_blend_ps(matched, r.oy, py);
+    r.oz = _mm512_mask_blend_ps(matched, r.oz, pz);
+    r.tmax = _mm512_mask_blend_ps(matched, r.tmax, _mm512_sub_ps(r.tmax, r.tmin));
+    r.tmin = _mm512_mask_blend_ps(matched, r.tmin, zero);
+    r.dx = _mm512_mask_xor_ps(r.dx, matched, r.dx, signMask);
+    r.dy = _mm512_mask_xor_ps(r.dy, matched, r.dy, signMask);
+    r.dz = _mm512_mask_xor_ps(r.dz, matched, r.dz, signMask);
+    return matched;
+}
+
+#endif
+
+}  // namespace
+
+uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t firstId, uint32_t* next,
+                            Bounds6* faceBounds, std::vector<rc_uint>& missed) {
+    uint64_t fromEnd = 0;
+    float* c[kCoords];
+    for (int k = 0; k < kCoords; ++k) c[k] = coord_[0][k].data();
+    uint32_t* ids = id_[0].data();
+    // Where each face's X leaves the scene box: ends beyond it are cut there, so the rays that
+    // leave the box share one end, which then stays a constant that partitions do not move.
+    float faceEnd[kFaceCount];
+    for (int f = 0; f < kFaceCount; ++f) faceEnd[f] = BoxInFace(f, sceneBox_).hi[0];
+    // A ray that ToRay5 maps: written at its face's next position.
+    auto put = [&](const Ray5& r, uint32_t id) {
+        const uint32_t at = next[r.face]++;
+        const float p[kCoords] = {r.p[0], r.p[1], r.p[2],
+                                  r.p[3], r.p[4], std::min(r.p[0] + r.reach, faceEnd[r.face])};
+        for (int k = 0; k < kCoords; ++k) c[k][at] = p[k];
+        ids[at] = id;
+        GrowBounds(faceBounds[r.face], p);
+    };
+    const size_t n = rays.size();
+    size_t i = 0;
+#if defined(__AVX512F__)
+    // The fast path of ToRay5 for 16 rays at a time, with the same float operations so the points
+    // are bit-identical; lanes that need the slow path take the scalar one.
+    const __m512i idx = RayOffsets16(rays);
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
+    const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
+    const __m512 fmax = _mm512_set1_ps(kFloatMax);
+    const __m512 zero = _mm512_setzero_ps();
+    const __m512 one = _mm512_set1_ps(1.0f);
+    const __m512 blo[3] = {_mm512_set1_ps(sceneBox_.lo.x), _mm512_set1_ps(sceneBox_.lo.y),
+                           _mm512_set1_ps(sceneBox_.lo.z)};
+    const __m512 bhi[3] = {_mm512_set1_ps(sceneBox_.hi.x), _mm512_set1_ps(sceneBox_.hi.y),
+                           _mm512_set1_ps(sceneBox_.hi.z)};
+    __m512 accLo[kFaceCount][kCoords], accHi[kFaceCount][kCoords];
+    for (int f = 0; f < kFaceCount; ++f) {
+        for (int k = 0; k < kCoords; ++k) {
+            accLo[f][k] = _mm512_set1_ps(kInf);
+            accHi[f][k] = _mm512_set1_ps(-kInf);
+        }
+    }
+    for (; i < n; i += 16) {
+        const __mmask16 live = LiveLanes16(n, i);
+        Rays16 r = Gather16(rays.Floats(i), idx, live);
+        fromEnd += uint64_t(std::popcount(unsigned(Orient16(ends, live, r))));
+        const auto [ox, oy, oz, tmin, dx, dy, dz, tmax] = r;
+        const auto [isX, isY, isZ, neg, ax, ay, az, da] = DominantAxis16(dx, dy, dz);
+        // start = tMin == 0 ? origin : origin + tMin d
+        const __mmask16 t0 = _mm512_cmp_ps_mask(tmin, zero, _CMP_EQ_OQ);
+        const __m512 sx = _mm512_mask_blend_ps(t0, _mm512_add_ps(ox, _mm512_mul_ps(tmin, dx)), ox);
+        const __m512 sy = _mm512_mask_blend_ps(t0, _mm512_add_ps(oy, _mm512_mul_ps(tmin, dy)), oy);
+        const __m512 sz = _mm512_mask_blend_ps(t0, _mm512_add_ps(oz, _mm512_mul_ps(tmin, dz)), oz);
+        const __mmask16 inside = _mm512_cmp_ps_mask(sx, blo[0], _CMP_GE_OQ) &
+                                 _mm512_cmp_ps_mask(sx, bhi[0], _CMP_LE_OQ) &
+                                 _mm512_cmp_ps_mask(sy, blo[1], _CMP_GE_OQ) &
+                                 _mm512_cmp_ps_mask(sy, bhi[1], _CMP_LE_OQ) &
+                                 _mm512_cmp_ps_mask(sz, blo[2], _CMP_GE_OQ) &
+                                 _mm512_cmp_ps_mask(sz, bhi[2], _CMP_LE_OQ);
+        const __m512 dsum = _mm512_add_ps(_mm512_add_ps(dx, dy), dz);
+        const __mmask16 fast =
+            __mmask16(live & inside & _mm512_cmp_ps_mask(da, zero, _CMP_GT_OQ) &
+                      _mm512_cmp_ps_mask(_mm512_and_ps(dsum, absMask), fmax, _CMP_LE_OQ) &
+                      _mm512_cmp_ps_mask(tmin, tmax, _CMP_LT_OQ));
+        // Frame: X = s p_a, Y = p_b, Z = p_c with b = a + 1, c = a + 2 (mod 3).
+        const __m512 pa = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, sz, sy), sx);
+        const __m512 x = _mm512_mask_xor_ps(pa, neg, pa, signMask);
+        const __m512 y = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, sx, sz), sy);
+        const __m512 z = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, sy, sx), sz);
+        const __m512 db = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dx, dz), dy);
+        const __m512 dc = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dy, dx), dz);
+        const __m512 inv = _mm512_div_ps(one, _mm512_mask_blend_ps(fast, one, da));
+        const __m512 u = _mm512_mul_ps(db, inv);
+        const __m512 v = _mm512_mul_ps(dc, inv);
+        const __m512 reach = Min16(_mm512_mul_ps(_mm512_sub_ps(tmax, tmin), da), fmax);
+        const __m512 hiA =
+            _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, bhi[2], bhi[1]), bhi[0]);
+        const __m512 loA =
+            _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, blo[2], blo[1]), blo[0]);
+        const __m512 xEnd = _mm512_mask_xor_ps(hiA, neg, loA, signMask);  // BoxInFace's hi X
+        const __m512 end = Min16(_mm512_add_ps(x, reach), xEnd);
+        const __m512 p[kCoords] = {x, y, z, u, v, end};
+        const __m512i id = _mm512_add_epi32(_mm512_set1_epi32(int(firstId + i)), lane);
+        // Faces 2a + neg; bucket the fast lanes of each face present.
+        const __mmask16 byAxis[3] = {isX, isY, isZ};
+        for (int f = 0; f < kFaceCount; ++f) {
+            const __mmask16 m =
+                __mmask16(fast & byAxis[f >> 1] & ((f & 1) ? neg : __mmask16(~neg)));
+            if (!m) continue;
+            const uint32_t cnt = uint32_t(std::popcount(unsigned(m)));
+            const __mmask16 dst = __mmask16((1u << cnt) - 1u);
+            const uint32_t w = next[f];
+            for (int k = 0; k < kCoords; ++k) {
+                _mm512_mask_storeu_ps(c[k] + w, dst, _mm512_maskz_compress_ps(m, p[k]));
+                accLo[f][k] = _mm512_mask_min_ps(accLo[f][k], m, accLo[f][k], p[k]);
+                accHi[f][k] = _mm512_mask_max_ps(accHi[f][k], m, accHi[f][k], p[k]);
+            }
+            _mm512_mask_storeu_epi32(ids + w, dst, _mm512_maskz_compress_epi32(m, id));
+            next[f] = w + cnt;
+        }
+        unsigned slow = unsigned(live & ~fast);
+        while (slow) {
+            const int j = std::countr_zero(slow);
+            slow &= slow - 1;
+            const Ray ray = ends.Oriented(rays[i + size_t(j)]);
+            Ray5 r5;
+            if (DirectionFace(ray.direction) < kFaceCount && ToRay5Clipped(ray, sceneBox_, r5)) {
+                put(r5, firstId + uint32_t(i) + uint32_t(j));
+            } else {
+                missed.push_back(firstId + uint32_t(i) + uint32_t(j));
+            }
+        }
+    }
+    for (int f = 0; f < kFaceCount; ++f) {
+        for (int k = 0; k < kCoords; ++k) {
+            faceBounds[f].lo[k] = std::min(faceBounds[f].lo[k], ReduceMin(accLo[f][k]));
+            faceBounds[f].hi[k] = std::max(faceBounds[f].hi[k], ReduceMax(accHi[f][k]));
+        }
+    }
+#endif
+    for (; i < n; ++i) {
+        Ray5 r;
+        const int match = ends.Match(rays[i]);
+        const Ray ray = ends.Oriented(rays[i], match);
+        fromEnd += match >= 0 ? 1 : 0;
+        if (DirectionFace(ray.direction) < kFaceCount && ToRay5(ray, sceneBox_, r)) {
+            put(r, firstId + uint32_t(i));
+        } else {
+            missed.push_back(firstId + uint32_t(i));
+        }
+    }
+    return fromEnd;
+}
+
+void Hierarchy::ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* faceBounds,
+                           LeafBatch& out) {
+    for (int f = 0; f < kFaceCount; ++f) faceBounds[f] = EmptyBounds();
+    const uint32_t n = nInserted_;
+    for (int f = 0; f < kFaceCount; ++f) faceBegin[f] = faceEnd[f] = f * n;
+    if (sceneBox_.Empty()) {
+        for (uint32_t i = 0; i < n; ++i) out.missed.push_back(i);
+        return;
+    }
+    // Every inserted array in `threads` pieces, each mapping its rays straight into the
+    // structure-of-arrays buffer in one pass over them. Face f's rays go to the slab
+    // [f n, (f + 1) n), where a piece writes from its first ray's id on: room for all of its
+    // rays, so no pass is needed to count the faces first. The pieces' runs are then moved down
+    // to follow each other: faces in their slabs, pieces in order within a face. The slabs are
+    // address space: only the pages rays are written to are ever touched.
+    const int threads = Threads(n);
+    struct Piece {
+        RayView rays;
+        const CommonEnds* ends;
+        uint32_t firstId;
+        uint64_t fromEnd = 0;
+        uint32_t start[kFaceCount], next[kFaceCount];
+        Bounds6 bounds[kFaceCount];
+        std::vector<rc_uint> missed;
+    };
+    std::vector<Piece> pieces;
+    uint32_t firstId = 0;
+    for (const auto& [rays, ends] : inserted_) {
+        // Pieces start at multiples of 16 rays: Convert places the rays its slow path maps
+        // after the others of their run of 16, so the runs must not depend on the thread count.
+        const size_t step = (rays.size() + size_t(threads) * 16 - 1) / (size_t(threads) * 16) * 16;
+        for (size_t at = 0; at < rays.size(); at += step) {
+            Piece& p = pieces.emplace_back();
+            p.rays = rays.Sub(at, std::min(step, rays.size() - at));
+            p.ends = &ends;
+            p.firstId = firstId + uint32_t(at);
+            for (int f = 0; f < kFaceCount; ++f) p.start[f] = p.next[f] = f * n + p.firstId;
+        }
+        firstId += uint32_t(rays.size());
+    }
+    const size_t slabs = size_t(kFaceCount) * n;
+    for (int b = 0; b < 2; ++b) {
+        for (auto& c : coord_[b]) Regrow(c, slabs);
+        Regrow(id_[b], slabs);
+    }
+    Regrow(dest_, slabs);
+    OnThreads(threads, [&](int t) {
+        for (size_t i = size_t(t); i < pieces.size(); i += size_t(threads)) {
+            Piece& p = pieces[i];
+            for (auto& b : p.bounds) b = EmptyBounds();
+            p.fromEnd = Convert(p.rays, *p.ends, p.firstId, p.next, p.bounds, p.missed);
+        }
+    });
+    bool moves = false;
+    for (int f = 0; f < kFaceCount; ++f) {
+        for (const Piece& p : pieces) {
+            moves = moves || (p.next[f] > p.start[f] && p.start[f] != faceEnd[f]);
+            faceEnd[f] += p.next[f] - p.start[f];
+            Merge(faceBounds[f], p.bounds[f]);
+        }
+    }
+    if (moves) {
+        // Each face's arrays apart (the coordinates and the ids), spread over the threads.
+        constexpr int kArrays = kCoords + 1;
+        OnThreads(threads, [&](int t) {
+            for (int job = t; job < kFaceCount * kArrays; job += threads) {
+                const int f = job / kArrays, k = job % kArrays;
+                auto move = [&](auto* a) {
+                    uint32_t to = faceBegin[f];
+                    for (const Piece& p : pieces) {
+                        const uint32_t len = p.next[f] - p.start[f];
+                        // Runs only move down: the runs before one hold at most their pieces'
+                        // rays, so a forward copy never overwrites what it has still to read.
+                        if (to != p.start[f]) std::copy_n(a + p.start[f], len, a + to);
+                        to += len;
+                    }
+                };
+                if (k < kCoords) {
+                    move(coord_[0][k].data());
+                } else {
+                    move(id_[0].data());
+                }
+            }
+        });
+    }
+    for (Piece& p : pieces) {
+        out.missed.insert(out.missed.end(), p.missed.begin(), p.missed.end());
+        counters_.fromEnd += p.fromEnd;
+    }
+    std::sort(out.missed.begin(), out.missed.end());
+}
+
+}  // namespace rayclass::classify

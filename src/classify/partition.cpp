@@ -1,0 +1,352 @@
+#include "partition.h"
+
+#include <algorithm>
+#include <array>
+#include <barrier>
+#include <bit>
+#include <vector>
+
+#if defined(__AVX512F__)
+#include "avx512.h"
+#endif
+
+namespace rayclass::classify {
+
+void MinMax(const float* x, size_t n, float& lo, float& hi) {
+#if defined(__AVX512F__)
+    __m512 vlo = _mm512_set1_ps(kInf);
+    __m512 vhi = _mm512_set1_ps(-kInf);
+    size_t i = 0;
+    for (; i + 16 <= n; i += 16) {
+        const __m512 v = _mm512_loadu_ps(x + i);
+        vlo = Min16(vlo, v);
+        vhi = Max16(vhi, v);
+    }
+    if (i < n) {
+        const __mmask16 live = __mmask16((1u << (n - i)) - 1u);
+        vlo = _mm512_mask_min_ps(vlo, live, vlo, _mm512_maskz_loadu_ps(live, x + i));
+        vhi = _mm512_mask_max_ps(vhi, live, vhi, _mm512_maskz_loadu_ps(live, x + i));
+    }
+    lo = ReduceMin(vlo);
+    hi = ReduceMax(vhi);
+#else
+    float l = kInf, h = -kInf;
+    for (size_t i = 0; i < n; ++i) {
+        l = std::min(l, x[i]);
+        h = std::max(h, x[i]);
+    }
+    lo = l;
+    hi = h;
+#endif
+}
+
+// Reads buffer `from` (coordinates and ids) and writes `to`; the key is the caller's.
+PartitionIo Between(const ScratchVector<float>* from, ScratchVector<float>* to,
+                    const ScratchVector<uint32_t>& fromId, ScratchVector<uint32_t>& toId) {
+    PartitionIo io;
+    for (int k = 0; k < kCoords; ++k) {
+        io.src[k] = from[k].data();
+        io.dst[k] = to[k].data();
+    }
+    io.srcId = fromId.data();
+    io.dstId = toId.data();
+    io.key = nullptr;
+    return io;
+}
+
+namespace {
+
+// kActive is a template argument so that the per-coordinate registers stay registers.
+template <int kActive>
+uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint32_t end,
+                       Bounds6& leftBox, Bounds6& rightBox) {
+    uint32_t l = begin, r = end;
+#if defined(__AVX512F__)
+    const __m512 m = _mm512_set1_ps(value);
+    __m512 lLo[kCoords], lHi[kCoords], rLo[kCoords], rHi[kCoords];
+    for (int k = 0; k < kCoords; ++k) {
+        lLo[k] = rLo[k] = _mm512_set1_ps(kInf);
+        lHi[k] = rHi[k] = _mm512_set1_ps(-kInf);
+    }
+    // Local copies: stores through the destination pointers could otherwise alias `io`, and the
+    // compiler would reload every pointer after every store.
+    const float* src[kCoords];
+    float* dst[kCoords];
+    for (int k = 0; k < kCoords; ++k) {
+        src[k] = io.src[k];
+        dst[k] = io.dst[k];
+    }
+    const float* const key = io.key;
+    const uint32_t* const srcId = io.srcId;
+    uint32_t* const dstId = io.dstId;
+    for (uint32_t i = begin; i < end; i += 16) {
+        const uint32_t rest = end - i;
+        const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
+        const __m512 kv = _mm512_maskz_loadu_ps(live, key + i);
+        const __mmask16 left = _mm512_mask_cmp_ps_mask(live, kv, m, _CMP_LT_OQ);
+        const __mmask16 right = __mmask16(live & ~left);
+        const uint32_t nl = uint32_t(std::popcount(unsigned(left)));
+        const uint32_t nr = uint32_t(std::popcount(unsigned(right)));
+        const __mmask16 ml = __mmask16((1u << nl) - 1u), mr = __mmask16((1u << nr) - 1u);
+#pragma GCC unroll 6
+        for (int k = 0; k < kCoords; ++k) {
+            if (!((kActive >> k) & 1)) continue;
+            const __m512 v = _mm512_maskz_loadu_ps(live, src[k] + i);
+            _mm512_mask_storeu_ps(dst[k] + l, ml, _mm512_maskz_compress_ps(left, v));
+            _mm512_mask_storeu_ps(dst[k] + r - nr, mr, _mm512_maskz_compress_ps(right, v));
+            lLo[k] = _mm512_mask_min_ps(lLo[k], left, lLo[k], v);
+            lHi[k] = _mm512_mask_max_ps(lHi[k], left, lHi[k], v);
+            rLo[k] = _mm512_mask_min_ps(rLo[k], right, rLo[k], v);
+            rHi[k] = _mm512_mask_max_ps(rHi[k], right, rHi[k], v);
+        }
+        const __m512i id = _mm512_maskz_loadu_epi32(live, srcId + i);
+        _mm512_mask_storeu_epi32(dstId + l, ml, _mm512_maskz_compress_epi32(left, id));
+        _mm512_mask_storeu_epi32(dstId + r - nr, mr, _mm512_maskz_compress_epi32(right, id));
+        l += nl;
+        r -= nr;
+    }
+    for (int k = 0; k < kCoords; ++k) {
+        if (!((kActive >> k) & 1)) continue;
+        leftBox.lo[k] = ReduceMin(lLo[k]);
+        leftBox.hi[k] = ReduceMax(lHi[k]);
+        rightBox.lo[k] = ReduceMin(rLo[k]);
+        rightBox.hi[k] = ReduceMax(rHi[k]);
+    }
+#else
+    for (uint32_t i = begin; i < end; ++i) {
+        const bool isLeft = io.key[i] < value;
+        const uint32_t at = isLeft ? l : r - 1;
+        for (int k = 0; k < kCoords; ++k) {
+            if ((kActive >> k) & 1) io.dst[k][at] = io.src[k][i];
+        }
+        io.dstId[at] = io.srcId[i];
+        l += isLeft ? 1 : 0;
+        r -= isLeft ? 0 : 1;
+    }
+    for (int k = 0; k < kCoords; ++k) {
+        if (!((kActive >> k) & 1)) continue;
+        MinMax(io.dst[k] + begin, l - begin, leftBox.lo[k], leftBox.hi[k]);
+        MinMax(io.dst[k] + l, end - l, rightBox.lo[k], rightBox.hi[k]);
+    }
+#endif
+    return l;
+}
+
+template <int kActive = 0>
+uint32_t DispatchPartition(int active, const PartitionIo& io, float value, uint32_t begin,
+                           uint32_t end, Bounds6& leftBox, Bounds6& rightBox) {
+    if constexpr (kActive == 1 << kCoords) {
+        return begin;
+    } else {
+        if (active == kActive)
+            return PartitionRays<kActive>(io, value, begin, end, leftBox, rightBox);
+        return DispatchPartition<kActive + 1>(active, io, value, begin, end, leftBox, rightBox);
+    }
+}
+
+}  // namespace
+
+uint32_t PartitionRays(int active, const PartitionIo& io, float value, uint32_t begin, uint32_t end,
+                       Bounds6& leftBox, Bounds6& rightBox) {
+    return DispatchPartition(active, io, value, begin, end, leftBox, rightBox);
+}
+
+bool AlreadySplit(const float* key, float value, uint32_t begin, uint32_t end, uint32_t* first,
+                  bool* firstLeft) {
+    uint32_t changes = 0, run = end - begin;
+    int prev = -1;
+#if defined(__AVX512F__)
+    const __m512 m = _mm512_set1_ps(value);
+    for (uint32_t i = begin; i < end; i += 16) {
+        const uint32_t lanes = std::min(16u, end - i);
+        const __mmask16 live = __mmask16(lanes == 16 ? 0xFFFFu : (1u << lanes) - 1u);
+        const unsigned left = unsigned(
+            _mm512_mask_cmp_ps_mask(live, _mm512_maskz_loadu_ps(live, key + i), m, _CMP_LT_OQ));
+        if (prev < 0) *firstLeft = left & 1u;
+        if (prev >= 0 && int(left & 1u) != prev) {
+            if (changes++ == 0) run = i - begin;
+        }
+        // Bit j: lanes j and j + 1 lie on different sides.
+        const unsigned inner = (left ^ (left >> 1)) & ((1u << (lanes - 1)) - 1u);
+        if (inner) {
+            if (changes == 0) run = i - begin + uint32_t(std::countr_zero(inner)) + 1;
+            changes += uint32_t(std::popcount(inner));
+        }
+        if (changes > 1) return false;
+        prev = int((left >> (lanes - 1)) & 1u);
+    }
+#else
+    for (uint32_t i = begin; i < end; ++i) {
+        const int left = key[i] < value ? 1 : 0;
+        if (prev < 0) *firstLeft = left;
+        if (prev >= 0 && left != prev) {
+            if (changes++ == 0) run = i - begin;
+            if (changes > 1) return false;
+        }
+        prev = left;
+    }
+#endif
+    *first = run;
+    return true;
+}
+
+namespace {
+#if defined(__AVX512F__)
+// The cells of `rule` of the 16 rays from i on, as cell numbers.
+__m512i CellsOf16(const PartitionIo& io, const CellRule& rule, __m512 split, uint32_t i,
+                  __mmask16 live) {
+    const int firstCell = (1 << rule.levels) - 1;  // heap index of cell 0
+    const __m512i one = _mm512_set1_epi32(1);
+    __m512i h = _mm512_setzero_si512();
+    for (int l = 0; l < rule.levels; ++l) {
+        const __m512 key = _mm512_maskz_loadu_ps(live, io.src[rule.dim[l]] + i);
+        // (maskz: GCC 12 warns of the plain form's undefined pass-through)
+        const __m512 value = _mm512_maskz_permutexvar_ps(__mmask16(0xFFFF), h, split);
+        const __mmask16 left = _mm512_cmp_ps_mask(key, value, _CMP_LT_OQ);
+        h = _mm512_add_epi32(_mm512_add_epi32(h, h), one);
+        h = _mm512_mask_add_epi32(h, __mmask16(~left), h, one);
+    }
+    return _mm512_sub_epi32(h, _mm512_set1_epi32(firstCell));
+}
+
+// The split values of `rule` in heap order, for CellsOf16.
+__m512 SplitValues16(const CellRule& rule) {
+    float values[16] = {};
+    std::copy(rule.value, rule.value + (1 << rule.levels) - 1, values);
+    return _mm512_loadu_ps(values);
+}
+
+// Calls f(c, lanes) for each cell c among the live lanes, with the lanes in it.
+template <typename F>
+void EachCell(__m512i cells, __mmask16 live, const F& f) {
+    alignas(64) int32_t lane[16];
+    _mm512_store_si512(lane, cells);
+    unsigned rest = live;
+    while (rest) {
+        const int c = lane[std::countr_zero(rest)];
+        const __mmask16 m =
+            _mm512_mask_cmpeq_epi32_mask(__mmask16(rest), cells, _mm512_set1_epi32(c));
+        f(c, m);
+        rest &= ~unsigned(m);
+    }
+}
+#else
+int CellOf(const PartitionIo& io, const CellRule& rule, uint32_t i) {
+    int h = 0;
+    for (int l = 0; l < rule.levels; ++l)
+        h = 2 * h + (io.src[rule.dim[l]][i] < rule.value[h] ? 1 : 2);
+    return h - ((1 << rule.levels) - 1);
+}
+#endif
+
+// Adds the rays [begin, end) of `io` to the counts of their cells of `rule`.
+void CountCells(const PartitionIo& io, const CellRule& rule, uint32_t begin, uint32_t end,
+                uint32_t* count) {
+#if defined(__AVX512F__)
+    const __m512 split = SplitValues16(rule);
+    for (uint32_t i = begin; i < end; i += 16) {
+        const __mmask16 live = LiveLanes16(end, i);
+        EachCell(CellsOf16(io, rule, split, i, live), live,
+                 [&](int c, __mmask16 m) { count[c] += uint32_t(std::popcount(unsigned(m))); });
+    }
+#else
+    for (uint32_t i = begin; i < end; ++i) ++count[CellOf(io, rule, i)];
+#endif
+}
+
+// Writes the rays [begin, end) of `io` to their cells, cell c's from next[c] on in ray order, and
+// gathers each cell's bounds of the active coordinates (the others are left empty).
+void ScatterCells(const PartitionIo& io, const bool* active, const CellRule& rule, uint32_t begin,
+                  uint32_t end, uint32_t* next, Bounds6* cell) {
+    const int nCells = 1 << rule.levels;
+    for (int c = 0; c < nCells; ++c) cell[c] = EmptyBounds();
+#if defined(__AVX512F__)
+    __m512 lo[16][kCoords], hi[16][kCoords];
+    for (int c = 0; c < nCells; ++c) {
+        for (int k = 0; k < kCoords; ++k) {
+            lo[c][k] = _mm512_set1_ps(kInf);
+            hi[c][k] = _mm512_set1_ps(-kInf);
+        }
+    }
+    const __m512 split = SplitValues16(rule);
+    for (uint32_t i = begin; i < end; i += 16) {
+        const __mmask16 live = LiveLanes16(end, i);
+        __m512 v[kCoords];
+        for (int k = 0; k < kCoords; ++k) {
+            v[k] = active[k] ? _mm512_maskz_loadu_ps(live, io.src[k] + i) : _mm512_setzero_ps();
+        }
+        const __m512i id = _mm512_maskz_loadu_epi32(live, io.srcId + i);
+        EachCell(CellsOf16(io, rule, split, i, live), live, [&](int c, __mmask16 m) {
+            const uint32_t n = uint32_t(std::popcount(unsigned(m)));
+            const __mmask16 dst = __mmask16((1u << n) - 1u);
+            for (int k = 0; k < kCoords; ++k) {
+                if (!active[k]) continue;
+                _mm512_mask_storeu_ps(io.dst[k] + next[c], dst, _mm512_maskz_compress_ps(m, v[k]));
+                lo[c][k] = _mm512_mask_min_ps(lo[c][k], m, lo[c][k], v[k]);
+                hi[c][k] = _mm512_mask_max_ps(hi[c][k], m, hi[c][k], v[k]);
+            }
+            _mm512_mask_storeu_epi32(io.dstId + next[c], dst, _mm512_maskz_compress_epi32(m, id));
+            next[c] += n;
+        });
+    }
+    for (int c = 0; c < nCells; ++c) {
+        for (int k = 0; k < kCoords; ++k) {
+            if (!active[k]) continue;
+            cell[c].lo[k] = ReduceMin(lo[c][k]);
+            cell[c].hi[k] = ReduceMax(hi[c][k]);
+        }
+    }
+#else
+    for (uint32_t i = begin; i < end; ++i) {
+        const int c = CellOf(io, rule, i);
+        const uint32_t at = next[c]++;
+        for (int k = 0; k < kCoords; ++k) {
+            if (!active[k]) continue;
+            const float x = io.src[k][i];
+            io.dst[k][at] = x;
+            cell[c].lo[k] = std::min(cell[c].lo[k], x);
+            cell[c].hi[k] = std::max(cell[c].hi[k], x);
+        }
+        io.dstId[at] = io.srcId[i];
+    }
+#endif
+}
+
+}  // namespace
+
+void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule, uint32_t begin,
+                uint32_t end, uint32_t* cellBegin, Bounds6* cell, int pieces) {
+    const int nCells = 1 << rule.levels;
+    // Runs of a multiple of 16 rays, so that the vector path sees the same blocks.
+    const uint32_t step =
+        ((end - begin + uint32_t(pieces) * 16 - 1) / (uint32_t(pieces) * 16)) * 16;
+    std::vector<std::array<uint32_t, 16>> count(static_cast<size_t>(pieces));
+    std::vector<std::array<Bounds6, 16>> bounds(static_cast<size_t>(pieces));
+    std::barrier counted(pieces);
+    OnThreads(pieces, [&](int t) {
+        const uint32_t b = std::min(end, begin + uint32_t(t) * step);
+        const uint32_t e = std::min(end, b + step);
+        count[size_t(t)].fill(0);
+        CountCells(io, rule, b, e, count[size_t(t)].data());
+        counted.arrive_and_wait();
+        // Piece t's rays of cell c follow the cell's rays of the earlier pieces.
+        uint32_t next[16];
+        uint32_t at = begin;
+        for (int c = 0; c < nCells; ++c) {
+            next[c] = at;
+            for (int u = 0; u < pieces; ++u) {
+                if (u == t) next[c] = at;
+                at += count[size_t(u)][size_t(c)];
+            }
+            if (t == 0) cellBegin[c + 1] = at;
+        }
+        ScatterCells(io, active, rule, b, e, next, bounds[size_t(t)].data());
+    });
+    cellBegin[0] = begin;
+    for (int c = 0; c < nCells; ++c) {
+        cell[c] = bounds[0][size_t(c)];
+        for (int t = 1; t < pieces; ++t) Merge(cell[c], bounds[size_t(t)][size_t(c)]);
+    }
+}
+
+}  // namespace rayclass::classify
