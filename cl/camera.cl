@@ -12,7 +12,8 @@ inline float3 rc_eye_direction(__constant const RcCamera* cam, uint x, uint y) {
 }
 
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_generate_eye_rays(
-    __constant const RcCamera* cam, uint first, uint n, __global RcRay* rays) {
+    __constant const RcCamera* cam, uint first, uint n, __global RcRay* rays,
+    __global RcRayInfo* info) {
     const uint i = get_global_id(0);
     if (i >= n) return;
     const uint pixel = first + i;
@@ -21,10 +22,12 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_gene
     r.origin = (float4)(cam->position.xyz, 0.0f);
     uint packed;
     r.direction = (float4)(rc_encode_direction(rc_eye_direction(cam, x, y), &packed), INFINITY);
-    r.weight = (float4)(1.0f, 1.0f, 1.0f, 1.0f);
-    r.pixel = pixel;
-    r.depth = 0;
-    r.kind = RC_RAY_EYE;
-    r.polar16 = packed;
     rays[i] = r;
+    RcRayInfo ri;
+    ri.weight = (float4)(1.0f, 1.0f, 1.0f, 1.0f);
+    ri.pixel = pixel;
+    ri.depth = 0;
+    ri.kind = RC_RAY_EYE;
+    ri.polar16 = packed;
+    info[i] = ri;
 }

@@ -225,10 +225,10 @@ inline RcHit rc_vertex_nearest(const RcRay* ray, RcLeaf leaf, uint firstBlock,
 /* The thesis's vertex unit whole: the work-item that found the hit shades it and writes its
  * shadow, reflection and refraction rays. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_vertex_shade(
-    __global const RcRay* rays, __global const uint* rayIndex, __global const uint* rayLeaf,
-    uint nSlots, __global const RcLeaf* leaves, __global const uint* leafFirstBlock,
-    __global const RcTriangleBlock16* blocks, __global RcHit* hits, __global uint* tests,
-    RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
+    __global const RcRay* rays, __global const RcRayInfo* infos, __global const uint* rayIndex,
+    __global const uint* rayLeaf, uint nSlots, __global const RcLeaf* leaves,
+    __global const uint* leafFirstBlock, __global const RcTriangleBlock16* blocks,
+    __global RcHit* hits, __global uint* tests, RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
     const uint slot = get_global_id(0);
     if (slot >= nSlots) return;
     const uint id = rayIndex[slot];
@@ -239,7 +239,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
                                         triangles, spheres, quadrics, params, &tested);
     hits[id] = hit;
     tests[slot] = tested;
-    rc_shade_ray(id, &ray, hit, 1, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
+    const RcRayInfo info = infos[id];
+    rc_shade_ray(id, &ray, &info, hit, 1, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
 }
 
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_vertex(
@@ -287,10 +288,10 @@ typedef struct RcLanes16 {
 
 /* The rays of a packet as lanes: the leaf's rays [first, first + 16), unused lanes repeating the
  * first ray (their results are not written); ids[k] is lane k's ray. `rays` are records of
- * `stride` float4s that start with origin (w: tmin) and direction (w: tmax): RcRay and
- * RcShadowRay alike. The records are read as float4 into registers and transposed there: lanes
- * written one float at a time to private arrays and read back as float16 cost half the fragment
- * kernel's time on PoCL (the arrays become per-work-item context memory). */
+ * `stride` float4s that start with origin (w: tmin) and direction (w: tmax): RcRay (2) and
+ * RcShadowRay (3) alike. The records are read as float4 into registers and transposed there:
+ * lanes written one float at a time to private arrays and read back as float16 cost half the
+ * fragment kernel's time on PoCL (the arrays become per-work-item context memory). */
 #define RC_LANES16(a, f)                                                                         \
     (float16)(a[0].f, a[1].f, a[2].f, a[3].f, a[4].f, a[5].f, a[6].f, a[7].f, a[8].f, a[9].f,  \
               a[10].f, a[11].f, a[12].f, a[13].f, a[14].f, a[15].f)

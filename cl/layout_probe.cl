@@ -73,11 +73,13 @@ __kernel void rc_layout_probe(__global uint* out) {
     RC_STRUCT(RcRay);
     RC_FIELD(RcRay, origin);
     RC_FIELD(RcRay, direction);
-    RC_FIELD(RcRay, weight);
-    RC_FIELD(RcRay, pixel);
-    RC_FIELD(RcRay, depth);
-    RC_FIELD(RcRay, kind);
-    RC_FIELD(RcRay, polar16);
+
+    RC_STRUCT(RcRayInfo);
+    RC_FIELD(RcRayInfo, weight);
+    RC_FIELD(RcRayInfo, pixel);
+    RC_FIELD(RcRayInfo, depth);
+    RC_FIELD(RcRayInfo, kind);
+    RC_FIELD(RcRayInfo, polar16);
 
     RC_STRUCT(RcHit);
     RC_FIELD(RcHit, t);

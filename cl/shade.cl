@@ -93,10 +93,10 @@ inline int rc_worth_spawning(float3 w, uint depth, __constant const RcRenderPara
         __constant const RcRenderParams *params
 #define RC_SHADE_SCENE_ARGS \
     triangles, triShading, spheres, quadrics, materials, lights, params
-#define RC_SHADE_OUT_PARAMS                                                         \
+#define RC_SHADE_OUT_PARAMS                                                                \
     __global float4 *radiance, __global float4 *normals, __global RcShadowRay *shadowRays, \
-        __global RcRay *secondary, __global uchar *spawned
-#define RC_SHADE_OUT_ARGS radiance, normals, shadowRays, secondary, spawned
+        __global RcRay *secondary, __global RcRayInfo *secondaryInfo, __global uchar *spawned
+#define RC_SHADE_OUT_ARGS radiance, normals, shadowRays, secondary, secondaryInfo, spawned
 
 /* An empty shadow slot: no contribution and no direction, so a host classifying every slot
  * finds it missing the scene at once. */
@@ -110,10 +110,11 @@ RC_SHADE_INLINE void rc_no_shadow(__global RcShadowRay* shadowRays, uint slot) {
 
 /* Light l's contribution at the hit of ray i, into shadow slot i * nLights + l (an empty slot
  * when the light is behind the surface or adds nothing). */
-RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcSurface* s,
-                           __global const RcMaterial* m, __global const RcLight* lights,
-                           __constant const RcRenderParams* params,
-                           __global RcShadowRay* shadowRays) {
+RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcRayInfo* info,
+                                    const RcSurface* s, __global const RcMaterial* m,
+                                    __global const RcLight* lights,
+                                    __constant const RcRenderParams* params,
+                                    __global RcShadowRay* shadowRays) {
     const uint slot = i * params->nLights + l;
     const float3 d = ray->direction.xyz;
     const float3 toLight = lights[l].position.xyz - s->p;
@@ -132,7 +133,7 @@ RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcSu
         const float cosb = fmax(dot(r, -d), 0.0f);
         brdf += ks * pow(cosb, m->shininess);
     }
-    const float3 c = ray->weight.xyz * lights[l].intensity.xyz / dist2 * brdf;
+    const float3 c = info->weight.xyz * lights[l].intensity.xyz / dist2 * brdf;
     if (fmax(c.x, fmax(c.y, c.z)) <= 0.0f) {
         rc_no_shadow(shadowRays, slot);
         return;
@@ -148,28 +149,30 @@ RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcSu
 }
 
 /* Writes a secondary ray of `parent` into slot `slot` (direction dir, not yet unit) and flags it. */
-RC_SHADE_INLINE void rc_spawn(__global RcRay* secondary, __global uchar* spawned, uint slot,
-                              const RcRay* parent, float3 origin, float3 dir, float3 weight,
-                              uint depth, uint kind) {
+RC_SHADE_INLINE void rc_spawn(__global RcRay* secondary, __global RcRayInfo* secondaryInfo,
+                              __global uchar* spawned, uint slot, const RcRayInfo* parent,
+                              float3 origin, float3 dir, float3 weight, uint depth, uint kind) {
     RcRay out;
     out.origin = (float4)(origin, 0.0f);
     uint packed;
     out.direction = (float4)(rc_encode_direction(normalize(dir), &packed), INFINITY);
-    out.weight = (float4)(weight, 1.0f);
-    out.pixel = parent->pixel;
-    out.depth = depth;
-    out.kind = kind;
-    out.polar16 = packed;
     secondary[slot] = out;
+    RcRayInfo outInfo;
+    outInfo.weight = (float4)(weight, 1.0f);
+    outInfo.pixel = parent->pixel;
+    outInfo.depth = depth;
+    outInfo.kind = kind;
+    outInfo.polar16 = packed;
+    secondaryInfo[slot] = outInfo;
     spawned[slot] = 1;
 }
 
 /* Shades the hit of ray i: radiance, normal, the reflection and refraction rays and, when
  * withLights, every light's shadow slot (else a per-(ray, light) pass writes them). */
-RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, RcHit hit, int withLights,
-                         RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
+RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* info, RcHit hit,
+                                  int withLights, RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
     const uint nLights = params->nLights;
-    const float3 weight = ray->weight.xyz;
+    const float3 weight = info->weight.xyz;
     spawned[2 * i] = 0;
     spawned[2 * i + 1] = 0;
     if (hit.prim == RC_NO_HIT) {
@@ -188,7 +191,8 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, RcHit hit, int withL
     radiance[i] = (float4)(weight * (m->emission.xyz + m->kd.xyz * params->ambient.xyz), 0.0f);
     normals[i] = (float4)(s.ns, 0.0f);
     if (withLights) {
-        for (uint l = 0; l < nLights; ++l) rc_shade_light(i, l, ray, &s, m, lights, params, shadowRays);
+        for (uint l = 0; l < nLights; ++l)
+            rc_shade_light(i, l, ray, info, &s, m, lights, params, shadowRays);
     }
 
     const float3 kr = m->kr.xyz, kt = m->kt.xyz;
@@ -206,51 +210,54 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, RcHit hit, int withL
         krEff = kr + kt;
         ktEff = (float3)(0.0f);
     }
-    const uint depth = ray->depth + 1;
+    const uint depth = info->depth + 1;
     const float3 wr = weight * krEff;
     if (rc_worth_spawning(wr, depth, params)) {
         float3 rdir = d + 2.0f * cosi * s.ns;
         /* A shading normal can tilt the mirror direction below the surface: fall back to ng. */
         if (dot(rdir, s.ng) <= 0.0f) rdir = d - 2.0f * dot(d, s.ng) * s.ng;
-        rc_spawn(secondary, spawned, 2 * i, ray, rc_offset_ray_origin(s.p, s.ng), rdir, wr,
-                 depth, RC_RAY_REFLECTION);
+        rc_spawn(secondary, secondaryInfo, spawned, 2 * i, info, rc_offset_ray_origin(s.p, s.ng),
+                 rdir, wr, depth, RC_RAY_REFLECTION);
     }
     const float3 wt = weight * ktEff;
     if (!tir && rc_worth_spawning(wt, depth, params)) {
         const float3 tdir = eta * d + (eta * cosi - sqrt(1.0f - sin2t)) * s.ns;
         if (dot(tdir, s.ng) < 0.0f) {
-            rc_spawn(secondary, spawned, 2 * i + 1, ray, rc_offset_ray_origin(s.p, -s.ng), tdir,
-                     wt, depth, RC_RAY_REFRACTION);
+            rc_spawn(secondary, secondaryInfo, spawned, 2 * i + 1, info,
+                     rc_offset_ray_origin(s.p, -s.ng), tdir, wt, depth, RC_RAY_REFRACTION);
         }
     }
 }
 
 /* Every ray of the batch, lights included. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade(
-    __global const RcRay* rays, __global const RcHit* hits, uint n, RC_SHADE_SCENE_PARAMS,
-    RC_SHADE_OUT_PARAMS) {
+    __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits, uint n,
+    RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
     const uint i = get_global_id(0);
     if (i >= n) return;
     const RcRay ray = rays[i];
-    rc_shade_ray(i, &ray, hits[i], 1, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
+    const RcRayInfo info = infos[i];
+    rc_shade_ray(i, &ray, &info, hits[i], 1, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
 }
 
 /* The rays ids[0, nIds) of the batch; lights only when withLights (else rc_shade_lights). */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade_ids(
-    __global const RcRay* rays, __global const RcHit* hits, __global const uint* ids, uint nIds,
-    uint withLights, RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
+    __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits,
+    __global const uint* ids, uint nIds, uint withLights, RC_SHADE_SCENE_PARAMS,
+    RC_SHADE_OUT_PARAMS) {
     const uint j = get_global_id(0);
     if (j >= nIds) return;
     const uint i = ids[j];
     const RcRay ray = rays[i];
-    rc_shade_ray(i, &ray, hits[i], (int)withLights, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
+    const RcRayInfo info = infos[i];
+    rc_shade_ray(i, &ray, &info, hits[i], (int)withLights, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
 }
 
 /* The thesis's second fragment pass: one work-item per (ray, light) pair of the rays ids[0, nIds),
  * so every lane of a vector does the same light computation. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade_lights(
-    __global const RcRay* rays, __global const RcHit* hits, __global const uint* ids, uint nIds,
-    RC_SHADE_SCENE_PARAMS, __global RcShadowRay* shadowRays) {
+    __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits,
+    __global const uint* ids, uint nIds, RC_SHADE_SCENE_PARAMS, __global RcShadowRay* shadowRays) {
     const uint j = get_global_id(0);
     const uint nLights = params->nLights;
     if (j >= nIds * nLights) return;
@@ -261,7 +268,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
         return;
     }
     const RcRay ray = rays[i];
+    const RcRayInfo info = infos[i];
     const RcSurface s = rc_surface(ray.origin.xyz, ray.direction.xyz, hit, triangles, triShading,
                                    spheres, quadrics, params->nTriangles, params->nSpheres);
-    rc_shade_light(i, l, &ray, &s, materials + s.material, lights, params, shadowRays);
+    rc_shade_light(i, l, &ray, &info, &s, materials + s.material, lights, params, shadowRays);
 }

@@ -125,10 +125,15 @@ struct Bench {
     }
 };
 
-RcRay ToRc(const bench::BenchRay& r, uint32_t i, uint32_t kind) {
+RcRay ToRc(const bench::BenchRay& r) {
     RcRay o{};
     o.origin = {r.origin.x, r.origin.y, r.origin.z, r.tMin};
     o.direction = {r.direction.x, r.direction.y, r.direction.z, r.tMax};
+    return o;
+}
+
+RcRayInfo InfoOf(uint32_t i, uint32_t kind) {
+    RcRayInfo o{};
     o.weight = {1.0f, 1.0f, 1.0f, 0.0f};
     o.pixel = i;
     o.depth = kind == RC_RAY_EYE ? 0 : 1;
@@ -233,7 +238,7 @@ int Micro(int argc, char** argv) {
             r.origin = glm::vec3(0, 0, -4);
             r.direction = glm::normalize(glm::vec3(pos(rng), pos(rng), pos(rng)) - r.origin);
             r.tMax = INFINITY;
-            rays[i] = ToRc(r, i, RC_RAY_EYE);
+            rays[i] = ToRc(r);
             orig[i] = rays[i].origin;
             dir[i] = rays[i].direction;
         }
@@ -350,7 +355,7 @@ int main(int argc, char** argv) try {
     const glm::vec3 lightPos = bench::NamedLight(sc, light);
     const std::vector<bench::BenchRay> eye = bench::EyeRays(cam);
     std::vector<RcRay> eyeRc(eye.size());
-    for (size_t i = 0; i < eye.size(); ++i) eyeRc[i] = ToRc(eye[i], uint32_t(i), RC_RAY_EYE);
+    for (size_t i = 0; i < eye.size(); ++i) eyeRc[i] = ToRc(eye[i]);
     std::vector<bench::BenchHit> eyeHits(eye.size());
     {
         const cl::Buffer raysBuf = Upload(ctx, eyeRc);
@@ -382,22 +387,28 @@ int main(int argc, char** argv) try {
             continue;
         const bool shadow = bench::IsShadowKind(k);
         std::vector<RcRay> rays;
+        std::vector<RcRayInfo> info;
         std::vector<RcShadowRay> shadowRays;
         cl::Buffer raysBuf;
+        render::ShadeBuffers shade;
         if (shadow) {
             for (const auto& r : set) shadowRays.push_back(ToShadow(r));
             raysBuf = Upload(ctx, shadowRays);
         } else {
             const uint32_t kind = k == 0 ? RC_RAY_EYE : (k == 3 ? RC_RAY_REFRACTION : RC_RAY_REFLECTION);
-            for (uint32_t i = 0; i < n; ++i) rays.push_back(ToRc(set[i], i, kind));
+            for (uint32_t i = 0; i < n; ++i) {
+                rays.push_back(ToRc(set[i]));
+                info.push_back(InfoOf(i, kind));
+            }
             raysBuf = Upload(ctx, rays);
+            shade.rayInfo = Upload(ctx, info);
         }
         const cl::Buffer out = Device(ctx, size_t(n) * (shadow ? 1 : sizeof(RcHit)));
-        render::ShadeBuffers shade;
         shade.radiance = Device(ctx, size_t(n) * sizeof(rc_float4));
         shade.normals = Device(ctx, size_t(n) * sizeof(rc_float4));
         shade.shadow = Device(ctx, size_t(n) * nLights * sizeof(RcShadowRay));
-        shade.secondary = Device(ctx, 2 * size_t(n) * sizeof(RcRay));
+        shade.secondary = {Device(ctx, 2 * size_t(n) * sizeof(RcRay)),
+                           Device(ctx, 2 * size_t(n) * sizeof(RcRayInfo))};
         shade.spawned = Device(ctx, 2 * size_t(n));
 
         for (const std::string& method : methods) {

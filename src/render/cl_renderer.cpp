@@ -169,38 +169,41 @@ void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& q
     stats.timeS["transfer_and_other"] = std::max(0.0, stats.timeS["render"] - accounted);
 }
 
-// Device pages of rays, recycled from generation to generation: a fresh buffer costs its page
-// faults again.
+// Device pages of rays (both arrays), recycled from generation to generation: a fresh buffer
+// costs its page faults again.
 class PagePool {
   public:
     PagePool(clrt::Context& ctx, size_t pageRays) : ctx_(ctx), pageRays_(pageRays) {}
     size_t PageRays() const { return pageRays_; }
-    cl::Buffer Take() {
-        if (free_.empty()) return DeviceBuffer(ctx_, pageRays_ * sizeof(RcRay));
-        cl::Buffer page = std::move(free_.back());
+    RayBuffers Take() {
+        if (free_.empty()) {
+            return {DeviceBuffer(ctx_, pageRays_ * sizeof(RcRay)),
+                    DeviceBuffer(ctx_, pageRays_ * sizeof(RcRayInfo))};
+        }
+        RayBuffers page = std::move(free_.back());
         free_.pop_back();
         return page;
     }
-    void Give(cl::Buffer& page) {
-        if (page()) free_.push_back(std::move(page));
-        page = cl::Buffer();
+    void Give(RayBuffers& page) {
+        if (page.rays()) free_.push_back(std::move(page));
+        page = RayBuffers();
     }
-    void Give(std::vector<cl::Buffer>& pages) {
-        for (cl::Buffer& page : pages) Give(page);
+    void Give(std::vector<RayBuffers>& pages) {
+        for (RayBuffers& page : pages) Give(page);
         pages.clear();
     }
 
   private:
     clrt::Context& ctx_;
     size_t pageRays_;
-    std::vector<cl::Buffer> free_;
+    std::vector<RayBuffers> free_;
 };
 
 // Copies the live secondary slots `live` (indices into `secondary`, in slot order) to the end
 // of `pages`, which hold `count` rays; new pages come from `pool`.
-void AppendToPages(clrt::Context& ctx, cl::Kernel& compact, const cl::Buffer& secondary,
+void AppendToPages(clrt::Context& ctx, cl::Kernel& compact, const RayBuffers& secondary,
                    const cl::Buffer& liveSlots, const std::vector<uint32_t>& live, size_t count,
-                   PagePool& pool, std::vector<cl::Buffer>& pages, KernelTimer& timer) {
+                   PagePool& pool, std::vector<RayBuffers>& pages, KernelTimer& timer) {
     const size_t pageRays = pool.PageRays();
     if (live.empty()) return;
     clrt::Check("clEnqueueWriteBuffer", [&] {
@@ -211,7 +214,8 @@ void AppendToPages(clrt::Context& ctx, cl::Kernel& compact, const cl::Buffer& se
         const size_t offset = (count + done) % pageRays;
         if (offset == 0) pages.push_back(pool.Take());
         const uint32_t m = uint32_t(std::min(live.size() - done, pageRays - offset));
-        SetArgs(compact, secondary, liveSlots, uint32_t(done), m, pages.back(), uint32_t(offset));
+        SetArgs(compact, secondary.rays, secondary.info, liveSlots, uint32_t(done), m,
+                pages.back().rays, pages.back().info, uint32_t(offset));
         Launch(ctx, compact, m, timer);
         done += m;
     }
@@ -274,10 +278,12 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     shade.radiance = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
     shade.normals = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
     shade.shadow = DeviceBuffer(ctx_, batch * nLights * sizeof(RcShadowRay));
-    shade.secondary = DeviceBuffer(ctx_, 2 * batch * sizeof(RcRay));
+    shade.secondary = {DeviceBuffer(ctx_, 2 * batch * sizeof(RcRay)),
+                       DeviceBuffer(ctx_, 2 * batch * sizeof(RcRayInfo))};
     shade.spawned = DeviceBuffer(ctx_, 2 * batch);
     const cl::Buffer &radiance = shade.radiance, &normals = shade.normals, &shadow = shade.shadow,
-                     &secondary = shade.secondary, &spawned = shade.spawned;
+                     &spawned = shade.spawned;
+    const RayBuffers& secondary = shade.secondary;
     cl::Buffer blocked = DeviceBuffer(ctx_, batch * nLights);
     cl::Buffer liveSlots = DeviceBuffer(ctx_, 2 * batch * sizeof(uint32_t));
     cl::Kernel compactKernel(program, "rc_compact_rays");
@@ -289,7 +295,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
 
     // A generation's rays live on the device in pages of `batch` rays; a batch is one page. The
     // host keeps only each ray's pixel, for accumulating contributions.
-    std::vector<cl::Buffer> pages, nextPages;
+    std::vector<RayBuffers> pages, nextPages;
     PagePool pool(ctx_, batch);
     std::vector<uint32_t> pixels, nextPixels;
     auto& q = ctx_.queue();
@@ -320,7 +326,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
             for (size_t first = 0; first < nRays; first += batch) {
                 const uint32_t n = uint32_t(std::min(batch, nRays - first));
                 pages.push_back(pool.Take());
-                SetArgs(eyeKernel, camBuffer, uint32_t(first), n, pages.back());
+                SetArgs(eyeKernel, camBuffer, uint32_t(first), n, pages.back().rays,
+                        pages.back().info);
                 Launch(ctx_, eyeKernel, n, timer);
             }
         }
@@ -329,7 +336,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         clrt::Check("clFinish", [&] { q.finish(); });
         auto prepare = [&](size_t page) -> std::unique_ptr<PreparedBatch> {
             if (generation == 0 && eyeHits_) return nullptr;
-            return query->Prepare(pages[page], uint32_t(std::min(batch, nRays - page * batch)),
+            return query->Prepare(pages[page].rays, uint32_t(std::min(batch, nRays - page * batch)),
                                   readQueue);
         };
         std::future<std::unique_ptr<PreparedBatch>> nextPrepared =
@@ -340,7 +347,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
             if (first + batch < nRays) {
                 nextPrepared = std::async(std::launch::async, prepare, page + 1);
             }
-            const cl::Buffer& rays = pages[page];
+            const RayBuffers& rays = pages[page];
+            shade.rayInfo = rays.info;
             QueryResult found;
             if (generation == 0 && eyeHits_) {
                 clrt::Check("clEnqueueWriteBuffer", [&] {
@@ -348,15 +356,15 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                                          eyeHits.data() + first);
                 });
             } else {
-                found = query->Intersect(rays, n, prepared.get(), hits, shade, timer);
+                found = query->Intersect(rays.rays, n, prepared.get(), hits, shade, timer);
                 query->Recycle(std::move(prepared));
             }
             stats.intersectionTests += found.tests;
             if (!found.shaded) {
-                SetArgs(shadeKernel, rays, hits, n, sceneBuffers.triangles,
+                SetArgs(shadeKernel, rays.rays, rays.info, hits, n, sceneBuffers.triangles,
                         sceneBuffers.triangleShading, sceneBuffers.spheres, sceneBuffers.quadrics,
                         sceneBuffers.materials, sceneBuffers.lights, sceneBuffers.params, radiance,
-                        normals, shadow, secondary, spawned);
+                        normals, shadow, secondary.rays, secondary.info, spawned);
                 Launch(ctx_, shadeKernel, n, timer);
             }
             // Read in place by the shadow query's classification and the accumulation below.

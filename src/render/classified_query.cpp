@@ -69,9 +69,10 @@ class ClassifiedQuery final : public RayQuery {
             }
         }
         if (!out) out = std::make_unique<ClassifiedBatch>();
-        // Classified in place: an RcRay starts with the fields of a classify::Ray, and mapping
-        // costs no copy on a device that shares host memory.
-        static_assert(sizeof(classify::Ray) == offsetof(RcRay, weight));
+        // Classified in place: an RcRay is a classify::Ray, and mapping costs no copy on a
+        // device that shares host memory.
+        static_assert(sizeof(classify::Ray) == sizeof(RcRay) &&
+                      offsetof(classify::Ray, direction) == offsetof(RcRay, direction));
         clrt::MappedRead<RcRay> mapped(queue, rays, n);
         Classify(hierarchy_, classify::RayView(mapped.data(), n, sizeof(RcRay)),
                  classify::RayUse::kNearestHit, *out, style_);
@@ -251,11 +252,11 @@ class ClassifiedQuery final : public RayQuery {
                         scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
                         testsBuf);
             } else {
-                SetArgs(k, rays, *slots, *slotLeaf, nSlots, leaves, leafFirstBlock, blocks, out,
-                        testsBuf, scene_.triangles, scene_.triangleShading, scene_.spheres,
-                        scene_.quadrics, scene_.materials, scene_.lights, scene_.params,
-                        shade->radiance, shade->normals, shade->shadow, shade->secondary,
-                        shade->spawned);
+                SetArgs(k, rays, shade->rayInfo, *slots, *slotLeaf, nSlots, leaves, leafFirstBlock,
+                        blocks, out, testsBuf, scene_.triangles, scene_.triangleShading,
+                        scene_.spheres, scene_.quadrics, scene_.materials, scene_.lights,
+                        scene_.params, shade->radiance, shade->normals, shade->shadow,
+                        shade->secondary.rays, shade->secondary.info, shade->spawned);
             }
             AddHostSeconds(Seconds(t1));
             Launch(ctx_, gather_, nBlocks, timer);
@@ -313,14 +314,14 @@ class ClassifiedQuery final : public RayQuery {
             const uint32_t nIds = uint32_t(unshaded_.size());
             const cl::Buffer& ids = unshadedBuf_.Upload(ctx_, unshaded_);
             const uint32_t withLights = 0;
-            SetArgs(shadeIds_, rays, out, ids, nIds, withLights, scene_.triangles,
+            SetArgs(shadeIds_, rays, shade->rayInfo, out, ids, nIds, withLights, scene_.triangles,
                     scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
                     scene_.lights, scene_.params, shade->radiance, shade->normals, shade->shadow,
-                    shade->secondary, shade->spawned);
+                    shade->secondary.rays, shade->secondary.info, shade->spawned);
             Launch(ctx_, shadeIds_, nIds, timer);
-            SetArgs(shadeLights_, rays, out, ids, nIds, scene_.triangles, scene_.triangleShading,
-                    scene_.spheres, scene_.quadrics, scene_.materials, scene_.lights, scene_.params,
-                    shade->shadow);
+            SetArgs(shadeLights_, rays, shade->rayInfo, out, ids, nIds, scene_.triangles,
+                    scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
+                    scene_.lights, scene_.params, shade->shadow);
             Launch(ctx_, shadeLights_, size_t(nIds) * scene_.hostParams.nLights, timer);
         }
         return {tests, true};

@@ -331,15 +331,16 @@ TEST(Hierarchy, InsertAppendsRaysOfOneGeneration) {
     }
 }
 
-// The renderer classifies rays in place inside RcRay and RcShadowRay records: a strided view
-// must give exactly the leaves of the packed rays (the vector path and the scalar tail alike).
+// The renderer classifies rays in place inside RcRay (8 floats) and RcShadowRay (12) records: a
+// strided view must give exactly the leaves of the packed rays (the vector path and the scalar
+// tail alike).
 TEST(Hierarchy, StridedViewsClassifyLikePackedRays) {
     const scene::Scene s = RandomScene(65, 200, 4, 2);
     auto rays = RandomRays(66, 1003);
     rays[5].direction = glm::vec3(0.0f);  // an empty shadow slot: no direction
     Hierarchy packed(s, DeepParams(s));
     const LeafBatch expected = packed.Classify(rays);
-    for (const size_t floats : {12u, 16u}) {
+    for (const size_t floats : {8u, 12u}) {
         std::vector<float> records(rays.size() * floats, -7.0f);
         for (size_t i = 0; i < rays.size(); ++i) {
             std::memcpy(&records[i * floats], &rays[i], sizeof(Ray));

@@ -21,7 +21,7 @@ using testing::kProbeOptions;
 using testing::TestContext;
 
 struct Entry {
-    std::string label;  // "RcRay.kind", or "RcRay sizeof" / "RcRay alignof"
+    std::string label;  // "RcRayInfo.kind", or "RcRay sizeof" / "RcRay alignof"
     uint32_t value;
 };
 
@@ -92,11 +92,13 @@ std::vector<Entry> HostLayout() {
     RC_STRUCT(RcRay);
     RC_FIELD(RcRay, origin);
     RC_FIELD(RcRay, direction);
-    RC_FIELD(RcRay, weight);
-    RC_FIELD(RcRay, pixel);
-    RC_FIELD(RcRay, depth);
-    RC_FIELD(RcRay, kind);
-    RC_FIELD(RcRay, polar16);
+
+    RC_STRUCT(RcRayInfo);
+    RC_FIELD(RcRayInfo, weight);
+    RC_FIELD(RcRayInfo, pixel);
+    RC_FIELD(RcRayInfo, depth);
+    RC_FIELD(RcRayInfo, kind);
+    RC_FIELD(RcRayInfo, polar16);
 
     RC_STRUCT(RcHit);
     RC_FIELD(RcHit, t);

@@ -30,7 +30,7 @@ constexpr int kFaceCount = 6;
 constexpr int kDims = 5;  // X, Y, Z, u, v in that order
 
 // A ray of a generation, as the host hands it in. Hits count for tMin < t < tMax; t is in units
-// of |direction|. 32 bytes, the layout of RcRay's first two float4.
+// of |direction|. 32 bytes, the layout of RcRay.
 struct Ray {
     glm::vec3 origin{0.0f};
     float tMin = 0.0f;
@@ -38,8 +38,8 @@ struct Ray {
     float tMax = 3.402823466e38f;
 };
 
-// Rays read in place from larger records that begin with a Ray's fields (RcRay, RcShadowRay, a
-// mapped device buffer of them): `stride` bytes from one ray to the next, a multiple of 4.
+// Rays read in place from records that begin with a Ray's fields (RcRay, RcShadowRay, a mapped
+// device buffer of them): `stride` bytes from one ray to the next, a multiple of 4.
 class RayView {
   public:
     RayView() = default;

@@ -36,10 +36,20 @@ struct SceneBuffers {
     SceneBuffers(clrt::Context& ctx, const DeviceScene& scene, const RcRenderParams& renderParams);
 };
 
-// What shading writes per batch (see cl/shade.cl): radiance and normal per ray, nLights shadow
-// slots per ray, two secondary slots per ray and their spawned flags.
+// A device array of rays as its two parallel arrays (rc_types.h): RcRay, all a query reads, and
+// RcRayInfo, which only ray generation and shading touch.
+struct RayBuffers {
+    cl::Buffer rays, info;
+};
+
+// What shading reads and writes per batch (see cl/shade.cl): it reads the batch's RcRayInfo and
+// writes radiance and normal per ray, nLights shadow slots per ray, two secondary slots per ray
+// and their spawned flags.
 struct ShadeBuffers {
-    cl::Buffer radiance, normals, shadow, secondary, spawned;
+    cl::Buffer rayInfo;  // the batch's, set for each batch
+    cl::Buffer radiance, normals, shadow;
+    RayBuffers secondary;
+    cl::Buffer spawned;
 };
 
 struct QueryResult {
@@ -80,7 +90,7 @@ class RayQuery {
     // faulted in (raybench --warm measures the steady state this way).
     virtual void Reset() {}
     // Nearest hit of rays[0, n) (RcRay) into hits (RcHit). Query styles whose kernels shade
-    // the hits they find (vertex style) also write `shade` and say so.
+    // the hits they find (vertex style) also read shade.rayInfo, write `shade` and say so.
     virtual QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
                                   const cl::Buffer& hits, const ShadeBuffers& shade,
                                   KernelTimer& timer) = 0;
