@@ -69,8 +69,11 @@ void main() {
         // An eye ray meets view depths below uZNear only inside the frustum's tip, whose corners
         // lie reach / 2 from the eye. A plane farther off than that (a wall or floor passing
         // beside the eye) has all its hits beyond uZNear: bound the part of the triangle there.
+        // A plane nearly through the eye (below) may get "hits" anywhere along its trace, and
+        // its vertices behind the eye do not project: it still covers the screen.
         float reach = 2.0 * uZNear * length(vec3(uTanHalfFov, 1.0));
-        if (abs(dot(n, a)) <= reach * length(n)) {
+        float rmax = max(length(a), max(length(b), length(c)));
+        if (abs(dot(n, a)) <= max(reach, 1e-3 * rmax) * length(n)) {
             EmitFullScreen();
             return;
         }

@@ -196,6 +196,14 @@ TEST(RasterCornerCases, WallsPassingBesideTheEyeAreClippedAtTheNearPlane) {
     corridor.spheres.push_back({{0.3f, -0.5f, -6}, 0.4f});
     ExpectSameIds(*gl, corridor, 96 * 72);
 
+    // A floor crossing the eye plane just below the eye, seen at grazing angles up to its far
+    // edge; closer to the eye (within 1e-3 of its farthest vertex) it would cover the screen.
+    scene::Scene grazing;
+    grazing.camera = MakeCamera({0, 0, 0}, {0, 0, -1}, 96, 72, 60);
+    AddRectangle(grazing, 1, -0.05f, {-20, -3}, {5, 3});  // z, x
+    grazing.spheres.push_back({{0.5f, 0.3f, -4}, 0.5f});
+    ExpectSameIds(*gl, grazing, 100, 2);
+
     // A floor below a narrow view, crossing the eye plane without coming into view, costs no
     // fragment; drawn over the whole screen, as a triangle crossing the eye plane once was, its
     // two triangles would cost two per pixel.
