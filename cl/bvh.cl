@@ -80,7 +80,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
 
 /* Any hit before the light ends the search. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_bvh(
-    __global const RcShadowRay* rays, uint n, __global const RcBvhNode* nodes,
+    __global const RcRay* rays, uint n, __global const RcBvhNode* nodes,
     __global const uint* primIndex, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
     __constant const RcRenderParams* params, __global uchar* blocked, __global uint* tests) {
@@ -88,7 +88,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     if (i >= n) return;
     blocked[i] = 0;
     tests[i] = 0;
-    if (rays[i].contribution.w == 0.0f) return;
+    /* An empty slot has tmax 0: nothing can block it. */
+    if (rays[i].direction.w == 0.0f) return;
     const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
     const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
     RcHit best = rc_no_hit(tmax);

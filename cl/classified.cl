@@ -64,7 +64,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
 
 /* Any hit before tmax (the light): one work-item per shadow ray, scalar. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_scalar(
-    __global const RcShadowRay* rays, __global const uint* rayIndex, __global const uint* rayLeaf,
+    __global const RcRay* rays, __global const uint* rayIndex, __global const uint* rayLeaf,
     uint nSlots, __global const RcLeaf* leaves, __global const RcCandidate* candidates,
     __global const RcTriangle* triangles, __global const RcSphere* spheres,
     __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
@@ -244,7 +244,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
 }
 
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_vertex(
-    __global const RcShadowRay* rays, __global const uint* rayIndex, __global const uint* rayLeaf,
+    __global const RcRay* rays, __global const uint* rayIndex, __global const uint* rayLeaf,
     uint nSlots, __global const RcLeaf* leaves, __global const uint* leafFirstBlock,
     __global const RcTriangleBlock16* blocks, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
@@ -288,8 +288,8 @@ typedef struct RcLanes16 {
 
 /* The rays of a packet as lanes: the leaf's rays [first, first + 16), unused lanes repeating the
  * first ray (their results are not written); ids[k] is lane k's ray. `rays` are records of
- * `stride` float4s that start with origin (w: tmin) and direction (w: tmax): RcRay (2) and
- * RcShadowRay (3) alike. The records are read as float4 into registers and transposed there:
+ * `stride` float4s that start with origin (w: tmin) and direction (w: tmax): RcRay (2), for
+ * shadow rays too. The records are read as float4 into registers and transposed there:
  * lanes written one float at a time to private arrays and read back as float16 cost half the
  * fragment kernel's time on PoCL (the arrays become per-work-item context memory). */
 #define RC_LANES16(a, f)                                                                         \
@@ -473,12 +473,11 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
  * done once blocked or once the candidates start beyond its end X; the packet stops when every
  * lane is done. The triangle test is rc_intersect_triangle's, lane by lane. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_fragment(
-    __global const RcShadowRay* rays, __global const uint* rayIndex,
-    __global const uint* packetLeaf, __global const uint* packetFirst, uint nPackets,
-    __global const RcLeaf* leaves, __global const RcCandidate* candidates,
-    __global const RcTriangle* triangles, __global const RcSphere* spheres,
-    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
-    __global uchar* blocked, __global uint* tests) {
+    __global const RcRay* rays, __global const uint* rayIndex, __global const uint* packetLeaf,
+    __global const uint* packetFirst, uint nPackets, __global const RcLeaf* leaves,
+    __global const RcCandidate* candidates, __global const RcTriangle* triangles,
+    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+    __constant const RcRenderParams* params, __global uchar* blocked, __global uint* tests) {
     const uint p = get_global_id(0);
     if (p >= nPackets) return;
     const RcLeaf leaf = leaves[packetLeaf[p]];

@@ -93,19 +93,22 @@ inline int rc_worth_spawning(float3 w, uint depth, __constant const RcRenderPara
         __constant const RcRenderParams *params
 #define RC_SHADE_SCENE_ARGS \
     triangles, triShading, spheres, quadrics, materials, lights, params
-#define RC_SHADE_OUT_PARAMS                                                                \
-    __global float4 *radiance, __global float4 *normals, __global RcShadowRay *shadowRays, \
-        __global RcRay *secondary, __global RcRayInfo *secondaryInfo, __global uchar *spawned
-#define RC_SHADE_OUT_ARGS radiance, normals, shadowRays, secondary, secondaryInfo, spawned
+#define RC_SHADE_OUT_PARAMS                                                          \
+    __global float4 *radiance, __global float4 *normals, __global RcRay *shadowRays, \
+        __global float4 *shadowContribution, __global RcRay *secondary,              \
+        __global RcRayInfo *secondaryInfo, __global uchar *spawned
+#define RC_SHADE_OUT_ARGS \
+    radiance, normals, shadowRays, shadowContribution, secondary, secondaryInfo, spawned
 
 /* An empty shadow slot: no contribution and no direction, so a host classifying every slot
  * finds it missing the scene at once. */
-RC_SHADE_INLINE void rc_no_shadow(__global RcShadowRay* shadowRays, uint slot) {
-    RcShadowRay none;
+RC_SHADE_INLINE void rc_no_shadow(__global RcRay* shadowRays, __global float4* shadowContribution,
+                                  uint slot) {
+    RcRay none;
     none.origin = (float4)(0.0f);
     none.direction = (float4)(0.0f);
-    none.contribution = (float4)(0.0f);
     shadowRays[slot] = none;
+    shadowContribution[slot] = (float4)(0.0f);
 }
 
 /* Light l's contribution at the hit of ray i, into shadow slot i * nLights + l (an empty slot
@@ -114,7 +117,8 @@ RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcRa
                                     const RcSurface* s, __global const RcMaterial* m,
                                     __global const RcLight* lights,
                                     __constant const RcRenderParams* params,
-                                    __global RcShadowRay* shadowRays) {
+                                    __global RcRay* shadowRays,
+                                    __global float4* shadowContribution) {
     const uint slot = i * params->nLights + l;
     const float3 d = ray->direction.xyz;
     const float3 toLight = lights[l].position.xyz - s->p;
@@ -122,7 +126,7 @@ RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcRa
     const float3 ldir = toLight / sqrt(dist2);
     const float cosl = dot(s->ns, ldir);
     if (cosl <= 0.0f || dot(s->ng, ldir) <= 0.0f) {
-        rc_no_shadow(shadowRays, slot);
+        rc_no_shadow(shadowRays, shadowContribution, slot);
         return;
     }
     const float3 ks = m->ks.xyz;
@@ -135,17 +139,17 @@ RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcRa
     }
     const float3 c = info->weight.xyz * lights[l].intensity.xyz / dist2 * brdf;
     if (fmax(c.x, fmax(c.y, c.z)) <= 0.0f) {
-        rc_no_shadow(shadowRays, slot);
+        rc_no_shadow(shadowRays, shadowContribution, slot);
         return;
     }
     const float3 above = rc_offset_ray_origin(s->p, s->ng);
     const float3 toLightFromOrigin = lights[l].position.xyz - above;
     const float dist = length(toLightFromOrigin);
-    RcShadowRay sr;
+    RcRay sr;
     sr.origin = (float4)(above, 0.0f);
     sr.direction = (float4)(toLightFromOrigin / dist, dist);
-    sr.contribution = (float4)(c, 1.0f);
     shadowRays[slot] = sr;
+    shadowContribution[slot] = (float4)(c, 1.0f);
 }
 
 /* Writes a secondary ray of `parent` into slot `slot` (direction dir, not yet unit) and flags it. */
@@ -180,7 +184,7 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* inf
         normals[i] = (float4)(0.0f);
         if (withLights) {
             for (uint l = 0; l < nLights; ++l)
-                rc_no_shadow(shadowRays, i * nLights + l);
+                rc_no_shadow(shadowRays, shadowContribution, i * nLights + l);
         }
         return;
     }
@@ -192,7 +196,7 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* inf
     normals[i] = (float4)(s.ns, 0.0f);
     if (withLights) {
         for (uint l = 0; l < nLights; ++l)
-            rc_shade_light(i, l, ray, info, &s, m, lights, params, shadowRays);
+            rc_shade_light(i, l, ray, info, &s, m, lights, params, shadowRays, shadowContribution);
     }
 
     const float3 kr = m->kr.xyz, kt = m->kt.xyz;
@@ -257,19 +261,21 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
  * so every lane of a vector does the same light computation. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade_lights(
     __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits,
-    __global const uint* ids, uint nIds, RC_SHADE_SCENE_PARAMS, __global RcShadowRay* shadowRays) {
+    __global const uint* ids, uint nIds, RC_SHADE_SCENE_PARAMS, __global RcRay* shadowRays,
+    __global float4* shadowContribution) {
     const uint j = get_global_id(0);
     const uint nLights = params->nLights;
     if (j >= nIds * nLights) return;
     const uint i = ids[j / nLights], l = j % nLights;
     const RcHit hit = hits[i];
     if (hit.prim == RC_NO_HIT) {
-        rc_no_shadow(shadowRays, i * nLights + l);
+        rc_no_shadow(shadowRays, shadowContribution, i * nLights + l);
         return;
     }
     const RcRay ray = rays[i];
     const RcRayInfo info = infos[i];
     const RcSurface s = rc_surface(ray.origin.xyz, ray.direction.xyz, hit, triangles, triShading,
                                    spheres, quadrics, params->nTriangles, params->nSpheres);
-    rc_shade_light(i, l, &ray, &info, &s, materials + s.material, lights, params, shadowRays);
+    rc_shade_light(i, l, &ray, &info, &s, materials + s.material, lights, params, shadowRays,
+                   shadowContribution);
 }

@@ -141,14 +141,6 @@ RcRayInfo InfoOf(uint32_t i, uint32_t kind) {
     return o;
 }
 
-RcShadowRay ToShadow(const bench::BenchRay& r) {
-    RcShadowRay s{};
-    s.origin = {r.origin.x, r.origin.y, r.origin.z, r.tMin};
-    s.direction = {r.direction.x, r.direction.y, r.direction.z, r.tMax};
-    s.contribution = {1.0f, 1.0f, 1.0f, 1.0f};
-    return s;
-}
-
 // Component k of primitive i at [k * n + i]: sphere centre, radius; triangle v0, e1, e2; quadric
 // coefficients, box min, box max (the layout micro_kernels.h reads).
 std::vector<float> MicroSoa(const scene::Scene& s, uint32_t n) {
@@ -388,12 +380,11 @@ int main(int argc, char** argv) try {
         const bool shadow = bench::IsShadowKind(k);
         std::vector<RcRay> rays;
         std::vector<RcRayInfo> info;
-        std::vector<RcShadowRay> shadowRays;
         cl::Buffer raysBuf;
         render::ShadeBuffers shade;
         if (shadow) {
-            for (const auto& r : set) shadowRays.push_back(ToShadow(r));
-            raysBuf = Upload(ctx, shadowRays);
+            for (const auto& r : set) rays.push_back(ToRc(r));
+            raysBuf = Upload(ctx, rays);
         } else {
             const uint32_t kind = k == 0 ? RC_RAY_EYE : (k == 3 ? RC_RAY_REFRACTION : RC_RAY_REFLECTION);
             for (uint32_t i = 0; i < n; ++i) {
@@ -406,7 +397,8 @@ int main(int argc, char** argv) try {
         const cl::Buffer out = Device(ctx, size_t(n) * (shadow ? 1 : sizeof(RcHit)));
         shade.radiance = Device(ctx, size_t(n) * sizeof(rc_float4));
         shade.normals = Device(ctx, size_t(n) * sizeof(rc_float4));
-        shade.shadow = Device(ctx, size_t(n) * nLights * sizeof(RcShadowRay));
+        shade.shadow = {Device(ctx, size_t(n) * nLights * sizeof(RcRay)),
+                        Device(ctx, size_t(n) * nLights * sizeof(rc_float4))};
         shade.secondary = {Device(ctx, 2 * size_t(n) * sizeof(RcRay)),
                            Device(ctx, 2 * size_t(n) * sizeof(RcRayInfo))};
         shade.spawned = Device(ctx, 2 * size_t(n));
@@ -429,7 +421,7 @@ int main(int argc, char** argv) try {
                 const double host0 = q->HostSeconds();
                 const auto tq = Clock::now();
                 if (shadow) {
-                    tests = q->Occluded(raysBuf, shadowRays, out, timer);
+                    tests = q->Occluded(raysBuf, rays, out, timer);
                 } else {
                     std::unique_ptr<render::PreparedBatch> prepared = q->Prepare(raysBuf, n, queue);
                     tests = q->Intersect(raysBuf, n, prepared.get(), out, shade, timer).tests;

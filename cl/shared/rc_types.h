@@ -125,13 +125,11 @@ typedef struct RcHit {
     float u, v;
 } RcHit;
 
-/* A light's contribution that becomes visible if the shadow ray from origin to the light is
- * unblocked. origin.w = 0, direction.w = distance to the light. 48 bytes. */
-typedef struct RcShadowRay {
-    rc_float4 origin;
-    rc_float4 direction;
-    rc_float4 contribution; /* rgb; w = 1 when the ray is live; an empty slot is all zeros */
-} RcShadowRay;
+/* A shadow ray is split the same way: an RcRay from the offset hit point (tmin 0) toward the
+ * light (tmax = distance to the light), all the occlusion query and the classification read,
+ * and a float4 of the same index holding the light's contribution that becomes visible if the
+ * ray is unblocked (rgb; w = 1 when the slot is live). An empty slot is all zeros in both: its
+ * ray has no direction (it misses at once) and it contributes nothing. */
 
 /* Scalar parameters of a render passed to every kernel. 64 bytes. */
 typedef struct RcRenderParams {

@@ -18,7 +18,6 @@ static_assert(sizeof(RcCamera) == 80);
 static_assert(sizeof(RcRay) == 32);
 static_assert(sizeof(RcRayInfo) == 32);
 static_assert(sizeof(RcHit) == 16);
-static_assert(sizeof(RcShadowRay) == 48);
 static_assert(sizeof(RcRenderParams) == 64);
 static_assert(sizeof(RcLeaf) == 32);
 static_assert(sizeof(RcCandidate) == 8);
@@ -29,8 +28,7 @@ static_assert(offsetof(RcBvhNode, first) == 32);
 static_assert(alignof(RcTriangle) == 16 && alignof(RcTriangleShading) == 16 &&
               alignof(RcSphere) == 16 && alignof(RcQuadric) == 16 && alignof(RcMaterial) == 16 &&
               alignof(RcLight) == 16 && alignof(RcCamera) == 16 && alignof(RcRay) == 16 &&
-              alignof(RcRayInfo) == 16 && alignof(RcShadowRay) == 16 &&
-              alignof(RcRenderParams) == 16);
+              alignof(RcRayInfo) == 16 && alignof(RcRenderParams) == 16);
 static_assert(alignof(RcHit) == 4);
 
 // Scalars after the vectors, and the vectors of RcRenderParams after its eight scalars.

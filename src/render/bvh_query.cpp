@@ -26,7 +26,7 @@ class BvhQuery final : public RayQuery {
         return {SumTests(n), false};
     }
 
-    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
+    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
                       const cl::Buffer& blocked, KernelTimer& timer) override {
         const uint32_t n = uint32_t(hostRays.size());
         Run(occluded_, shadowRays, n, blocked, timer);

@@ -40,7 +40,7 @@ class BruteForceQuery final : public RayQuery {
         return {uint64_t(n) * (p.nTriangles + p.nSpheres + p.nQuadrics), false};
     }
 
-    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
+    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
                       const cl::Buffer& blocked, KernelTimer& timer) override {
         const uint32_t n = uint32_t(hostRays.size());
         const cl::Buffer& tests = testsBuffer_.Reserve(ctx_, n * sizeof(uint32_t));
@@ -277,12 +277,13 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     ShadeBuffers shade;
     shade.radiance = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
     shade.normals = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
-    shade.shadow = DeviceBuffer(ctx_, batch * nLights * sizeof(RcShadowRay));
+    shade.shadow = {DeviceBuffer(ctx_, batch * nLights * sizeof(RcRay)),
+                    DeviceBuffer(ctx_, batch * nLights * sizeof(rc_float4))};
     shade.secondary = {DeviceBuffer(ctx_, 2 * batch * sizeof(RcRay)),
                        DeviceBuffer(ctx_, 2 * batch * sizeof(RcRayInfo))};
     shade.spawned = DeviceBuffer(ctx_, 2 * batch);
-    const cl::Buffer &radiance = shade.radiance, &normals = shade.normals, &shadow = shade.shadow,
-                     &spawned = shade.spawned;
+    const cl::Buffer &radiance = shade.radiance, &normals = shade.normals, &spawned = shade.spawned;
+    const ShadowBuffers& shadow = shade.shadow;
     const RayBuffers& secondary = shade.secondary;
     cl::Buffer blocked = DeviceBuffer(ctx_, batch * nLights);
     cl::Buffer liveSlots = DeviceBuffer(ctx_, 2 * batch * sizeof(uint32_t));
@@ -364,14 +365,18 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                 SetArgs(shadeKernel, rays.rays, rays.info, hits, n, sceneBuffers.triangles,
                         sceneBuffers.triangleShading, sceneBuffers.spheres, sceneBuffers.quadrics,
                         sceneBuffers.materials, sceneBuffers.lights, sceneBuffers.params, radiance,
-                        normals, shadow, secondary.rays, secondary.info, spawned);
+                        normals, shadow.rays, shadow.contribution, secondary.rays, secondary.info,
+                        spawned);
                 Launch(ctx_, shadeKernel, n, timer);
             }
-            // Read in place by the shadow query's classification and the accumulation below.
+            // The rays are read in place by the shadow query's classification, the contributions
+            // by the accumulation below.
             const uint32_t nShadow = n * nLights;
-            clrt::MappedRead<RcShadowRay> shadowRays(q, shadow, nShadow);
-            const RcShadowRay* hostShadow = shadowRays.data();
-            stats.intersectionTests += query->Occluded(shadow, shadowRays.span(), blocked, timer);
+            clrt::MappedRead<RcRay> shadowRays(q, shadow.rays, nShadow);
+            clrt::MappedRead<rc_float4> shadowContribution(q, shadow.contribution, nShadow);
+            const rc_float4* hostContribution = shadowContribution.data();
+            stats.intersectionTests +=
+                query->Occluded(shadow.rays, shadowRays.span(), blocked, timer);
             clrt::Check("clEnqueueReadBuffer", [&] {
                 q.enqueueReadBuffer(radiance, CL_FALSE, 0, n * sizeof(rc_float4),
                                     hostRadiance.data());
@@ -397,11 +402,11 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                 glm::vec3& px = img.rgb[pixel];
                 px += glm::vec3(hostRadiance[i].x, hostRadiance[i].y, hostRadiance[i].z);
                 for (uint32_t l = 0; l < nLights; ++l) {
-                    const RcShadowRay& s = hostShadow[size_t(i) * nLights + l];
-                    if (s.contribution.w == 0.0f) continue;
+                    const rc_float4& c = hostContribution[size_t(i) * nLights + l];
+                    if (c.w == 0.0f) continue;
                     ++gen.shadowRays;
                     if (!hostBlocked[size_t(i) * nLights + l]) {
-                        px += glm::vec3(s.contribution.x, s.contribution.y, s.contribution.z);
+                        px += glm::vec3(c.x, c.y, c.z);
                     }
                 }
                 for (uint32_t k = 0; k < 2; ++k) {
@@ -418,7 +423,9 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                 }
             }
             hostSeconds += SecondsSince(tHost);
-            shadowRays.Unmap();  // before the next batch's shading writes the buffer
+            // Before the next batch's shading writes the buffers.
+            shadowRays.Unmap();
+            shadowContribution.Unmap();
 
             AppendToPages(ctx_, compactKernel, secondary, liveSlots, hostLive,
                           nextPixels.size() - hostLive.size(), pool, nextPages, timer);

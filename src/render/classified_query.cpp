@@ -108,15 +108,14 @@ class ClassifiedQuery final : public RayQuery {
         return Query(batch, rays, hits, &shade, timer);
     }
 
-    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
+    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
                       const cl::Buffer& blocked, KernelTimer& timer) override {
         const uint32_t n = uint32_t(hostRays.size());
         if (n == 0) return 0;
         clrt::Check("clEnqueueFillBuffer",
                     [&] { ctx_.queue().enqueueFillBuffer(blocked, uint8_t(0), 0, n); });
         // Every slot: empty ones have no direction and miss at once.
-        static_assert(sizeof(classify::Ray) == offsetof(RcShadowRay, contribution));
-        Classify(shadowHierarchy_, classify::RayView(hostRays.data(), n, sizeof(RcShadowRay)),
+        Classify(shadowHierarchy_, classify::RayView(hostRays.data(), n, sizeof(RcRay)),
                  classify::RayUse::kAnyHit, shadowBatch_, ShadowStyle());
         shadowFromLight_ += shadowHierarchy_.Counters().fromEnd;
         return Query(shadowBatch_, shadowRays, blocked, nullptr, timer).tests;
@@ -255,8 +254,9 @@ class ClassifiedQuery final : public RayQuery {
                 SetArgs(k, rays, shade->rayInfo, *slots, *slotLeaf, nSlots, leaves, leafFirstBlock,
                         blocks, out, testsBuf, scene_.triangles, scene_.triangleShading,
                         scene_.spheres, scene_.quadrics, scene_.materials, scene_.lights,
-                        scene_.params, shade->radiance, shade->normals, shade->shadow,
-                        shade->secondary.rays, shade->secondary.info, shade->spawned);
+                        scene_.params, shade->radiance, shade->normals, shade->shadow.rays,
+                        shade->shadow.contribution, shade->secondary.rays, shade->secondary.info,
+                        shade->spawned);
             }
             AddHostSeconds(Seconds(t1));
             Launch(ctx_, gather_, nBlocks, timer);
@@ -316,12 +316,13 @@ class ClassifiedQuery final : public RayQuery {
             const uint32_t withLights = 0;
             SetArgs(shadeIds_, rays, shade->rayInfo, out, ids, nIds, withLights, scene_.triangles,
                     scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
-                    scene_.lights, scene_.params, shade->radiance, shade->normals, shade->shadow,
-                    shade->secondary.rays, shade->secondary.info, shade->spawned);
+                    scene_.lights, scene_.params, shade->radiance, shade->normals,
+                    shade->shadow.rays, shade->shadow.contribution, shade->secondary.rays,
+                    shade->secondary.info, shade->spawned);
             Launch(ctx_, shadeIds_, nIds, timer);
             SetArgs(shadeLights_, rays, shade->rayInfo, out, ids, nIds, scene_.triangles,
                     scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
-                    scene_.lights, scene_.params, shade->shadow);
+                    scene_.lights, scene_.params, shade->shadow.rays, shade->shadow.contribution);
             Launch(ctx_, shadeLights_, size_t(nIds) * scene_.hostParams.nLights, timer);
         }
         return {tests, true};

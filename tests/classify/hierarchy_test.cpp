@@ -331,9 +331,9 @@ TEST(Hierarchy, InsertAppendsRaysOfOneGeneration) {
     }
 }
 
-// The renderer classifies rays in place inside RcRay (8 floats) and RcShadowRay (12) records: a
-// strided view must give exactly the leaves of the packed rays (the vector path and the scalar
-// tail alike).
+// The renderer classifies rays in place inside RcRay records (8 floats); other records that begin
+// with a ray (here 12 floats) are read through the generic strided path: a strided view must give
+// exactly the leaves of the packed rays (the vector path and the scalar tail alike).
 TEST(Hierarchy, StridedViewsClassifyLikePackedRays) {
     const scene::Scene s = RandomScene(65, 200, 4, 2);
     auto rays = RandomRays(66, 1003);

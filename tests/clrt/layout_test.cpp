@@ -106,11 +106,6 @@ std::vector<Entry> HostLayout() {
     RC_FIELD(RcHit, u);
     RC_FIELD(RcHit, v);
 
-    RC_STRUCT(RcShadowRay);
-    RC_FIELD(RcShadowRay, origin);
-    RC_FIELD(RcShadowRay, direction);
-    RC_FIELD(RcShadowRay, contribution);
-
     RC_STRUCT(RcRenderParams);
     RC_FIELD(RcRenderParams, nTriangles);
     RC_FIELD(RcRenderParams, nSpheres);

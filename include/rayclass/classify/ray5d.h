@@ -38,8 +38,8 @@ struct Ray {
     float tMax = 3.402823466e38f;
 };
 
-// Rays read in place from records that begin with a Ray's fields (RcRay, RcShadowRay, a mapped
-// device buffer of them): `stride` bytes from one ray to the next, a multiple of 4.
+// Rays read in place from records that begin with a Ray's fields (RcRay, a mapped device buffer
+// of them): `stride` bytes from one ray to the next, a multiple of 4.
 class RayView {
   public:
     RayView() = default;

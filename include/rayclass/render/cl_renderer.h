@@ -42,12 +42,19 @@ struct RayBuffers {
     cl::Buffer rays, info;
 };
 
+// Shadow slots as their two parallel arrays (rc_types.h): RcRay toward the light, all the
+// occlusion query reads, and the light's contribution (rc_float4, w = 1 when the slot is live).
+struct ShadowBuffers {
+    cl::Buffer rays, contribution;
+};
+
 // What shading reads and writes per batch (see cl/shade.cl): it reads the batch's RcRayInfo and
 // writes radiance and normal per ray, nLights shadow slots per ray, two secondary slots per ray
 // and their spawned flags.
 struct ShadeBuffers {
     cl::Buffer rayInfo;  // the batch's, set for each batch
-    cl::Buffer radiance, normals, shadow;
+    cl::Buffer radiance, normals;
+    ShadowBuffers shadow;
     RayBuffers secondary;
     cl::Buffer spawned;
 };
@@ -94,9 +101,9 @@ class RayQuery {
     virtual QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
                                   const cl::Buffer& hits, const ShadeBuffers& shade,
                                   KernelTimer& timer) = 0;
-    // blocked[i] = 1 when shadow ray i (RcShadowRay, live ones only) hits anything before its
-    // light; returns the primitive tests done.
-    virtual uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcShadowRay> hostRays,
+    // blocked[i] = 1 when shadow ray i (RcRay, tmax = distance to the light; empty slots have
+    // no direction) hits anything before its light; returns the primitive tests done.
+    virtual uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
                               const cl::Buffer& blocked, KernelTimer& timer) = 0;
 };
 
