@@ -287,17 +287,16 @@ typedef struct RcLanes16 {
 } RcLanes16;
 
 /* The rays of a packet as lanes: the leaf's rays [first, first + 16), unused lanes repeating the
- * first ray (their results are not written); ids[k] is lane k's ray. `rays` are records of
- * `stride` float4s that start with origin (w: tmin) and direction (w: tmax): RcRay (2), for
- * shadow rays too. The records are read as float4 into registers and transposed there:
+ * first ray (their results are not written); ids[k] is lane k's ray (RcRay: origin, w: tmin;
+ * direction, w: tmax; shadow rays too). The rays are read as float4 into registers and
+ * transposed there:
  * lanes written one float at a time to private arrays and read back as float16 cost half the
  * fragment kernel's time on PoCL (the arrays become per-work-item context memory). */
 #define RC_LANES16(a, f)                                                                         \
     (float16)(a[0].f, a[1].f, a[2].f, a[3].f, a[4].f, a[5].f, a[6].f, a[7].f, a[8].f, a[9].f,  \
               a[10].f, a[11].f, a[12].f, a[13].f, a[14].f, a[15].f)
-RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const float4* rays, uint stride,
-                                         __global const uint* rayIndex, RcLeaf leaf, uint first,
-                                         uint* ids) {
+RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const RcRay* rays, __global const uint* rayIndex,
+                                         RcLeaf leaf, uint first, uint* ids) {
     const uint count = min(16u, leaf.rayCount - first);
     __global const uint* index = rayIndex + leaf.rayBegin + first;
     float4 o[16], d[16];
@@ -305,8 +304,8 @@ RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const float4* rays, uint strid
     for (uint k = 0; k < 16; ++k) {
         const uint id = index[k < count ? k : 0];
         ids[k] = id;
-        o[k] = rays[id * stride];
-        d[k] = rays[id * stride + 1];
+        o[k] = rays[id].origin;
+        d[k] = rays[id].direction;
     }
     RcLanes16 l;
     l.ox = RC_LANES16(o, x);
@@ -344,8 +343,7 @@ RC_SHADE_INLINE void rc_store_lanes(const RcLanes16* L, RcLaneArrays16* a) {
 /* On a CPU device (PoCL compiles the kernels for the host's x86-64) the next work-item a thread
  * runs is the next packet: fetching that packet's rays while this one tests its candidates hides
  * the cache misses of its scattered ray loads. */
-RC_SHADE_INLINE void rc_prefetch_packet(__global const float4* rays, uint stride,
-                                        __global const uint* rayIndex,
+RC_SHADE_INLINE void rc_prefetch_packet(__global const RcRay* rays, __global const uint* rayIndex,
                                         __global const RcLeaf* leaves,
                                         __global const uint* packetLeaf,
                                         __global const uint* packetFirst, uint p, uint nPackets) {
@@ -355,7 +353,7 @@ RC_SHADE_INLINE void rc_prefetch_packet(__global const float4* rays, uint stride
     const uint first = packetFirst[p];
     const uint count = min(16u, leaf.rayCount - first);
     __global const uint* index = rayIndex + leaf.rayBegin + first;
-    for (uint k = 0; k < count; ++k) __builtin_prefetch(rays + index[k] * stride);
+    for (uint k = 0; k < count; ++k) __builtin_prefetch(rays + index[k]);
 #endif
 }
 
@@ -396,10 +394,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     const RcLeaf leaf = leaves[packetLeaf[p]];
     const uint count = min(16u, leaf.rayCount - packetFirst[p]);
     uint ids[16];
-    const RcLanes16 L = rc_load_packet((__global const float4*)rays, sizeof(rays[0]) / 16, rayIndex,
-                                       leaf, packetFirst[p], ids);
-    rc_prefetch_packet((__global const float4*)rays, sizeof(rays[0]) / 16, rayIndex, leaves,
-                       packetLeaf, packetFirst, p + 1, nPackets);
+    const RcLanes16 L = rc_load_packet(rays, rayIndex, leaf, packetFirst[p], ids);
+    rc_prefetch_packet(rays, rayIndex, leaves, packetLeaf, packetFirst, p + 1, nPackets);
     float16 bestT = L.tmax, bestU = 0.0f, bestV = 0.0f;
     uint16 bestPrim = (uint16)(RC_NO_HIT);
     const uint nT = params->nTriangles, nS = params->nSpheres;
@@ -483,10 +479,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const RcLeaf leaf = leaves[packetLeaf[p]];
     const uint count = min(16u, leaf.rayCount - packetFirst[p]);
     uint ids[16];
-    const RcLanes16 L = rc_load_packet((__global const float4*)rays, sizeof(rays[0]) / 16, rayIndex,
-                                       leaf, packetFirst[p], ids);
-    rc_prefetch_packet((__global const float4*)rays, sizeof(rays[0]) / 16, rayIndex, leaves,
-                       packetLeaf, packetFirst, p + 1, nPackets);
+    const RcLanes16 L = rc_load_packet(rays, rayIndex, leaf, packetFirst[p], ids);
+    rc_prefetch_packet(rays, rayIndex, leaves, packetLeaf, packetFirst, p + 1, nPackets);
     const float16 endX = L.x + select(L.tmin, L.tmax, L.dX > 0.0f) * L.dX;
     int16 hit = (int16)(0);
     const uint nT = params->nTriangles, nS = params->nSpheres;

@@ -65,15 +65,19 @@ void main() {
     if (zmax <= 0.0) return;  // every eye ray runs towards +z: nothing behind the eye is hit
     gNear = 0.9999 * max(zmin, 0.0);  // a hit's distance is at least its view depth
     vec3 n = cross(b - a, c - a);
+    // Plane (nearly) through the eye: rays almost parallel to it make the float test's determinant
+    // pure rounding noise, so the kernel can report "hits" anywhere along the plane's trace, far
+    // outside the triangle.
+    float rmax = max(length(a), max(length(b), length(c)));
+    bool throughEye = abs(dot(n, a)) < 1e-3 * length(n) * rmax;
     if (zmin < uZNear) {
         // An eye ray meets view depths below uZNear only inside the frustum's tip, whose corners
         // lie reach / 2 from the eye. A plane farther off than that (a wall or floor passing
         // beside the eye) has all its hits beyond uZNear: bound the part of the triangle there.
-        // A plane nearly through the eye (below) may get "hits" anywhere along its trace, and
-        // its vertices behind the eye do not project: it still covers the screen.
+        // A plane through the eye's trace cannot be covered by projecting vertices behind the
+        // eye: it still covers the screen.
         float reach = 2.0 * uZNear * length(vec3(uTanHalfFov, 1.0));
-        float rmax = max(length(a), max(length(b), length(c)));
-        if (abs(dot(n, a)) <= max(reach, 1e-3 * rmax) * length(n)) {
+        if (throughEye || abs(dot(n, a)) <= reach * length(n)) {
             EmitFullScreen();
             return;
         }
@@ -98,12 +102,9 @@ void main() {
         return;
     }
     vec2 A = ToPixel(a), B = ToPixel(b), C = ToPixel(c);
-    // Plane (nearly) through the eye: rays almost parallel to it make the float test's determinant
-    // pure rounding noise, so the kernel can report "hits" anywhere along the plane's trace, far
-    // outside the triangle. Cover the whole trace line across the screen, as thick as the
-    // triangle's projection plus the margin.
-    float rmax = max(length(a), max(length(b), length(c)));
-    if (abs(dot(n, a)) < 1e-3 * length(n) * rmax && length(n.xy) > 1e-6 * length(n)) {
+    // Through the eye: cover the whole trace line across the screen, as thick as the triangle's
+    // projection plus the margin.
+    if (throughEye && length(n.xy) > 1e-6 * length(n)) {
         vec2 m = normalize(vec2(n.x, -n.y));  // the trace's normal in pixels (rows run down)
         vec2 along = vec2(-m.y, m.x);
         float reach = length(vec2(uSize)) + length(A - 0.5 * vec2(uSize));
