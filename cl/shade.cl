@@ -244,21 +244,22 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
     rc_shade_ray(i, &ray, &info, hits[i], 1, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
 }
 
-/* The rays ids[0, nIds) of the batch; lights only when withLights (else rc_shade_lights). */
+/* The rays ids[0, nIds) of the batch, or its rays [0, nIds) when ids is null (the fragment pass
+ * answered them all, and a list 0, 1, 2, ... would cost a host pass and a copy); their lights
+ * are rc_shade_lights'. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade_ids(
     __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits,
-    __global const uint* ids, uint nIds, uint withLights, RC_SHADE_SCENE_PARAMS,
-    RC_SHADE_OUT_PARAMS) {
+    __global const uint* ids, uint nIds, RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
     const uint j = get_global_id(0);
     if (j >= nIds) return;
-    const uint i = ids[j];
+    const uint i = ids ? ids[j] : j;
     const RcRay ray = rays[i];
     const RcRayInfo info = infos[i];
-    rc_shade_ray(i, &ray, &info, hits[i], (int)withLights, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
+    rc_shade_ray(i, &ray, &info, hits[i], 0, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
 }
 
-/* The thesis's second fragment pass: one work-item per (ray, light) pair of the rays ids[0, nIds),
- * so every lane of a vector does the same light computation. */
+/* The thesis's second fragment pass: one work-item per (ray, light) pair of the rays ids[0, nIds)
+ * (or [0, nIds) when ids is null), so every lane of a vector does the same light computation. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade_lights(
     __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits,
     __global const uint* ids, uint nIds, RC_SHADE_SCENE_PARAMS, __global RcRay* shadowRays,
@@ -266,7 +267,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
     const uint j = get_global_id(0);
     const uint nLights = params->nLights;
     if (j >= nIds * nLights) return;
-    const uint i = ids[j / nLights], l = j % nLights;
+    const uint i = ids ? ids[j / nLights] : j / nLights, l = j % nLights;
     const RcHit hit = hits[i];
     if (hit.prim == RC_NO_HIT) {
         rc_no_shadow(shadowRays, shadowContribution, i * nLights + l);

@@ -292,10 +292,7 @@ class ClassifiedQuery final : public RayQuery {
         // slot order: shading then walks the batch's arrays in order, not leaf by leaf.
         const auto tUnshaded = Clock::now();
         unshaded_.clear();
-        if (cb.vertexLeaves.empty()) {
-            unshaded_.resize(cb.batch.nRays);
-            std::iota(unshaded_.begin(), unshaded_.end(), 0u);
-        } else {
+        if (!cb.vertexLeaves.empty()) {
             shadedByVertex_.assign(cb.batch.nRays, 0);
             for (uint32_t l : cb.vertexLeaves) {
                 const RcLeaf& leaf = cb.batch.leaves[l];
@@ -308,13 +305,14 @@ class ClassifiedQuery final : public RayQuery {
             }
         }
         AddHostSeconds(Seconds(tUnshaded));
-        if (!unshaded_.empty()) {
+        // Without vertex-style leaves every ray is left: the kernels take a null id list.
+        const bool allRays = cb.vertexLeaves.empty();
+        if (allRays || !unshaded_.empty()) {
             // The thesis's fragment pass 2: per ray (radiance, secondary rays), then per
             // (ray, light) pair (shadow rays).
-            const uint32_t nIds = uint32_t(unshaded_.size());
-            const cl::Buffer& ids = unshadedBuf_.Upload(ctx_, unshaded_);
-            const uint32_t withLights = 0;
-            SetArgs(shadeIds_, rays, shade->rayInfo, out, ids, nIds, withLights, scene_.triangles,
+            const uint32_t nIds = allRays ? cb.batch.nRays : uint32_t(unshaded_.size());
+            const cl::Buffer ids = allRays ? cl::Buffer() : unshadedBuf_.Upload(ctx_, unshaded_);
+            SetArgs(shadeIds_, rays, shade->rayInfo, out, ids, nIds, scene_.triangles,
                     scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
                     scene_.lights, scene_.params, shade->radiance, shade->normals,
                     shade->shadow.rays, shade->shadow.contribution, shade->secondary.rays,
