@@ -5,10 +5,12 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 
+#include <algorithm>
 #include <climits>
 #include <cstddef>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "formats.h"
 
@@ -48,6 +50,10 @@ bool HasChannel(const Imf::ChannelList& channels, const char* name) {
     return channel && channel->xSampling == 1 && channel->ySampling == 1;
 }
 
+// ZIP compression of a 1024x768 image with its AOV layers took 0.3 s on one thread, as long as
+// the render of Sibenik; OpenEXR compresses blocks of lines on its own threads.
+int ExrThreads() { return int(std::max(1u, std::thread::hardware_concurrency())); }
+
 }  // namespace
 
 void WriteExr(const Image& image, OutFile& file, const std::string& name) {
@@ -76,13 +82,13 @@ void WriteExr(const Image& image, OutFile& file, const std::string& name) {
     ExrStream stream(file, name);
     // The line offset table is written by the destructor, which swallows errors; OutFile keeps
     // them for the caller.
-    Imf::OutputFile output(stream, header);
+    Imf::OutputFile output(stream, header, ExrThreads());
     output.setFrameBuffer(frame);
     output.writePixels(int(image.height));
 }
 
 Image ReadExr(const std::filesystem::path& path) {
-    Imf::InputFile input(path.c_str());
+    Imf::InputFile input(path.c_str(), ExrThreads());
     const Imf::Header& header = input.header();
     const Imath::Box2i& window = header.dataWindow();
     const Imf::ChannelList& channels = header.channels();
