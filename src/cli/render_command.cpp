@@ -39,7 +39,8 @@ options:
   --device D              OpenCL device: auto (first GPU, else CPU), gpu, cpu or an index
                           from 'rayclass devices' (default auto)
   --accel A               ray query: classify (5D ray classification, default), bvh
-                          (binned-SAH BVH, same kernels' routines) or brute
+                          (binned-SAH BVH, same kernels' routines), auto (per generation,
+                          the classification until a sample shows the BVH cheaper) or brute
   --kernel K              classified query kernels: auto (default), vertex, fragment, scalar
   --classify NAME=VALUE   a cost-function setting of the classification (repeatable): min-rays,
                           min-candidates, splits-per-list, split (midpoint|median),
@@ -136,9 +137,9 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
         } else if (a == "--accel") {
             r.options.accel = value();
             if (r.options.accel != "classify" && r.options.accel != "brute" &&
-                r.options.accel != "bvh") {
-                throw UsageError("--accel must be classify, bvh or brute, not '" + r.options.accel +
-                                 "'");
+                r.options.accel != "bvh" && r.options.accel != "auto") {
+                throw UsageError("--accel must be classify, bvh, auto or brute, not '" +
+                                 r.options.accel + "'");
             }
         } else if (a == "--classify") {
             const std::string& setting = value();

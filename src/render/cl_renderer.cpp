@@ -6,6 +6,7 @@
 
 #include "rayclass/classify/params.h"
 #include "rayclass/clrt/mapped.h"
+#include "rayclass/render/auto_query.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/launch.h"
@@ -124,12 +125,15 @@ std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& progr
                                     const SceneBuffers& buffers, const scene::Scene& scene,
                                     const RenderOptions& options, RenderStats& stats) {
     if (options.accel == "brute") return MakeBruteForceQuery(ctx, program, buffers);
-    const auto t0 = Clock::now();
-    if (options.accel == "bvh") {
+    // The caller keeps ctx, program, buffers, scene and stats alive longer than the query.
+    auto makeBvh = [&ctx, &program, &buffers, &scene, &stats] {
+        const auto t0 = Clock::now();
         auto query = MakeBvhQuery(ctx, program, buffers, scene);
         stats.timeS["bvh_build"] = SecondsSince(t0);
         return query;
-    }
+    };
+    if (options.accel == "bvh") return makeBvh();
+    const auto t0 = Clock::now();
     classify::Params params = classify::Params::ForScene(scene);
     for (const auto& [name, value] : options.classifyParams) {
         classify::SetParam(params, name, value);
@@ -140,6 +144,7 @@ std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& progr
                                   : ParseKernelStyle(options.kernel);
     auto query = MakeClassifiedQuery(ctx, program, buffers, scene, params, style);
     stats.timeS["classify_setup"] = SecondsSince(t0);
+    if (options.accel == "auto") return MakeAutoQuery(ctx, std::move(query), makeBvh);
     return query;
 }
 
@@ -157,7 +162,9 @@ void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& q
         }
     }
     stats.timeS["host"] = hostSeconds;
-    if (stats.accel.starts_with("classify")) stats.timeS["host_classify"] = query.HostSeconds();
+    if (stats.accel.starts_with("classify") || stats.accel == "auto") {
+        stats.timeS["host_classify"] = query.HostSeconds();
+    }
     stats.timeS["render"] = SecondsSince(tStart);
     // What neither the kernels' profiling nor the host timers cover: copies between host and
     // device, buffer allocation, launch overhead and waiting.
@@ -335,6 +342,11 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         // The pages are complete: a worker reads batch k + 1 back and classifies it while the
         // device queries and shades batch k.
         clrt::Check("clFinish", [&] { q.finish(); });
+        const auto tGeneration = Clock::now();
+        if (!(generation == 0 && eyeHits_)) {
+            query->BeginGeneration(generation, pages[0].rays, uint32_t(std::min(batch, nRays)),
+                                   timer);
+        }
         auto prepare = [&](size_t page) -> std::unique_ptr<PreparedBatch> {
             if (generation == 0 && eyeHits_) return nullptr;
             return query->Prepare(pages[page].rays, uint32_t(std::min(batch, nRays - page * batch)),
@@ -444,6 +456,9 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         stats.raysByKind["reflection"] += nReflection;
         stats.raysByKind["refraction"] += nRefraction;
         gen.spawned = nextPixels.size();
+        gen.seconds = SecondsSince(tGeneration);
+        query->DescribeGeneration(gen);
+        if (generation == 0 && eyeHits_) gen.query = eyeHits_->Name();
         stats.raysByKind["shadow"] += gen.shadowRays;
         stats.generations.push_back(gen);
         std::swap(pages, nextPages);

@@ -20,7 +20,18 @@ nlohmann::json RenderStats::ToJson() const {
     j["rays_by_kind"] = raysByKind;
     nlohmann::json gens = nlohmann::json::array();
     for (const auto& g : generations) {
-        gens.push_back({{"rays", g.rays}, {"shadow_rays", g.shadowRays}, {"spawned", g.spawned}});
+        nlohmann::json gen = {{"rays", g.rays},       {"shadow_rays", g.shadowRays},
+                              {"spawned", g.spawned}, {"seconds", g.seconds},
+                              {"query", g.query},     {"shadow_query", g.shadowQuery}};
+        const std::pair<const char*, double> costs[] = {
+            {"classified_predicted", g.classifiedNs},
+            {"bvh_sample", g.bvhSampleNs},
+            {"shadow_classified_predicted", g.shadowClassifiedNs},
+            {"shadow_bvh_sample", g.shadowBvhSampleNs}};
+        for (const auto& [name, ns] : costs) {
+            if (ns > 0) gen["auto_ns_per_ray"][name] = ns;
+        }
+        gens.push_back(gen);
     }
     j["rays_by_generation"] = gens;
     j["intersection_tests"] = intersectionTests;

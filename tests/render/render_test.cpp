@@ -2,6 +2,7 @@
 // scene. Float and double differ in the last bits of every hit, so images are compared by error
 // statistics and id layers by a small count of mismatching pixels (silhouettes and grazing hits,
 // where a float ray may pass on the other side of an edge than the double one).
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -10,6 +11,7 @@
 
 #include "rayclass/clrt/context.h"
 #include "rayclass/image/compare.h"
+#include "rayclass/render/auto_query.h"
 #include "rayclass/render/cl_renderer.h"
 #include "rayclass/render/reference.h"
 #include "rayclass/scene/loader.h"
@@ -115,6 +117,60 @@ TEST_P(RenderMatchesReference, WithinBounds) {
         EXPECT_EQ(stats.accel, "bvh");
         EXPECT_LE(stats.intersectionTests, bruteStats.intersectionTests) << "bvh";
     }
+    // Auto hands generations to the BVH as it measures them cheaper: whichever answers, the
+    // image is the same. Its choice is timed, so which generations switch may vary (on these
+    // small scenes the BVH has won from generation 1 in every run seen), but the classification
+    // answers generation 0 and the BVH, once chosen, keeps a kind of query.
+    {
+        options.accel = "auto";
+        options.kernel = "auto";
+        RenderStats stats;
+        const image::Image img = ClRenderer(SharedContext(), scene, options).Render(stats);
+        const image::ImageComparison same = image::Compare(img, brute);
+        EXPECT_EQ(same.idMismatchPixels, 0u) << "auto";
+        EXPECT_EQ(same.maxAbsError, 0.0) << "auto";
+        EXPECT_EQ(stats.RaysTotal(), bruteStats.RaysTotal()) << "auto";
+        EXPECT_EQ(stats.accel, "auto");
+        ASSERT_FALSE(stats.generations.empty());
+        EXPECT_EQ(stats.generations[0].query, "classify/auto");
+        EXPECT_EQ(stats.generations[0].shadowQuery, "classify/auto");
+        bool nearestOnBvh = false, shadowOnBvh = false;
+        for (size_t g = 0; g < stats.generations.size(); ++g) {
+            const GenerationStats& gen = stats.generations[g];
+            EXPECT_THAT(gen.query, testing::AnyOf("classify/auto", "bvh")) << g;
+            EXPECT_THAT(gen.shadowQuery, testing::AnyOf("classify/auto", "bvh")) << g;
+            if (nearestOnBvh) {
+                EXPECT_EQ(gen.query, "bvh") << g;
+            }
+            if (shadowOnBvh) {
+                EXPECT_EQ(gen.shadowQuery, "bvh") << g;
+            }
+            nearestOnBvh = gen.query == "bvh";
+            shadowOnBvh = gen.shadowQuery == "bvh";
+            // A switch is backed by the two costs it compared.
+            if (g > 0 && gen.query == "bvh" && stats.generations[g - 1].query != "bvh") {
+                EXPECT_GT(gen.bvhSampleNs, 0.0) << g;
+                EXPECT_LT(gen.bvhSampleNs, gen.classifiedNs) << g;
+            }
+        }
+    }
+}
+
+TEST(AutoQueryCosts, TheBvhAnswersOnlyWhenBothWereMeasuredAndItsSampleCostLess) {
+    EXPECT_FALSE((QueryCosts{0, 0, 1e-7}.PreferBvh()));     // nothing classified yet
+    EXPECT_FALSE((QueryCosts{2e-7, 0, 0}.PreferBvh()));     // no sample
+    EXPECT_FALSE((QueryCosts{2e-7, 0, 3e-7}.PreferBvh()));  // the sample cost more
+    EXPECT_TRUE((QueryCosts{2e-7, 0, 1e-7}.PreferBvh()));
+}
+
+TEST(AutoQueryCosts, TheClassificationIsPredictedToGrowAsItDidLastTime) {
+    EXPECT_DOUBLE_EQ((QueryCosts{2e-7, 0, 0}.PredictedClassified()), 2e-7);  // one measurement
+    EXPECT_DOUBLE_EQ((QueryCosts{3e-7, 2e-7, 0}.PredictedClassified()), 4.5e-7);
+    // Growth is bounded to [1, 2]: one noisy generation cannot predict a fourfold rise.
+    EXPECT_DOUBLE_EQ((QueryCosts{8e-7, 2e-7, 0}.PredictedClassified()), 1.6e-6);
+    EXPECT_DOUBLE_EQ((QueryCosts{1e-7, 2e-7, 0}.PredictedClassified()), 1e-7);
+    // So a sample dearer than the last measurement can still win on a growing trend.
+    EXPECT_TRUE((QueryCosts{3e-7, 2e-7, 4e-7}.PreferBvh()));
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, RenderMatchesReference, testing::ValuesIn(kCases),

@@ -92,6 +92,17 @@ class RayQuery {
     virtual double HostSeconds() const { return 0.0; }
     // Shadow rays answered so far that the classification took from their light.
     virtual uint64_t ShadowRaysFromLight() const { return 0; }
+    // Called once all of generation `generation`'s rays are on the device, before its first
+    // Prepare; rays[0, n) (RcRay) are its first batch and the device is idle. A query that
+    // picks its method per generation (auto_query.h) picks it here.
+    virtual void BeginGeneration(uint32_t generation, const cl::Buffer& rays, uint32_t n,
+                                 KernelTimer& timer) {
+        (void)generation, (void)rays, (void)n, (void)timer;
+    }
+    // Says in `gen` what answered the generation's queries, once it is done.
+    virtual void DescribeGeneration(GenerationStats& gen) const {
+        gen.query = gen.shadowQuery = Name();
+    }
     // Forgets what earlier batches built (the classification's splits) but keeps every
     // allocation: the next batch is answered as if by a new query whose memory is already
     // faulted in (raybench --warm measures the steady state this way).

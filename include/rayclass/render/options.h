@@ -17,7 +17,8 @@ struct RenderOptions {
     // half the page faults of 2^20 (104k against 177k) for the same CPU time.
     uint32_t batchRays = 1u << 18;
     std::string device = "auto";    // OpenCL device: auto, cpu, gpu or an index
-    std::string accel = "classify";  // ray query: classify (ray classification), bvh or brute
+    // Ray query: classify (ray classification), bvh, auto (auto_query.h) or brute.
+    std::string accel = "classify";
     // Cost-function settings of the classification (classify::SetParam names and values).
     std::vector<std::pair<std::string, std::string>> classifyParams;
     std::string kernel = "auto";        // classified query style: scalar, vertex, fragment, auto

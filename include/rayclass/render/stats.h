@@ -13,6 +13,12 @@ struct GenerationStats {
     uint64_t rays = 0;        // rays queried for their nearest hit (eye, reflection, refraction)
     uint64_t shadowRays = 0;  // shadow rays queried
     uint64_t spawned = 0;     // secondary rays this generation spawned for the next
+    double seconds = 0;       // wall time from its first batch to its last
+    // What answered its nearest-hit and shadow queries (RayQuery::Name(), or what auto chose).
+    std::string query, shadowQuery;
+    // --accel auto: the costs per ray (ns) its choices compared, the classification's as
+    // predicted (auto_query.h); 0: not measured.
+    double classifiedNs = 0, bvhSampleNs = 0, shadowClassifiedNs = 0, shadowBvhSampleNs = 0;
 };
 
 struct RenderStats {

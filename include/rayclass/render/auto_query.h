@@ -1,0 +1,45 @@
+// The ray query that picks, generation by generation, between the ray classification and the BVH
+// (--accel auto). Coherent generations (eye rays, first bounces) are the classification's; as
+// rays scatter, its host work grows with every bounce, while the BVH's cost per ray stays nearly
+// flat (Conference mirror rays: about 650 ns a ray classified at bounce 3 and 2.8 us at bounce 5,
+// against the BVH's 460 ns). Each generation, the BVH answers a sample of the new rays; when that
+// costs less per ray than the classification is predicted to (from the last two generations),
+// the BVH answers this generation and every later one. Nearest-hit and shadow queries decide apart:
+// shadow rays toward a point light stay coherent at their light's end. Both answer every ray
+// exactly alike (the same primitive routines), so the choice changes the time, never the image.
+#pragma once
+
+#include <algorithm>
+#include <functional>
+#include <memory>
+
+#include "rayclass/render/cl_renderer.h"
+
+namespace rayclass::render {
+
+// Cost per ray in seconds of the two ways to answer a kind of query (nearest hit or shadow),
+// and the rule that picks one.
+struct QueryCosts {
+    double classified = 0;        // the classification's, measured on the last generation
+    double classifiedBefore = 0;  // and on the one before it (0: not measured)
+    double bvhSample = 0;         // the BVH's on a sample of this generation's rays
+
+    // The classification's cost on this generation if it grows by the factor it grew by on the
+    // last (rays scatter further with each bounce), bounded to [1, 2] (a wider bound let one noisy
+    // generation switch too early).
+    double PredictedClassified() const {
+        const double growth = classifiedBefore > 0 ? classified / classifiedBefore : 1.0;
+        return classified * std::clamp(growth, 1.0, 2.0);
+    }
+    // True when the BVH should answer: both were measured and the sample cost less.
+    bool PreferBvh() const {
+        return classified > 0 && bvhSample > 0 && bvhSample < PredictedClassified();
+    }
+};
+
+// `classified` and the query `makeBvh` makes answer the same scene; the BVH is made when the
+// first sample needs it, so a render without secondary rays never builds it.
+std::unique_ptr<RayQuery> MakeAutoQuery(clrt::Context& ctx, std::unique_ptr<RayQuery> classified,
+                                        std::function<std::unique_ptr<RayQuery>()> makeBvh);
+
+}  // namespace rayclass::render

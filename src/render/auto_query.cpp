@@ -1,0 +1,198 @@
+#include "rayclass/render/auto_query.h"
+
+#include <chrono>
+#include <mutex>
+#include <vector>
+
+#include "rayclass/clrt/mapped.h"
+#include "rayclass/render/launch.h"
+
+namespace rayclass::render {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// The BVH's sample: runs of consecutive rays spread evenly over the batch, 16384 rays, a few ms
+// of a generation that takes the BVH 0.3-0.6 s on two cores. Runs, because neighbouring rays
+// share the tree's paths through the cache: a sample of every 48th ray came out 30 % dearer
+// per ray than whole generations (Sibenik with mirror rays).
+constexpr size_t kSampleRuns = 16, kSampleRunRays = 1024;
+
+// One kind of query (nearest hit or shadow) and what its choice is based on.
+struct Choice {
+    bool onBvh = false;  // once the BVH has won, it answers every later generation
+    // A sample has run: the first is run twice, since its first run also pays for compiling
+    // the BVH kernel and faulting in the tree (11 us a ray instead of 0.8 on Sibenik).
+    bool warm = false;
+    QueryCosts costs;  // what the current generation's choice compared
+    // The classification's work on the current generation: seconds and rays.
+    double seconds = 0;
+    uint64_t rays = 0;
+
+    // The current generation's measurements become the classification's cost; a new sample
+    // is to be taken.
+    void NextGeneration() {
+        costs.classifiedBefore = costs.classified;
+        costs.classified = rays > 0 ? seconds / double(rays) : 0.0;
+        costs.bvhSample = 0;
+        seconds = 0;
+        rays = 0;
+    }
+};
+
+class AutoQuery final : public RayQuery {
+  public:
+    AutoQuery(clrt::Context& ctx, std::unique_ptr<RayQuery> classified,
+              std::function<std::unique_ptr<RayQuery>()> makeBvh)
+        : ctx_(ctx), classified_(std::move(classified)), makeBvh_(std::move(makeBvh)) {}
+
+    std::string Name() const override { return "auto"; }
+    double HostSeconds() const override { return classified_->HostSeconds(); }
+    uint64_t ShadowRaysFromLight() const override { return classified_->ShadowRaysFromLight(); }
+
+    void Reset() override {
+        classified_->Reset();
+        if (bvh_) bvh_->Reset();
+    }
+
+    void BeginGeneration(uint32_t generation, const cl::Buffer& rays, uint32_t n,
+                         KernelTimer& timer) override {
+        (void)generation;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);  // the last Prepare's thread is done
+            nearest_.NextGeneration();
+        }
+        shadow_.NextGeneration();
+        shadowSampled_ = false;
+        if (nearest_.onBvh || nearest_.costs.classified == 0 || n == 0) return;
+        Bvh();
+        {
+            clrt::MappedRead<RcRay> mapped(ctx_.queue(), rays, n);
+            Pick(mapped.span());
+            mapped.Unmap();
+        }
+        const cl::Buffer& sample = sampleRays_.Upload(ctx_, sample_);
+        const uint32_t m = uint32_t(sample_.size());
+        const cl::Buffer& hits = sampleHits_.Reserve(ctx_, m * sizeof(RcHit));
+        auto run = [&] {
+            const auto t0 = Clock::now();
+            bvh_->Intersect(sample, m, nullptr, hits, ShadeBuffers{}, timer);
+            clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
+            return SecondsSince(t0) / m;
+        };
+        clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
+        if (!nearest_.warm) run();
+        nearest_.warm = true;
+        nearest_.costs.bvhSample = run();
+        nearest_.onBvh = nearest_.costs.PreferBvh();
+    }
+
+    void DescribeGeneration(GenerationStats& gen) const override {
+        gen.query = (nearest_.onBvh ? bvh_ : classified_)->Name();
+        gen.shadowQuery = (shadow_.onBvh ? bvh_ : classified_)->Name();  // onBvh: bvh_ is made
+        gen.classifiedNs = nearest_.costs.PredictedClassified() * 1e9;
+        gen.bvhSampleNs = nearest_.costs.bvhSample * 1e9;
+        gen.shadowClassifiedNs = shadow_.costs.PredictedClassified() * 1e9;
+        gen.shadowBvhSampleNs = shadow_.costs.bvhSample * 1e9;
+    }
+
+    // Runs on the worker thread, while the render thread may be in Intersect or Occluded.
+    std::unique_ptr<PreparedBatch> Prepare(const cl::Buffer& rays, uint32_t n,
+                                           const cl::CommandQueue& queue) override {
+        if (nearest_.onBvh) return nullptr;  // set before this generation's first Prepare
+        const auto t0 = Clock::now();
+        std::unique_ptr<PreparedBatch> batch = classified_->Prepare(rays, n, queue);
+        std::lock_guard<std::mutex> lock(mutex_);
+        nearest_.seconds += SecondsSince(t0);
+        return batch;
+    }
+
+    void Recycle(std::unique_ptr<PreparedBatch> batch) override {
+        if (batch) classified_->Recycle(std::move(batch));
+    }
+
+    QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
+                          const cl::Buffer& hits, const ShadeBuffers& shade,
+                          KernelTimer& timer) override {
+        if (nearest_.onBvh) return bvh_->Intersect(rays, n, nullptr, hits, shade, timer);
+        const auto t0 = Clock::now();
+        const QueryResult result = classified_->Intersect(rays, n, prepared, hits, shade, timer);
+        std::lock_guard<std::mutex> lock(mutex_);
+        nearest_.seconds += SecondsSince(t0);
+        nearest_.rays += n;
+        return result;
+    }
+
+    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
+                      const cl::Buffer& blocked, KernelTimer& timer) override {
+        const uint32_t n = uint32_t(hostRays.size());
+        // Shadow rays appear batch by batch: the generation's first batch is sampled.
+        if (!shadow_.onBvh && !shadowSampled_ && shadow_.costs.classified > 0 && n > 0) {
+            shadowSampled_ = true;
+            Bvh();
+            Pick(hostRays);
+            const cl::Buffer& sample = sampleRays_.Upload(ctx_, sample_);
+            const cl::Buffer& sampleBlocked = sampleHits_.Reserve(ctx_, sample_.size());
+            auto run = [&] {
+                const auto t0 = Clock::now();
+                bvh_->Occluded(sample, sample_, sampleBlocked, timer);  // waits for its kernel
+                return SecondsSince(t0) / double(sample_.size());
+            };
+            clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
+            if (!shadow_.warm) run();
+            shadow_.warm = true;
+            shadow_.costs.bvhSample = run();
+            shadow_.onBvh = shadow_.costs.PreferBvh();
+        }
+        if (shadow_.onBvh) return bvh_->Occluded(shadowRays, hostRays, blocked, timer);
+        const auto t0 = Clock::now();
+        const uint64_t tests = classified_->Occluded(shadowRays, hostRays, blocked, timer);
+        shadow_.seconds += SecondsSince(t0);
+        shadow_.rays += n;
+        return tests;
+    }
+
+  private:
+    RayQuery& Bvh() {
+        if (!bvh_) bvh_ = makeBvh_();
+        return *bvh_;
+    }
+
+    // sample_ = kSampleRuns runs of kSampleRunRays rays spread evenly over `rays` (all of them
+    // when they are fewer).
+    void Pick(std::span<const RcRay> rays) {
+        sample_.clear();
+        if (rays.size() <= kSampleRuns * kSampleRunRays) {
+            sample_.assign(rays.begin(), rays.end());
+            return;
+        }
+        const size_t spacing = rays.size() / kSampleRuns;
+        for (size_t r = 0; r < kSampleRuns; ++r) {
+            const auto first = rays.begin() + std::ptrdiff_t(r * spacing);
+            sample_.insert(sample_.end(), first, first + kSampleRunRays);
+        }
+    }
+
+    clrt::Context& ctx_;
+    std::unique_ptr<RayQuery> classified_, bvh_;
+    std::function<std::unique_ptr<RayQuery>()> makeBvh_;
+    std::mutex mutex_;  // guards nearest_'s measurements, which Prepare adds to on its thread
+    Choice nearest_, shadow_;
+    bool shadowSampled_ = false;
+    std::vector<RcRay> sample_;
+    GrowingBuffer sampleRays_, sampleHits_;
+};
+
+}  // namespace
+
+std::unique_ptr<RayQuery> MakeAutoQuery(clrt::Context& ctx, std::unique_ptr<RayQuery> classified,
+                                        std::function<std::unique_ptr<RayQuery>()> makeBvh) {
+    return std::make_unique<AutoQuery>(ctx, std::move(classified), std::move(makeBvh));
+}
+
+}  // namespace rayclass::render
