@@ -1,7 +1,11 @@
 // The Embree 3 baseline of scripts/bench: the rays raybench saved (same cameras, same secondary
 // rays from the same hits) shot through Embree's BVH with 1 and 2 application threads, one ray
-// per call (rtcIntersect1/rtcOccluded1) and coherent 16-ray packets of consecutive rays
-// (rtcIntersect16/rtcOccluded16). CSV on stdout, one row per ray kind x API x thread count:
+// per call (rtcIntersect1/rtcOccluded1) and 16-ray packets of consecutive rays
+// (rtcIntersect16/rtcOccluded16), traced in Embree's coherent mode
+// (RTC_INTERSECT_CONTEXT_FLAG_COHERENT) except for diffuse rays, as for measured-anchors.md's
+// "best" figures. Without the flag, eye-ray packets ran at 8-13 instead of 43-44 Mrays/s on two
+// threads (Sibenik, 2026-12-02), which had made Embree look 3x slower than it is.
+// CSV on stdout, one row per ray kind x API x thread count:
 //   kind,api,threads,rays,median_s,min_s,max_s,mrays_s,hits
 // Usage: embree_bench SCENE RAYS.bin [--runs N] [--warmup N] [--threads 1,2]
 // Triangles only: a scene with spheres or quadrics is refused (exit 3), Embree would not shoot
@@ -47,11 +51,12 @@ void ParallelChunks(size_t n, int threads, F&& fn) {
 
 // Returns the number of rays that hit (or are occluded).
 size_t Shoot(RTCScene scene, const std::vector<bench::BenchRay>& rays, bool shadow, bool packet,
-             int threads) {
+             bool coherent, int threads) {
     std::atomic<size_t> hits{0};
     ParallelChunks(rays.size(), threads, [&](size_t b, size_t e) {
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
+        if (coherent) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
         size_t local = 0;
         if (!packet) {
             for (size_t i = b; i < e; ++i) {
@@ -189,14 +194,16 @@ int main(int argc, char** argv) {
             const auto& rays = sets.sets[k];
             if (rays.empty()) continue;
             const bool shadow = bench::IsShadowKind(k);
+            const bool coherent = std::strcmp(bench::kKinds[k], "diffuse") != 0;
             for (const bool packet : {false, true}) {
                 for (int threads : threadCounts) {
                     size_t hits = 0;
-                    for (int w = 0; w < warmup; ++w) hits = Shoot(scene, rays, shadow, packet, threads);
+                    for (int w = 0; w < warmup; ++w)
+                        hits = Shoot(scene, rays, shadow, packet, packet && coherent, threads);
                     std::vector<double> times;
                     for (int r = 0; r < runs; ++r) {
                         const auto t0 = Clock::now();
-                        hits = Shoot(scene, rays, shadow, packet, threads);
+                        hits = Shoot(scene, rays, shadow, packet, packet && coherent, threads);
                         times.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
                     }
                     std::sort(times.begin(), times.end());
