@@ -2,6 +2,7 @@
 // scratch directory): its exit statuses (0 success, 2 usage errors, 1 other failures), its exact
 // messages, and the files it leaves behind: the outputs of a successful render and nothing else,
 // nothing at all when a command fails, and a previous output untouched by a failed render.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -275,6 +276,10 @@ TEST_F(CliFailure, UsageErrorsExitWith2AndNameTheProblem) {
          2,
          "rayclass render: x: unsupported output format '' (use .exr or .png)\n",
          "x"},
+        {{"SCENE", "-o", "x.exr", "--accel", "kdtree"},
+         2,
+         "rayclass render: --accel must be classify, bvh, auto or brute, not 'kdtree'\n",
+         "x.exr"},
         {{"SCENE", "-o", "x.exr", "--stats", "s.txt"},
          2,
          "rayclass render: --stats expects a .json file, not 's.txt'\n",
@@ -511,6 +516,17 @@ TEST_F(Cli, RenderWritesTheImageAndConsistentStatsAndNothingElse) {
         EXPECT_EQ(gens[i].at("spawned"), gens[i + 1].at("rays")) << "generation " << i;
     }
     EXPECT_EQ(gens.back().at("spawned"), 0);
+    // Each generation says what answered it and how long it took; the eye rays' first hits
+    // came from the raster pass (the default) or the classified query.
+    EXPECT_THAT(gens[0].at("query").get<std::string>(), testing::AnyOf("raster", "classify/auto"));
+    for (size_t i = 0; i < gens.size(); ++i) {
+        if (i > 0) {
+            EXPECT_EQ(gens[i].at("query"), "classify/auto") << "generation " << i;
+        }
+        EXPECT_EQ(gens[i].at("shadow_query"), "classify/auto") << "generation " << i;
+        EXPECT_GE(gens[i].at("seconds").get<double>(), 0.0) << "generation " << i;
+        EXPECT_FALSE(gens[i].contains("auto_ns_per_ray")) << "generation " << i;
+    }
     EXPECT_EQ(Sum(gens, "rays"), eye + reflection + refraction);
     EXPECT_EQ(Sum(gens, "shadow_rays"), shadow);
     // Ray classification tests some primitives per ray, never more than brute force would (25
