@@ -1,7 +1,6 @@
 #include "rayclass/render/auto_query.h"
 
 #include <chrono>
-#include <mutex>
 #include <vector>
 
 #include "rayclass/clrt/mapped.h"
@@ -30,7 +29,8 @@ struct Choice {
     // the BVH kernel and faulting in the tree (11 us a ray instead of 0.8 on Sibenik).
     bool warm = false;
     QueryCosts costs;  // what the current generation's choice compared
-    // The classification's work on the current generation: seconds and rays.
+    // The classification's cost on the current generation: seconds of the render thread's
+    // time, and rays.
     double seconds = 0;
     uint64_t rays = 0;
 
@@ -63,33 +63,11 @@ class AutoQuery final : public RayQuery {
     void BeginGeneration(uint32_t generation, const cl::Buffer& rays, uint32_t n,
                          KernelTimer& timer) override {
         (void)generation;
-        {
-            std::lock_guard<std::mutex> lock(mutex_);  // the last Prepare's thread is done
-            nearest_.NextGeneration();
-        }
+        nearest_.NextGeneration();
         shadow_.NextGeneration();
         shadowSampled_ = false;
-        if (nearest_.onBvh || nearest_.costs.classified == 0 || n == 0) return;
-        Bvh();
-        {
-            clrt::MappedRead<RcRay> mapped(ctx_.queue(), rays, n);
-            Pick(mapped.span());
-            mapped.Unmap();
-        }
-        const cl::Buffer& sample = sampleRays_.Upload(ctx_, sample_);
-        const uint32_t m = uint32_t(sample_.size());
-        const cl::Buffer& hits = sampleHits_.Reserve(ctx_, m * sizeof(RcHit));
-        auto run = [&] {
-            const auto t0 = Clock::now();
-            bvh_->Intersect(sample, m, nullptr, hits, ShadeBuffers{}, timer);
-            clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
-            return SecondsSince(t0) / m;
-        };
-        clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
-        if (!nearest_.warm) run();
-        nearest_.warm = true;
-        nearest_.costs.bvhSample = run();
-        nearest_.onBvh = nearest_.costs.PreferBvh();
+        Sample(rays, n, timer);
+        lastReturn_ = Clock::now();
     }
 
     void DescribeGeneration(GenerationStats& gen) const override {
@@ -101,63 +79,96 @@ class AutoQuery final : public RayQuery {
         gen.shadowBvhSampleNs = shadow_.costs.bvhSample * 1e9;
     }
 
-    // Runs on the worker thread, while the render thread may be in Intersect or Occluded.
+    // Runs on the worker thread, while the render thread may be in Intersect or Occluded; its
+    // time counts where the render thread waits for it (see Intersect).
     std::unique_ptr<PreparedBatch> Prepare(const cl::Buffer& rays, uint32_t n,
                                            const cl::CommandQueue& queue) override {
         if (nearest_.onBvh) return nullptr;  // set before this generation's first Prepare
-        const auto t0 = Clock::now();
-        std::unique_ptr<PreparedBatch> batch = classified_->Prepare(rays, n, queue);
-        std::lock_guard<std::mutex> lock(mutex_);
-        nearest_.seconds += SecondsSince(t0);
-        return batch;
+        return classified_->Prepare(rays, n, queue);
     }
 
     void Recycle(std::unique_ptr<PreparedBatch> batch) override {
         if (batch) classified_->Recycle(std::move(batch));
     }
 
+    // The classification's cost is what it costs the render thread: this call, and the wait for
+    // the batch's Prepare since the thread's last call here (an upper bound: that also holds
+    // the thread's own work between batches, a few ms). Summing Prepare's time and this call's
+    // instead counted twice the stretches where they overlap and compete for the same cores.
     QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
                           const cl::Buffer& hits, const ShadeBuffers& shade,
                           KernelTimer& timer) override {
         if (nearest_.onBvh) return bvh_->Intersect(rays, n, nullptr, hits, shade, timer);
-        const auto t0 = Clock::now();
         const QueryResult result = classified_->Intersect(rays, n, prepared, hits, shade, timer);
-        std::lock_guard<std::mutex> lock(mutex_);
-        nearest_.seconds += SecondsSince(t0);
+        nearest_.seconds += SecondsSince(lastReturn_);
         nearest_.rays += n;
+        lastReturn_ = Clock::now();
         return result;
     }
 
     uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
                       const cl::Buffer& blocked, KernelTimer& timer) override {
         const uint32_t n = uint32_t(hostRays.size());
-        // Shadow rays appear batch by batch: the generation's first batch is sampled.
-        if (!shadow_.onBvh && !shadowSampled_ && shadow_.costs.classified > 0 && n > 0) {
+        // Shadow rays appear batch by batch: the generation's first batch is sampled, once the
+        // nearest-hit sample has built the BVH. Classified from their light, shadow rays stay
+        // cheap, and building the tree for them alone cost more than it saved (Conference: 0.5 s
+        // of build in a render whose shadow rays all stayed classified).
+        if (bvh_ && !shadow_.onBvh && !shadowSampled_ && shadow_.costs.classified > 0 && n > 0) {
             shadowSampled_ = true;
-            Bvh();
             Pick(hostRays);
             const cl::Buffer& sample = sampleRays_.Upload(ctx_, sample_);
             const cl::Buffer& sampleBlocked = sampleHits_.Reserve(ctx_, sample_.size());
-            auto run = [&] {
-                const auto t0 = Clock::now();
+            shadow_.costs.bvhSample = TimeSample(shadow_, [&] {
                 bvh_->Occluded(sample, sample_, sampleBlocked, timer);  // waits for its kernel
-                return SecondsSince(t0) / double(sample_.size());
-            };
-            clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
-            if (!shadow_.warm) run();
-            shadow_.warm = true;
-            shadow_.costs.bvhSample = run();
+            });
             shadow_.onBvh = shadow_.costs.PreferBvh();
         }
-        if (shadow_.onBvh) return bvh_->Occluded(shadowRays, hostRays, blocked, timer);
-        const auto t0 = Clock::now();
-        const uint64_t tests = classified_->Occluded(shadowRays, hostRays, blocked, timer);
-        shadow_.seconds += SecondsSince(t0);
-        shadow_.rays += n;
+        uint64_t tests;
+        if (shadow_.onBvh) {
+            tests = bvh_->Occluded(shadowRays, hostRays, blocked, timer);
+        } else {
+            const auto t0 = Clock::now();
+            tests = classified_->Occluded(shadowRays, hostRays, blocked, timer);
+            shadow_.seconds += SecondsSince(t0);
+            shadow_.rays += n;
+        }
+        lastReturn_ = Clock::now();
         return tests;
     }
 
   private:
+    // Times the BVH on a sample of the generation's first batch rays[0, n), once the
+    // classification has been measured and the BVH has not won yet.
+    void Sample(const cl::Buffer& rays, uint32_t n, KernelTimer& timer) {
+        if (nearest_.onBvh || nearest_.costs.classified == 0 || n == 0) return;
+        Bvh();
+        {
+            clrt::MappedRead<RcRay> mapped(ctx_.queue(), rays, n);
+            Pick(mapped.span());
+            mapped.Unmap();
+        }
+        const cl::Buffer& sample = sampleRays_.Upload(ctx_, sample_);
+        const uint32_t m = uint32_t(sample_.size());
+        const cl::Buffer& hits = sampleHits_.Reserve(ctx_, m * sizeof(RcHit));
+        nearest_.costs.bvhSample = TimeSample(nearest_, [&] {
+            bvh_->Intersect(sample, m, nullptr, hits, ShadeBuffers{}, timer);
+            clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
+        });
+        nearest_.onBvh = nearest_.costs.PreferBvh();
+    }
+
+    // Seconds per sample_ ray that run() (the BVH on the uploaded sample, to completion)
+    // takes on the otherwise idle device; the first sample of a kind runs twice.
+    template <typename Run>
+    double TimeSample(Choice& choice, const Run& run) {
+        clrt::Check("clFinish", [&] { ctx_.queue().finish(); });  // the upload, and nothing else
+        if (!choice.warm) run();
+        choice.warm = true;
+        const auto t0 = Clock::now();
+        run();
+        return SecondsSince(t0) / double(sample_.size());
+    }
+
     RayQuery& Bvh() {
         if (!bvh_) bvh_ = makeBvh_();
         return *bvh_;
@@ -181,7 +192,7 @@ class AutoQuery final : public RayQuery {
     clrt::Context& ctx_;
     std::unique_ptr<RayQuery> classified_, bvh_;
     std::function<std::unique_ptr<RayQuery>()> makeBvh_;
-    std::mutex mutex_;  // guards nearest_'s measurements, which Prepare adds to on its thread
+    Clock::time_point lastReturn_;  // when the render thread last returned from this query
     Choice nearest_, shadow_;
     bool shadowSampled_ = false;
     std::vector<RcRay> sample_;
