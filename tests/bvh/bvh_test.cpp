@@ -1,11 +1,13 @@
 // The SAH builder: every primitive in exactly one leaf, every node's box contains its children's
 // boxes and its primitives' boxes, and the flattened layout is what cl/bvh.cl walks.
-#include <filesystem>
-#include <random>
+#include "rayclass/bvh/bvh.h"
 
 #include <gtest/gtest.h>
 
-#include "rayclass/bvh/bvh.h"
+#include <cstring>
+#include <filesystem>
+#include <random>
+
 #include "rayclass/scene/loader.h"
 
 namespace rayclass::bvh {
@@ -79,6 +81,33 @@ TEST(BvhBuild, RandomBoxes) {
         if (n.count > 0) {
             EXPECT_LE(n.count, params.maxLeafSize);
         }
+    }
+}
+
+TEST(BvhBuild, ThreadsBuildTheSameTreeNodeForNode) {
+    // Large enough that subtrees of 32768 primitives or more go to other threads at two levels.
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> pos(-100.0f, 100.0f), size(0.0f, 2.0f);
+    std::vector<Bounds3f> boxes(200000);
+    for (auto& b : boxes) {
+        const glm::vec3 p(pos(rng), pos(rng), pos(rng));
+        b.lo = p;
+        b.hi = p + glm::vec3(size(rng), size(rng), size(rng));
+    }
+    BuildParams serial;
+    serial.threads = 1;
+    const Bvh one = Build(boxes, 1e-4f, serial);
+    CheckTree(one, boxes, serial);
+    for (uint32_t threads : {2u, 4u}) {
+        BuildParams params;
+        params.threads = threads;
+        const Bvh t = Build(boxes, 1e-4f, params);
+        ASSERT_EQ(t.nodes.size(), one.nodes.size()) << threads;
+        EXPECT_EQ(std::memcmp(t.nodes.data(), one.nodes.data(), t.nodes.size() * sizeof(RcBvhNode)),
+                  0)
+            << threads << " threads";
+        EXPECT_EQ(t.primIndex, one.primIndex) << threads;
+        EXPECT_EQ(t.maxDepth, one.maxDepth) << threads;
     }
 }
 

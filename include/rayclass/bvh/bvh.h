@@ -18,6 +18,7 @@ struct BuildParams {
     uint32_t bins = 32;          // SAH bins per axis
     uint32_t maxLeafSize = 8;    // a node with more primitives is always split
     float traversalCost = 1.0f;  // cost of one node visit relative to one primitive test
+    uint32_t threads = 0;        // build threads (0: one per core); the tree does not depend on it
 };
 
 struct Bvh {
