@@ -93,8 +93,9 @@ class RayQuery {
     // Shadow rays answered so far that the classification took from their light.
     virtual uint64_t ShadowRaysFromLight() const { return 0; }
     // Called once all of generation `generation`'s rays are on the device, before its first
-    // Prepare; rays[0, n) (RcRay) are its first batch and the device is idle. A query that
-    // picks its method per generation (auto_query.h) picks it here.
+    // Prepare (not for generation 0 when another source supplies its hits); rays[0, n) (RcRay)
+    // are its first batch and the device is idle. A query that picks its method per generation
+    // (auto_query.h) picks it here.
     virtual void BeginGeneration(uint32_t generation, const cl::Buffer& rays, uint32_t n,
                                  KernelTimer& timer) {
         (void)generation, (void)rays, (void)n, (void)timer;
