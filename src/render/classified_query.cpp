@@ -312,15 +312,18 @@ class ClassifiedQuery final : public RayQuery {
             // (ray, light) pair (shadow rays).
             const uint32_t nIds = allRays ? cb.batch.nRays : uint32_t(unshaded_.size());
             const cl::Buffer ids = allRays ? cl::Buffer() : unshadedBuf_.Upload(ctx_, unshaded_);
-            SetArgs(shadeIds_, rays, shade->rayInfo, out, ids, nIds, scene_.triangles,
+            const cl::Buffer& surfaces =
+                surfacesBuf_.Reserve(ctx_, size_t(cb.batch.nRays) * 2 * sizeof(rc_float4));
+            SetArgs(shadeIds_, rays, shade->rayInfo, out, ids, nIds, surfaces, scene_.triangles,
                     scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
                     scene_.lights, scene_.params, shade->radiance, shade->normals,
                     shade->shadow.rays, shade->shadow.contribution, shade->secondary.rays,
                     shade->secondary.info, shade->spawned);
             Launch(ctx_, shadeIds_, nIds, timer);
-            SetArgs(shadeLights_, rays, shade->rayInfo, out, ids, nIds, scene_.triangles,
-                    scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
-                    scene_.lights, scene_.params, shade->shadow.rays, shade->shadow.contribution);
+            SetArgs(shadeLights_, rays, shade->rayInfo, out, ids, nIds, surfaces, shade->normals,
+                    scene_.triangles, scene_.triangleShading, scene_.spheres, scene_.quadrics,
+                    scene_.materials, scene_.lights, scene_.params, shade->shadow.rays,
+                    shade->shadow.contribution);
             Launch(ctx_, shadeLights_, size_t(nIds) * scene_.hostParams.nLights, timer);
         }
         return {tests, true};
@@ -351,7 +354,7 @@ class ClassifiedQuery final : public RayQuery {
     std::vector<uint8_t> shadedByVertex_;
     GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,
         blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_, packetFirstBuf_,
-        fragmentTestsBuf_, unshadedBuf_;
+        fragmentTestsBuf_, unshadedBuf_, surfacesBuf_;
     mutable std::mutex mutex_;  // guards hostSeconds_ and pool_
     double hostSeconds_ = 0;
     uint64_t shadowFromLight_ = 0;  // Occluded's, which runs on the render thread only
