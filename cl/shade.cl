@@ -196,7 +196,6 @@ RC_SHADE_INLINE RcSurface rc_saved_surface(__global const float4* saved,
 RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* info, RcHit hit,
                                   __global float4* saved, RC_SHADE_SCENE_PARAMS,
                                   RC_SHADE_OUT_PARAMS) {
-    const int withLights = saved == 0;
     const uint nLights = params->nLights;
     const float3 weight = info->weight.xyz;
     spawned[2 * i] = 0;
@@ -204,7 +203,7 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* inf
     if (hit.prim == RC_NO_HIT) {
         radiance[i] = (float4)(weight * params->background.xyz, 0.0f);
         normals[i] = (float4)(0.0f);
-        if (withLights) {
+        if (!saved) {
             for (uint l = 0; l < nLights; ++l)
                 rc_no_shadow(shadowRays, shadowContribution, i * nLights + l);
         }
@@ -216,8 +215,9 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* inf
     __global const RcMaterial* m = materials + s.material;
     radiance[i] = (float4)(weight * (m->emission.xyz + m->kd.xyz * params->ambient.xyz), 0.0f);
     normals[i] = (float4)(s.ns, 0.0f);
-    if (!withLights) rc_save_surface(saved, i, &s);
-    if (withLights) {
+    if (saved) {
+        rc_save_surface(saved, i, &s);
+    } else {
         for (uint l = 0; l < nLights; ++l)
             rc_shade_light(i, l, ray, info, &s, m, lights, params, shadowRays, shadowContribution);
     }

@@ -21,6 +21,15 @@ float HalfArea(const Bounds3f& b) {
 constexpr uint32_t kParallelPrims = 32768;
 
 struct Builder {
+    Builder(std::span<const Bounds3f> boxes_, std::span<const glm::vec3> centroids_, float pad_,
+            const BuildParams& params_, std::span<uint32_t> primIndex_, uint32_t parallelDepth_)
+        : boxes(boxes_),
+          centroids(centroids_),
+          pad(pad_),
+          params(params_),
+          primIndex(primIndex_),
+          parallelDepth(parallelDepth_) {}
+
     std::span<const Bounds3f> boxes;
     std::span<const glm::vec3> centroids;
     float pad;
@@ -29,6 +38,10 @@ struct Builder {
     uint32_t parallelDepth;         // nodes above this depth build their right child apart
     std::vector<RcBvhNode> nodes;   // this builder's subtree, depth first, its root at 0
     uint32_t maxDepth = 0;
+    // A node's SAH bins, reused by every node (a node is done with them before it recurses).
+    std::vector<Bounds3f> binBox;
+    std::vector<uint32_t> binCount, rightCount;
+    std::vector<float> rightArea;
 
     float Outward(float x, float dir) const {
         return x + dir * (pad + std::abs(x) * (1.0f / 1048576.0f));
@@ -61,10 +74,10 @@ struct Builder {
         float bestCost = std::numeric_limits<float>::infinity();
         int bestAxis = -1;
         uint32_t bestSplit = 0;
-        std::vector<Bounds3f> binBox(3 * nb);
-        std::vector<uint32_t> binCount(3 * nb, 0u);
-        std::vector<float> rightArea(nb);
-        std::vector<uint32_t> rightCount(nb);
+        binBox.assign(3 * nb, Bounds3f{});
+        binCount.assign(3 * nb, 0u);
+        rightArea.resize(nb);
+        rightCount.resize(nb);
         auto binOf = [&](int axis, uint32_t prim) {
             const float lo = cbox.lo[axis], ext = cbox.hi[axis] - lo;
             const auto b = int32_t(float(nb) * ((centroids[prim][axis] - lo) / ext));
@@ -134,7 +147,7 @@ struct Builder {
         if (depth < parallelDepth && end - mid >= kParallelPrims) {
             // The right subtree on another thread, into its own nodes, appended after the left
             // one: the same tree, node for node, as built on one thread.
-            Builder other{boxes, centroids, pad, params, primIndex, parallelDepth, {}, 0};
+            Builder other(boxes, centroids, pad, params, primIndex, parallelDepth);
             other.nodes.reserve(2 * size_t(end - mid));
             other.nodes.emplace_back();
             auto done = std::async(std::launch::async, [&] { other.Node(0, mid, end, depth + 1); });
@@ -179,7 +192,7 @@ Bvh Build(std::span<const Bounds3f> boxes, float pad, const BuildParams& params)
         params.threads > 0 ? params.threads : std::max(1u, std::thread::hardware_concurrency());
     uint32_t parallelDepth = 0;  // 2^parallelDepth subtrees at most build at once
     while ((1u << parallelDepth) < threads) ++parallelDepth;
-    Builder b{boxes, centroids, pad, params, out.primIndex, parallelDepth, {}, 0};
+    Builder b(boxes, centroids, pad, params, out.primIndex, parallelDepth);
     b.nodes.reserve(2 * boxes.size());
     b.nodes.emplace_back();
     b.Node(0, 0, uint32_t(boxes.size()), 0);

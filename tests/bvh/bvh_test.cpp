@@ -63,15 +63,23 @@ void CheckTree(const Bvh& t, std::span<const Bounds3f> boxes, const BuildParams&
     (void)params;
 }
 
-TEST(BvhBuild, RandomBoxes) {
-    std::mt19937 rng(7);
-    std::uniform_real_distribution<float> pos(-100.0f, 100.0f), size(0.0f, 3.0f);
-    std::vector<Bounds3f> boxes(5000);
+// n boxes in [-100, 100]^3 with edges up to maxSize (flat: no extent along z, like axis-aligned
+// triangles), seeded.
+std::vector<Bounds3f> RandomBoxes(uint32_t seed, size_t n, float maxSize, bool flat) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> pos(-100.0f, 100.0f), size(0.0f, maxSize);
+    std::vector<Bounds3f> boxes(n);
     for (auto& b : boxes) {
         const glm::vec3 p(pos(rng), pos(rng), pos(rng));
         b.lo = p;
-        b.hi = p + glm::vec3(size(rng), size(rng), 0.0f);  // flat boxes, like axis-aligned tris
+        const float sx = size(rng), sy = size(rng);
+        b.hi = p + glm::vec3(sx, sy, flat ? 0.0f : size(rng));
     }
+    return boxes;
+}
+
+TEST(BvhBuild, RandomBoxes) {
+    const std::vector<Bounds3f> boxes = RandomBoxes(7, 5000, 3.0f, /*flat=*/true);
     const BuildParams params;
     const Bvh t = Build(boxes, 1e-4f, params);
     CheckTree(t, boxes, params);
@@ -86,14 +94,7 @@ TEST(BvhBuild, RandomBoxes) {
 
 TEST(BvhBuild, ThreadsBuildTheSameTreeNodeForNode) {
     // Large enough that subtrees of 32768 primitives or more go to other threads at two levels.
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<float> pos(-100.0f, 100.0f), size(0.0f, 2.0f);
-    std::vector<Bounds3f> boxes(200000);
-    for (auto& b : boxes) {
-        const glm::vec3 p(pos(rng), pos(rng), pos(rng));
-        b.lo = p;
-        b.hi = p + glm::vec3(size(rng), size(rng), size(rng));
-    }
+    const std::vector<Bounds3f> boxes = RandomBoxes(11, 200000, 2.0f, /*flat=*/false);
     BuildParams serial;
     serial.threads = 1;
     const Bvh one = Build(boxes, 1e-4f, serial);

@@ -88,6 +88,16 @@ TEST_P(RenderMatchesReference, WithinBounds) {
     const double reflections = double(refStats.raysByKind["reflection"]);
     EXPECT_NEAR(double(bruteStats.raysByKind["reflection"]), reflections, 0.01 * reflections + 20);
 
+    // Renders with `options` and requires brute force's image and ids exactly, and its rays.
+    auto renderLikeBrute = [&](const std::string& what) {
+        RenderStats stats;
+        const image::Image img = ClRenderer(SharedContext(), scene, options).Render(stats);
+        const image::ImageComparison same = image::Compare(img, brute);
+        EXPECT_EQ(same.idMismatchPixels, 0u) << what;
+        EXPECT_EQ(same.maxAbsError, 0.0) << what;
+        EXPECT_EQ(stats.RaysTotal(), bruteStats.RaysTotal()) << what;
+        return stats;
+    };
     // Every classified kernel style finds exactly the brute-force hits (same float routines,
     // lower id wins ties), so ids and images are identical, not merely close. Shadow rays are
     // classified from a light inside the scene box (every one of them: each ends there within
@@ -95,12 +105,7 @@ TEST_P(RenderMatchesReference, WithinBounds) {
     for (const char* style : {"scalar", "vertex", "fragment", "auto"}) {
         options.accel = "classify";
         options.kernel = style;
-        RenderStats stats;
-        const image::Image img = ClRenderer(SharedContext(), scene, options).Render(stats);
-        const image::ImageComparison same = image::Compare(img, brute);
-        EXPECT_EQ(same.idMismatchPixels, 0u) << style;
-        EXPECT_EQ(same.maxAbsError, 0.0) << style;
-        EXPECT_EQ(stats.RaysTotal(), bruteStats.RaysTotal()) << style;
+        RenderStats stats = renderLikeBrute(style);
         EXPECT_LT(stats.intersectionTests, bruteStats.intersectionTests) << style;
         EXPECT_EQ(stats.shadowRaysFromLight, c.lightsInBox ? stats.raysByKind["shadow"] : 0u)
             << style;
@@ -108,12 +113,7 @@ TEST_P(RenderMatchesReference, WithinBounds) {
     // The BVH query uses the same routines and tie-break: identical too.
     {
         options.accel = "bvh";
-        RenderStats stats;
-        const image::Image img = ClRenderer(SharedContext(), scene, options).Render(stats);
-        const image::ImageComparison same = image::Compare(img, brute);
-        EXPECT_EQ(same.idMismatchPixels, 0u) << "bvh";
-        EXPECT_EQ(same.maxAbsError, 0.0) << "bvh";
-        EXPECT_EQ(stats.RaysTotal(), bruteStats.RaysTotal()) << "bvh";
+        const RenderStats stats = renderLikeBrute("bvh");
         EXPECT_EQ(stats.accel, "bvh");
         EXPECT_LE(stats.intersectionTests, bruteStats.intersectionTests) << "bvh";
     }
@@ -124,12 +124,7 @@ TEST_P(RenderMatchesReference, WithinBounds) {
     {
         options.accel = "auto";
         options.kernel = "auto";
-        RenderStats stats;
-        const image::Image img = ClRenderer(SharedContext(), scene, options).Render(stats);
-        const image::ImageComparison same = image::Compare(img, brute);
-        EXPECT_EQ(same.idMismatchPixels, 0u) << "auto";
-        EXPECT_EQ(same.maxAbsError, 0.0) << "auto";
-        EXPECT_EQ(stats.RaysTotal(), bruteStats.RaysTotal()) << "auto";
+        const RenderStats stats = renderLikeBrute("auto");
         EXPECT_EQ(stats.accel, "auto");
         ASSERT_FALSE(stats.generations.empty());
         EXPECT_EQ(stats.generations[0].query, "classify/auto");
