@@ -184,19 +184,22 @@ typedef struct RcTriangleBlock16 {
     rc_uint pad[13];
 } RcTriangleBlock16;
 
-/* A node of the bounding volume hierarchy (--accel bvh; include/rayclass/bvh/bvh.h), flattened in
- * depth-first order. boxMin/boxMax: the node's box (w unused), padded so that float rounding in
- * the slab test never loses a primitive the intersection routines would hit. count > 0: a leaf
- * whose primitives' global ids are primIndex[first, first + count); count == 0: an interior node
- * whose children are nodes[self + 1] and nodes[first], split along `axis` (0, 1, 2: the child at
- * self + 1 holds the lower centroids). 48 bytes. */
-typedef struct RcBvhNode {
-    rc_float4 boxMin;
-    rc_float4 boxMax;
-    rc_uint first;
-    rc_uint count;
-    rc_uint axis;
-    rc_uint pad;
-} RcBvhNode;
+/* A node of the 8-wide bounding volume hierarchy that cl/bvh.cl walks (--accel bvh;
+ * include/rayclass/bvh/bvh.h): the boxes of up to eight children as structure of arrays, one
+ * float8 per bound, so that one slab test covers them all. Boxes are padded so that float rounding
+ * in the slab test never loses a primitive the intersection routines would hit. child[c] for
+ * c < nChildren: another node's index, or RC_BVH8_LEAF | (count - 1) << RC_BVH8_COUNT_SHIFT | first
+ * for a leaf whose primitives' global ids are primIndex[first, first + count). 256 bytes. */
+#define RC_BVH8_LEAF 0x80000000u
+#define RC_BVH8_COUNT_SHIFT 27
+#define RC_BVH8_MAX_LEAF 16u           /* primitives in a leaf */
+#define RC_BVH8_FIRST_MASK 0x07FFFFFFu /* primIndex positions a leaf can start at */
+typedef struct RcBvh8Node {
+    float loX[8], loY[8], loZ[8];
+    float hiX[8], hiY[8], hiZ[8];
+    rc_uint child[8];
+    rc_uint nChildren;
+    rc_uint pad[7];
+} RcBvh8Node;
 
 #endif

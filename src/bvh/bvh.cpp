@@ -5,6 +5,7 @@
 #include <future>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 namespace rayclass::bvh {
@@ -36,7 +37,7 @@ struct Builder {
     BuildParams params;
     std::span<uint32_t> primIndex;  // shared: each builder partitions its own ranges of it
     uint32_t parallelDepth;         // nodes above this depth build their right child apart
-    std::vector<RcBvhNode> nodes;   // this builder's subtree, depth first, its root at 0
+    std::vector<BinaryNode> nodes;  // this builder's subtree, depth first, its root at 0
     uint32_t maxDepth = 0;
     // A node's SAH bins, reused by every node (a node is done with them before it recurses).
     std::vector<Bounds3f> binBox;
@@ -56,12 +57,12 @@ struct Builder {
             box.Grow(boxes[primIndex[i]]);
             cbox.Grow(centroids[primIndex[i]]);
         }
-        RcBvhNode& node = nodes[self];
-        node.boxMin = {Outward(box.lo.x, -1), Outward(box.lo.y, -1), Outward(box.lo.z, -1), 0};
-        node.boxMax = {Outward(box.hi.x, 1), Outward(box.hi.y, 1), Outward(box.hi.z, 1), 0};
+        BinaryNode& node = nodes[self];
+        node.box.lo = {Outward(box.lo.x, -1), Outward(box.lo.y, -1), Outward(box.lo.z, -1)};
+        node.box.hi = {Outward(box.hi.x, 1), Outward(box.hi.y, 1), Outward(box.hi.z, 1)};
         const uint32_t n = end - begin;
         auto makeLeaf = [&] {
-            RcBvhNode& leaf = nodes[self];
+            BinaryNode& leaf = nodes[self];
             leaf.first = begin;
             leaf.count = n;
             leaf.axis = 0;
@@ -154,7 +155,7 @@ struct Builder {
             Node(left, begin, mid, depth + 1);
             done.get();
             right = uint32_t(nodes.size());
-            for (RcBvhNode nd : other.nodes) {
+            for (BinaryNode nd : other.nodes) {
                 if (nd.count == 0) nd.first += right;  // an inner node's right child
                 nodes.push_back(nd);
             }
@@ -165,14 +166,128 @@ struct Builder {
             nodes.emplace_back();
             Node(right, mid, end, depth + 1);
         }
-        RcBvhNode& node2 = nodes[self];
+        BinaryNode& node2 = nodes[self];
         node2.first = right;
         node2.count = 0;
         node2.axis = uint32_t(bestAxis);
     }
 };
 
+void SetChildBox(RcBvh8Node& node, uint32_t c, const Bounds3f& box) {
+    node.loX[c] = box.lo.x;
+    node.loY[c] = box.lo.y;
+    node.loZ[c] = box.lo.z;
+    node.hiX[c] = box.hi.x;
+    node.hiY[c] = box.hi.y;
+    node.hiZ[c] = box.hi.z;
+}
+
+// Collapses binary subtrees into wide nodes, depth first (a node's index is below its children's).
+struct Collapser {
+    explicit Collapser(const Bvh& tree_) : tree(tree_), need(tree_.nodes.size(), 0) {
+        // Children come after their parent: bottom up is back to front.
+        std::vector<uint32_t> height(tree.nodes.size(), 0), greedy(tree.nodes.size(), 0);
+        for (size_t b = tree.nodes.size(); b-- > 0;) {
+            const BinaryNode& n = tree.nodes[b];
+            if (n.count > 0) continue;
+            height[b] = 1 + std::max(height[b + 1], height[n.first]);
+            uint32_t child[8];
+            const uint32_t k = Expand(uint32_t(b), child, ~0u);
+            uint32_t below = 0;
+            for (uint32_t c = 0; c < k; ++c) below = std::max(below, greedy[child[c]]);
+            greedy[b] = k - 1 + below;
+            need[b] = std::min(height[b], greedy[b]);
+        }
+    }
+
+    const Bvh& tree;
+    // Per binary node: the stack entries a walk of its wide subtree needs at least, the fewer of
+    // its height (two children everywhere) and its greedy collapse's (eight where it can).
+    std::vector<uint32_t> need;
+    std::vector<RcBvh8Node> nodes;
+
+    // Inner node b's children in its wide node: its binary children, then the widest inner child
+    // replaced by its two children while fewer than eight and while a walk below would push at
+    // most `budget` entries. Returns their count.
+    uint32_t Expand(uint32_t b, uint32_t* child, uint32_t budget) const {
+        child[0] = b + 1;
+        child[1] = tree.nodes[b].first;
+        uint32_t n = 2;
+        while (n < 8) {
+            int widest = -1;
+            float widestArea = -1.0f;
+            for (uint32_t c = 0; c < n; ++c) {
+                const BinaryNode& cn = tree.nodes[child[c]];
+                if (cn.count > 0) continue;
+                const float a = HalfArea(cn.box);
+                if (a > widestArea) {
+                    widestArea = a;
+                    widest = int(c);
+                }
+            }
+            if (widest < 0) break;
+            const uint32_t w = child[widest];
+            uint32_t below = std::max(need[w + 1], need[tree.nodes[w].first]);
+            for (uint32_t c = 0; c < n; ++c) {
+                if (c != uint32_t(widest)) below = std::max(below, need[child[c]]);
+            }
+            if (n + below > budget) break;
+            child[widest] = w + 1;
+            child[n++] = tree.nodes[w].first;
+        }
+        return n;
+    }
+
+    uint32_t Ref(uint32_t b, uint32_t budget) {
+        const BinaryNode& n = tree.nodes[b];
+        if (n.count == 0) return Node(b, budget);
+        if (n.count > RC_BVH8_MAX_LEAF)
+            throw std::runtime_error("bvh: a leaf of " + std::to_string(n.count) +
+                                     " primitives, more than the kernels take (" +
+                                     std::to_string(RC_BVH8_MAX_LEAF) + ")");
+        return RC_BVH8_LEAF | (n.count - 1) << RC_BVH8_COUNT_SHIFT | n.first;
+    }
+
+    // The wide node of inner binary node b, for a walk that may push `budget` more entries (at
+    // least need[b]). The node pushes at most nChildren - 1 and leaves the rest to its children.
+    uint32_t Node(uint32_t b, uint32_t budget) {
+        uint32_t child[8];
+        const uint32_t n = Expand(b, child, budget);
+        const uint32_t self = uint32_t(nodes.size());
+        nodes.emplace_back();
+        RcBvh8Node wide{};
+        wide.nChildren = n;
+        // Unused slots keep empty boxes; the kernels mask them by nChildren.
+        for (uint32_t c = 0; c < 8; ++c)
+            SetChildBox(wide, c, c < n ? tree.nodes[child[c]].box : Bounds3f{});
+        for (uint32_t c = 0; c < n; ++c) wide.child[c] = Ref(child[c], budget - (n - 1));
+        nodes[self] = wide;
+        return self;
+    }
+};
+
 }  // namespace
+
+std::vector<RcBvh8Node> Collapse(const Bvh& tree) {
+    if (tree.primIndex.size() > size_t(RC_BVH8_FIRST_MASK) + 1)
+        throw std::runtime_error("bvh: more primitives than the kernels' leaves can address (" +
+                                 std::to_string(RC_BVH8_FIRST_MASK + 1) + ")");
+    Collapser c(tree);
+    c.nodes.reserve(tree.nodes.size() / 4 + 1);
+    const BinaryNode& root = tree.nodes[0];
+    if (root.count == 0 && !tree.primIndex.empty()) {
+        c.Node(0, kStackEntries);
+        return std::move(c.nodes);
+    }
+    // A single leaf (or no primitive): a root of one child (or none).
+    RcBvh8Node wide{};
+    wide.nChildren = tree.primIndex.empty() ? 0 : 1;
+    for (uint32_t k = 0; k < 8; ++k)
+        SetChildBox(wide, k, k < wide.nChildren ? root.box : Bounds3f{});
+    if (wide.nChildren > 0) wide.child[0] = c.Ref(0, kStackEntries);
+    c.nodes.push_back(wide);
+    return std::move(c.nodes);
+}
 
 Bvh Build(std::span<const Bounds3f> boxes, float pad, const BuildParams& params) {
     Bvh out;

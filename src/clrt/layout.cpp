@@ -22,8 +22,7 @@ static_assert(sizeof(RcRenderParams) == 64);
 static_assert(sizeof(RcLeaf) == 32);
 static_assert(sizeof(RcCandidate) == 8);
 static_assert(sizeof(RcTriangleBlock16) == 704);
-static_assert(sizeof(RcBvhNode) == 48 && alignof(RcBvhNode) == 16);
-static_assert(offsetof(RcBvhNode, first) == 32);
+static_assert(sizeof(RcBvh8Node) == 256);
 
 static_assert(alignof(RcTriangle) == 16 && alignof(RcTriangleShading) == 16 &&
               alignof(RcSphere) == 16 && alignof(RcQuadric) == 16 && alignof(RcMaterial) == 16 &&

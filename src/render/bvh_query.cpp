@@ -12,7 +12,7 @@ class BvhQuery final : public RayQuery {
              const bvh::Bvh& tree)
         : ctx_(ctx),
           scene_(scene),
-          nodes_(UploadVector(ctx, tree.nodes)),
+          nodes_(UploadVector(ctx, bvh::Collapse(tree))),
           primIndex_(UploadVector(ctx, tree.primIndex)),
           intersect_(program, "rc_intersect_bvh"),
           occluded_(program, "rc_occluded_bvh") {}

@@ -1,11 +1,14 @@
-// The SAH builder: every primitive in exactly one leaf, every node's box contains its children's
-// boxes and its primitives' boxes, and the flattened layout is what cl/bvh.cl walks.
+// The SAH builder and the collapse to the kernels' wide tree: every primitive in exactly one leaf,
+// every node's box contains its children's boxes and its primitives' boxes, and no walk of the
+// wide tree needs more stack than cl/bvh.cl has.
 #include "rayclass/bvh/bvh.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <random>
 
 #include "rayclass/scene/loader.h"
@@ -13,16 +16,9 @@
 namespace rayclass::bvh {
 namespace {
 
-bool Contains(const RcBvhNode& outer, const Bounds3f& b) {
-    return outer.boxMin.x <= b.lo.x && outer.boxMin.y <= b.lo.y && outer.boxMin.z <= b.lo.z &&
-           outer.boxMax.x >= b.hi.x && outer.boxMax.y >= b.hi.y && outer.boxMax.z >= b.hi.z;
-}
-
-Bounds3f BoxOf(const RcBvhNode& n) {
-    Bounds3f b;
-    b.lo = {n.boxMin.x, n.boxMin.y, n.boxMin.z};
-    b.hi = {n.boxMax.x, n.boxMax.y, n.boxMax.z};
-    return b;
+bool Contains(const Bounds3f& outer, const Bounds3f& b) {
+    return outer.lo.x <= b.lo.x && outer.lo.y <= b.lo.y && outer.lo.z <= b.lo.z &&
+           outer.hi.x >= b.hi.x && outer.hi.y >= b.hi.y && outer.hi.z >= b.hi.z;
 }
 
 // Walks the tree from the root; checks containment and counts each primitive's leaves.
@@ -37,14 +33,14 @@ void CheckTree(const Bvh& t, std::span<const Bounds3f> boxes, const BuildParams&
         ASSERT_LT(i, t.nodes.size());
         ASSERT_FALSE(visited[i]) << "node " << i << " reached twice";
         visited[i] = 1;
-        const RcBvhNode& n = t.nodes[i];
+        const BinaryNode& n = t.nodes[i];
         if (n.count > 0) {
             ASSERT_LE(size_t(n.first) + n.count, t.primIndex.size());
             for (uint32_t k = 0; k < n.count; ++k) {
                 const uint32_t prim = t.primIndex[n.first + k];
                 ASSERT_LT(prim, boxes.size());
                 ++seen[prim];
-                EXPECT_TRUE(Contains(n, boxes[prim])) << "leaf " << i << " prim " << prim;
+                EXPECT_TRUE(Contains(n.box, boxes[prim])) << "leaf " << i << " prim " << prim;
             }
             continue;
         }
@@ -52,8 +48,8 @@ void CheckTree(const Bvh& t, std::span<const Bounds3f> boxes, const BuildParams&
         const uint32_t lo = i + 1, hi = n.first;
         ASSERT_GT(hi, lo);
         ASSERT_LT(hi, t.nodes.size());
-        EXPECT_TRUE(Contains(n, BoxOf(t.nodes[lo]))) << "node " << i;
-        EXPECT_TRUE(Contains(n, BoxOf(t.nodes[hi]))) << "node " << i;
+        EXPECT_TRUE(Contains(n.box, t.nodes[lo].box)) << "node " << i;
+        EXPECT_TRUE(Contains(n.box, t.nodes[hi].box)) << "node " << i;
         stack.push_back(lo);
         stack.push_back(hi);
     }
@@ -61,6 +57,65 @@ void CheckTree(const Bvh& t, std::span<const Bounds3f> boxes, const BuildParams&
     for (size_t i = 0; i < visited.size(); ++i) EXPECT_TRUE(visited[i]) << "orphan node " << i;
     EXPECT_LE(t.maxDepth, kMaxDepth);
     (void)params;
+}
+
+Bounds3f ChildBox(const RcBvh8Node& n, uint32_t c) {
+    Bounds3f b;
+    b.lo = {n.loX[c], n.loY[c], n.loZ[c]};
+    b.hi = {n.hiX[c], n.hiY[c], n.hiZ[c]};
+    return b;
+}
+
+// Walks the wide tree as cl/bvh.cl does, pushing every child but one at each node: each primitive
+// is in exactly one leaf, inside the boxes of every node above it, each node is reached once, and
+// no walk needs more stack entries than the kernels have. Returns the most entries a walk needs.
+uint32_t CheckWide(const Bvh& t, std::span<const RcBvh8Node> wide,
+                   std::span<const Bounds3f> boxes) {
+    EXPECT_FALSE(wide.empty());
+    if (wide.empty()) return 0;
+    std::vector<int> seen(boxes.size(), 0);
+    std::vector<uint8_t> visited(wide.size(), 0);
+    uint32_t deepest = 0;
+    struct Item {
+        uint32_t node, entries;  // entries: pushed by the nodes above
+        std::vector<Bounds3f> above;
+    };
+    std::vector<Item> todo{{0, 0, {}}};
+    while (!todo.empty()) {
+        const Item item = todo.back();
+        todo.pop_back();
+        EXPECT_LT(item.node, wide.size());
+        if (item.node >= wide.size()) break;
+        EXPECT_FALSE(visited[item.node]) << "wide node " << item.node << " reached twice";
+        visited[item.node] = 1;
+        const RcBvh8Node& n = wide[item.node];
+        EXPECT_LE(n.nChildren, 8u);
+        EXPECT_TRUE(n.nChildren >= 2 || item.node == 0) << "wide node " << item.node;
+        const uint32_t entries = item.entries + (n.nChildren > 0 ? n.nChildren - 1 : 0);
+        deepest = std::max(deepest, entries);
+        for (uint32_t c = 0; c < n.nChildren; ++c) {
+            std::vector<Bounds3f> above = item.above;
+            above.push_back(ChildBox(n, c));
+            const uint32_t ref = n.child[c];
+            if (!(ref & RC_BVH8_LEAF)) {
+                EXPECT_GT(ref, item.node);  // depth first
+                todo.push_back({ref, entries, std::move(above)});
+                continue;
+            }
+            const uint32_t first = ref & RC_BVH8_FIRST_MASK;
+            const uint32_t count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
+            EXPECT_LE(size_t(first) + count, t.primIndex.size());
+            for (uint32_t k = 0; k < count && first + k < t.primIndex.size(); ++k) {
+                const uint32_t prim = t.primIndex[first + k];
+                ++seen[prim];
+                for (const Bounds3f& b : above) EXPECT_TRUE(Contains(b, boxes[prim])) << prim;
+            }
+        }
+    }
+    for (size_t p = 0; p < boxes.size(); ++p) EXPECT_EQ(seen[p], 1) << "primitive " << p;
+    for (size_t i = 0; i < visited.size(); ++i) EXPECT_TRUE(visited[i]) << "orphan node " << i;
+    EXPECT_LE(deepest, kStackEntries);
+    return deepest;
 }
 
 // n boxes in [-100, 100]^3 with edges up to maxSize (flat: no extent along z, like axis-aligned
@@ -85,6 +140,15 @@ TEST(BvhBuild, RandomBoxes) {
     CheckTree(t, boxes, params);
     // SAH splits: far from one leaf per maxLeafSize primitives in a chain.
     EXPECT_LT(t.maxDepth, 40u);
+    const std::vector<RcBvh8Node> wide = Collapse(t);
+    CheckWide(t, wide, boxes);
+    // The stack does not bind on a tree this shallow: a node has eight children unless all of
+    // them are leaves.
+    for (const RcBvh8Node& n : wide) {
+        bool inner = false;
+        for (uint32_t c = 0; c < n.nChildren; ++c) inner |= !(n.child[c] & RC_BVH8_LEAF);
+        EXPECT_TRUE(n.nChildren == 8 || !inner);
+    }
     for (const auto& n : t.nodes) {
         if (n.count > 0) {
             EXPECT_LE(n.count, params.maxLeafSize);
@@ -104,8 +168,8 @@ TEST(BvhBuild, ThreadsBuildTheSameTreeNodeForNode) {
         params.threads = threads;
         const Bvh t = Build(boxes, 1e-4f, params);
         ASSERT_EQ(t.nodes.size(), one.nodes.size()) << threads;
-        EXPECT_EQ(std::memcmp(t.nodes.data(), one.nodes.data(), t.nodes.size() * sizeof(RcBvhNode)),
-                  0)
+        EXPECT_EQ(
+            std::memcmp(t.nodes.data(), one.nodes.data(), t.nodes.size() * sizeof(BinaryNode)), 0)
             << threads << " threads";
         EXPECT_EQ(t.primIndex, one.primIndex) << threads;
         EXPECT_EQ(t.maxDepth, one.maxDepth) << threads;
@@ -136,6 +200,93 @@ TEST(BvhBuild, SinglePrimitiveIsOneLeaf) {
     ASSERT_EQ(t.nodes.size(), 1u);
     EXPECT_EQ(t.nodes[0].count, 1u);
     CheckTree(t, boxes, {});
+    const std::vector<RcBvh8Node> wide = Collapse(t);
+    ASSERT_EQ(wide.size(), 1u);
+    EXPECT_EQ(wide[0].nChildren, 1u);
+    CheckWide(t, wide, boxes);
+}
+
+TEST(BvhCollapse, NoPrimitiveIsARootWithoutChildren) {
+    const Bvh t = Build(std::span<const Bounds3f>(), 0.0f);
+    const std::vector<RcBvh8Node> wide = Collapse(t);
+    ASSERT_EQ(wide.size(), 1u);
+    EXPECT_EQ(wide[0].nChildren, 0u);
+}
+
+// A binary tree made by hand: a chain of `levels` inner nodes, each with a side subtree of eight
+// leaves whose boxes are larger than everything below it on the chain, so that taking the widest
+// child first expands the side subtree and pushes seven entries per level of the chain.
+Bvh SideHeavyChain(uint32_t levels, std::vector<Bounds3f>& boxes) {
+    Bvh t;
+    std::function<uint32_t(uint32_t, uint32_t)> complete = [&](uint32_t height, uint32_t level) {
+        const uint32_t self = uint32_t(t.nodes.size());
+        t.nodes.emplace_back();
+        if (height == 0) {
+            const float s = std::ldexp(1.0f, int(levels - level) + 2);
+            const float shift = float(boxes.size() % 8);
+            boxes.push_back({glm::vec3(shift), glm::vec3(s + shift)});
+            t.nodes[self].first = uint32_t(t.primIndex.size());
+            t.nodes[self].count = 1;
+            t.primIndex.push_back(uint32_t(boxes.size() - 1));
+        } else {
+            complete(height - 1, level);
+            const uint32_t right = complete(height - 1, level);
+            t.nodes[self].first = right;
+        }
+        return self;
+    };
+    std::function<uint32_t(uint32_t)> chain = [&](uint32_t level) {
+        const uint32_t self = uint32_t(t.nodes.size());
+        t.nodes.emplace_back();
+        if (level == levels) {
+            boxes.push_back({glm::vec3(0.0f), glm::vec3(1.0f)});
+            t.nodes[self].first = uint32_t(t.primIndex.size());
+            t.nodes[self].count = 1;
+            t.primIndex.push_back(uint32_t(boxes.size() - 1));
+        } else {
+            chain(level + 1);
+            t.nodes[self].first = complete(3, level);
+        }
+        return self;
+    };
+    chain(0);
+    // Boxes bottom up: a node's children come after it.
+    for (size_t i = t.nodes.size(); i-- > 0;) {
+        BinaryNode& n = t.nodes[i];
+        n.box = Bounds3f{};
+        if (n.count > 0) {
+            n.box = boxes[t.primIndex[n.first]];
+        } else {
+            n.box.Grow(t.nodes[i + 1].box);
+            n.box.Grow(t.nodes[n.first].box);
+        }
+    }
+    return t;
+}
+
+TEST(BvhCollapse, SideHeavyChainStaysWithinTheKernelsStack) {
+    std::vector<Bounds3f> boxes;
+    const Bvh t = SideHeavyChain(50, boxes);  // 7 entries per level with eight children
+    CheckTree(t, boxes, {});
+    const std::vector<RcBvh8Node> wide = Collapse(t);
+    // The budget is used, not just kept: the top nodes have eight children.
+    EXPECT_GT(CheckWide(t, wide, boxes), kStackEntries - 8);
+    EXPECT_EQ(wide[0].nChildren, 8u);
+}
+
+TEST(BvhCollapse, LeavesTooLongForTheKernelsFail) {
+    const std::vector<Bounds3f> boxes = RandomBoxes(3, 60, 3.0f, /*flat=*/false);
+    BuildParams params;
+    params.maxLeafSize = 64;
+    params.traversalCost = 1e6f;  // splitting never pays
+    const Bvh t = Build(boxes, 0.0f, params);
+    ASSERT_GT(t.nodes[0].count, RC_BVH8_MAX_LEAF);
+    try {
+        Collapse(t);
+        FAIL() << "no error";
+    } catch (const std::runtime_error& e) {
+        EXPECT_STREQ(e.what(), "bvh: a leaf of 60 primitives, more than the kernels take (16)");
+    }
 }
 
 TEST(BvhBuild, SceneWithAllPrimitiveKinds) {
@@ -147,6 +298,7 @@ TEST(BvhBuild, SceneWithAllPrimitiveKinds) {
         for (uint32_t id = 0; id < boxes.size(); ++id) boxes[id] = scene.PrimitiveBounds(id);
         const Bvh t = Build(scene);
         CheckTree(t, boxes, {});
+        CheckWide(t, Collapse(t), boxes);
     }
 }
 

@@ -144,13 +144,16 @@ std::vector<Entry> HostLayout() {
     RC_FIELD(RcTriangleBlock16, count);
     RC_FIELD(RcTriangleBlock16, nearX);
     RC_FIELD(RcTriangleBlock16, pad);
-    RC_STRUCT(RcBvhNode);
-    RC_FIELD(RcBvhNode, boxMin);
-    RC_FIELD(RcBvhNode, boxMax);
-    RC_FIELD(RcBvhNode, first);
-    RC_FIELD(RcBvhNode, count);
-    RC_FIELD(RcBvhNode, axis);
-    RC_FIELD(RcBvhNode, pad);
+    RC_STRUCT(RcBvh8Node);
+    RC_FIELD(RcBvh8Node, loX);
+    RC_FIELD(RcBvh8Node, loY);
+    RC_FIELD(RcBvh8Node, loZ);
+    RC_FIELD(RcBvh8Node, hiX);
+    RC_FIELD(RcBvh8Node, hiY);
+    RC_FIELD(RcBvh8Node, hiZ);
+    RC_FIELD(RcBvh8Node, child);
+    RC_FIELD(RcBvh8Node, nChildren);
+    RC_FIELD(RcBvh8Node, pad);
 #undef RC_STRUCT
 #undef RC_FIELD
     return e;

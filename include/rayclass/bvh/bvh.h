@@ -1,7 +1,7 @@
-// A bounding volume hierarchy over the scene's primitives, built on the host with the binned
-// surface area heuristic (Wald 2007) and flattened depth-first into RcBvhNode (rc_types.h) for the
-// stack-based traversal kernels of cl/bvh.cl (--accel bvh): the mainstream structure that ray
-// classification is measured against.
+// A bounding volume hierarchy over the scene's primitives, built on the host as a binary tree with
+// the binned surface area heuristic (Wald 2007), then collapsed to eight children per node
+// (RcBvh8Node, rc_types.h) for the stack-based traversal kernels of cl/bvh.cl (--accel bvh): the
+// mainstream structure that ray classification is measured against.
 #pragma once
 
 #include <cstdint>
@@ -21,8 +21,19 @@ struct BuildParams {
     uint32_t threads = 0;        // build threads (0: one per core); the tree does not depend on it
 };
 
+// A node of the binary tree, flattened depth first. count > 0: a leaf whose primitives' ids are
+// primIndex[first, first + count); count == 0: an inner node whose children are nodes[self + 1]
+// and nodes[first], split along `axis` (the child at self + 1 holds the lower centroids). The box
+// is padded (see Build).
+struct BinaryNode {
+    Bounds3f box;
+    uint32_t first = 0;
+    uint32_t count = 0;
+    uint32_t axis = 0;
+};
+
 struct Bvh {
-    std::vector<RcBvhNode> nodes;     // nodes[0] is the root
+    std::vector<BinaryNode> nodes;    // nodes[0] is the root
     std::vector<uint32_t> primIndex;  // leaves' global primitive ids
     uint32_t maxDepth = 0;            // deepest leaf (root = 0)
 };
@@ -34,7 +45,20 @@ Bvh Build(std::span<const Bounds3f> boxes, float pad, const BuildParams& params 
 // Every primitive of the scene (global ids), padded by 1e-6 of the scene box's diagonal.
 Bvh Build(const scene::Scene& scene, const BuildParams& params = {});
 
-// The traversal kernels' stack depth; Build fails (std::runtime_error) on a deeper tree.
+// Build fails (std::runtime_error) on a deeper tree: Collapse keeps a walk of the wide tree within
+// kStackEntries, which it can as long as the binary tree is no deeper.
 constexpr uint32_t kMaxDepth = 60;
+
+// The traversal kernels' stack (RC_BVH_STACK in cl/bvh.cl). Eight children everywhere needed 89
+// entries on Conference (binary depth 34); 64 made Collapse narrow 16,882 of its nodes and cost
+// 15-25 % of its eye and shadow rays' speed.
+constexpr uint32_t kStackEntries = 128;
+
+// The binary tree collapsed to nodes of up to eight children, nodes[0] the root, over the same
+// primIndex: each node takes the children of its binary node, then repeatedly replaces the inner
+// child of the largest surface with that child's two children. A node has fewer children where
+// more would let a walk push more than kStackEntries entries. Fails (std::runtime_error) on a leaf
+// of more than RC_BVH8_MAX_LEAF primitives or on more than RC_BVH8_FIRST_MASK + 1 primitives.
+std::vector<RcBvh8Node> Collapse(const Bvh& tree);
 
 }  // namespace rayclass::bvh
