@@ -67,14 +67,15 @@ inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
             if (mask != 0) {
                 float near[8];
                 vstore8(tn, 0, near);
-                /* The entered children, nearest first (insertion sort of at most eight). */
+                /* The entered children, nearest first (insertion sort of at most eight), or
+                 * in lane order when any hit ends the walk. */
                 uint r[8];
                 float t[8];
                 int k = 0;
                 for (; mask != 0; mask &= mask - 1) {
                     const int c = popcount((mask & -mask) - 1);
                     int j = k++;
-                    for (; j > 0 && t[j - 1] > near[c]; --j) {
+                    for (; !anyHit && j > 0 && t[j - 1] > near[c]; --j) {
                         t[j] = t[j - 1];
                         r[j] = r[j - 1];
                     }
