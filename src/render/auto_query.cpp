@@ -25,9 +25,7 @@ constexpr size_t kSampleRuns = 16, kSampleRunRays = 1024;
 // One kind of query (nearest hit or shadow) and what its choice is based on.
 struct Choice {
     bool onBvh = false;  // once the BVH has won, it answers every later generation
-    // A sample has run: the first is run twice, since its first run also pays for compiling
-    // the BVH kernel and faulting in the tree (11 us a ray instead of 0.8 on Sibenik).
-    bool warm = false;
+    bool sampled = false;  // a sample of this kind has run (see TimeSample)
     QueryCosts costs;  // what the current generation's choice compared
     // The classification's cost on the current generation: seconds of the render thread's
     // time, and rays.
@@ -158,12 +156,16 @@ class AutoQuery final : public RayQuery {
     }
 
     // Seconds per sample_ ray that run() (the BVH on the uploaded sample, to completion)
-    // takes on the otherwise idle device; the first sample of a kind runs twice.
+    // takes on the otherwise idle device, timed on a run after one that brings the tree back
+    // into the caches the classification used, and the first sample of a kind after two: its
+    // first run also compiles the kernel and faults in the tree. Sibenik with mirror rays, ns a
+    // ray on runs after the first: 443, 321, 327 for the first sample, 472, 235, 267 for the
+    // next one; whole generations cost about the lower figures.
     template <typename Run>
     double TimeSample(Choice& choice, const Run& run) {
         clrt::Check("clFinish", [&] { ctx_.queue().finish(); });  // the upload, and nothing else
-        if (!choice.warm) run();
-        choice.warm = true;
+        for (int warmUp = choice.sampled ? 1 : 2; warmUp > 0; --warmUp) run();
+        choice.sampled = true;
         const auto t0 = Clock::now();
         run();
         return SecondsSince(t0) / double(sample_.size());
