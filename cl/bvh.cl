@@ -17,7 +17,9 @@ inline float8 rc_min8(float8 a, float8 b) { return select(b, a, a < b); }
 inline float8 rc_max8(float8 a, float8 b) { return select(b, a, a > b); }
 
 /* 1 / d, with a zero component replaced by a huge finite value of its sign: then no slab distance
- * is 0 * infinity, and a ray in a slab's plane counts as inside it (never culls a primitive). */
+ * is 0 * infinity (NaN), and min and max can be plain selects. The boxes' padding keeps every
+ * primitive strictly inside its slabs, so a ray parallel to a slab can reach the primitives only
+ * from inside it (tests/render/bvh_query_test.cpp). */
 inline float3 rc_bvh_inverse(float3 d) {
     const float3 inv = (float3)(1.0f) / d;
     return select(inv, copysign((float3)(1e30f), inv), isinf(inv));
