@@ -26,11 +26,15 @@ struct ClassifiedBatch final : PreparedBatch {
     std::vector<uint32_t> fragmentLeaves;  // leaves the fragment-style kernel answers
 };
 
-// Directions of a leaf's rays vary little: packets of its rays stay in lockstep. On PoCL the
-// fragment style won nearly every leaf kind measured (docs/bench), so the bound is generous:
-// scripts/pipeline-report gave auto 5.43 / 3.22 Mrays/s (Sibenik / Conference with mirror rays)
-// at 0.5 against 5.10 / 3.13 at 0.125, always-fragment 5.56 / 3.43.
-constexpr float kCoherentDirExtent = 0.5f;
+// Auto's choice per leaf: the style of fewer loop iterations, a fragment packet's per candidate
+// against the vertex style's per ray and block of 16 candidates, the latter weighed 3x (chart 1
+// of docs/bench: at equal tests per ray the vertex style ran 1.9-3.5x slower). So only leaves of
+// a few rays with long lists take the vertex style. It replaced "fragment for at least 16 rays
+// whose directions span at most 0.5", which sent cornell.json's mirror, refraction and diffuse
+// rays to the vertex style at 0.3-0.5x the fragment style's speed (raybench, 2 alternating
+// rounds: reflection 8.4-9.1 -> 18.7-23.1 Mrays/s, always-fragment 21-25; the large scenes
+// within the noise).
+constexpr uint64_t kVertexIteration = 3;
 
 class ClassifiedQuery final : public RayQuery {
   public:
@@ -142,15 +146,14 @@ class ClassifiedQuery final : public RayQuery {
         out.rayLeaf.resize(perRay ? out.batch.rayIndex.size() : 0);
         out.vertexLeaves.clear();
         out.fragmentLeaves.clear();
-        const auto& nodes = hierarchy.Nodes();
         for (uint32_t l = 0; l < out.batch.leaves.size(); ++l) {
             const RcLeaf& leaf = out.batch.leaves[l];
             if (perRay) std::fill_n(out.rayLeaf.begin() + leaf.rayBegin, leaf.rayCount, l);
             bool fragment = style == KernelStyle::kFragment;
             if (style == KernelStyle::kAuto) {
-                const auto& box = nodes[leaf.node].box;
-                const float dirExtent = std::max(box.hi[3] - box.lo[3], box.hi[4] - box.lo[4]);
-                fragment = leaf.rayCount >= 16 && dirExtent <= kCoherentDirExtent;
+                const uint64_t packets = (leaf.rayCount + 15) / 16,
+                               blocks = (leaf.candCount + 15) / 16;
+                fragment = packets * leaf.candCount <= kVertexIteration * leaf.rayCount * blocks;
             }
             (fragment ? out.fragmentLeaves : out.vertexLeaves).push_back(l);
         }
