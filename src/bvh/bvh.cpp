@@ -184,9 +184,10 @@ void SetChildBox(RcBvh8Node& node, uint32_t c, const Bounds3f& box) {
 
 // Collapses binary subtrees into wide nodes, depth first (a node's index is below its children's).
 struct Collapser {
-    explicit Collapser(const Bvh& tree_) : tree(tree_), need(tree_.nodes.size(), 0) {
+    explicit Collapser(const Bvh& tree_)
+        : tree(tree_), greedy(tree_.nodes.size(), 0), need(tree_.nodes.size(), 0) {
         // Children come after their parent: bottom up is back to front.
-        std::vector<uint32_t> height(tree.nodes.size(), 0), greedy(tree.nodes.size(), 0);
+        std::vector<uint32_t> height(tree.nodes.size(), 0);
         for (size_t b = tree.nodes.size(); b-- > 0;) {
             const BinaryNode& n = tree.nodes[b];
             if (n.count > 0) continue;
@@ -201,9 +202,10 @@ struct Collapser {
     }
 
     const Bvh& tree;
-    // Per binary node: the stack entries a walk of its wide subtree needs at least, the fewer of
-    // its height (two children everywhere) and its greedy collapse's (eight where it can).
-    std::vector<uint32_t> need;
+    // Per binary node: the stack entries a walk of its wide subtree takes when every node has as
+    // many children as Expand gives it without a budget, and the fewest it can be made to take,
+    // the fewer of that and its height (two children everywhere).
+    std::vector<uint32_t> greedy, need;
     std::vector<RcBvh8Node> nodes;
 
     // Inner node b's children in its wide node: its binary children, then the widest inner child
@@ -249,10 +251,13 @@ struct Collapser {
     }
 
     // The wide node of inner binary node b, for a walk that may push `budget` more entries (at
-    // least need[b]). The node pushes at most nChildren - 1 and leaves the rest to its children.
+    // least need[b]). The node pushes at most nChildren - 1 and leaves the rest to its children,
+    // each of which gets at least its need: with budget >= greedy[b] the unbounded expansion
+    // leaves each child its own greedy; else budget >= height[b], which two children fit, and
+    // Expand takes a third and more only while they fit.
     uint32_t Node(uint32_t b, uint32_t budget) {
         uint32_t child[8];
-        const uint32_t n = Expand(b, child, budget);
+        const uint32_t n = Expand(b, child, budget >= greedy[b] ? ~0u : budget);
         const uint32_t self = uint32_t(nodes.size());
         nodes.emplace_back();
         RcBvh8Node wide{};
@@ -268,7 +273,7 @@ struct Collapser {
 
 }  // namespace
 
-std::vector<RcBvh8Node> Collapse(const Bvh& tree) {
+std::vector<RcBvh8Node> Collapse(const Bvh& tree, uint32_t stackEntries) {
     if (tree.primIndex.size() > size_t(RC_BVH8_FIRST_MASK) + 1)
         throw std::runtime_error("bvh: more primitives than the kernels' leaves can address (" +
                                  std::to_string(RC_BVH8_FIRST_MASK + 1) + ")");
@@ -276,7 +281,10 @@ std::vector<RcBvh8Node> Collapse(const Bvh& tree) {
     c.nodes.reserve(tree.nodes.size() / 4 + 1);
     const BinaryNode& root = tree.nodes[0];
     if (root.count == 0 && !tree.primIndex.empty()) {
-        c.Node(0, kStackEntries);
+        if (c.need[0] > stackEntries)
+            throw std::runtime_error("bvh: the tree needs a stack of " + std::to_string(c.need[0]) +
+                                     " entries, more than " + std::to_string(stackEntries));
+        c.Node(0, stackEntries);
         return std::move(c.nodes);
     }
     // A single leaf (or no primitive): a root of one child (or none).
@@ -284,7 +292,7 @@ std::vector<RcBvh8Node> Collapse(const Bvh& tree) {
     wide.nChildren = tree.primIndex.empty() ? 0 : 1;
     for (uint32_t k = 0; k < 8; ++k)
         SetChildBox(wide, k, k < wide.nChildren ? root.box : Bounds3f{});
-    if (wide.nChildren > 0) wide.child[0] = c.Ref(0, kStackEntries);
+    if (wide.nChildren > 0) wide.child[0] = c.Ref(0, stackEntries);
     c.nodes.push_back(wide);
     return std::move(c.nodes);
 }

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <functional>
 #include <random>
+#include <string>
 
 #include "rayclass/scene/loader.h"
 
@@ -69,8 +70,8 @@ Bounds3f ChildBox(const RcBvh8Node& n, uint32_t c) {
 // Walks the wide tree as cl/bvh.cl does, pushing every child but one at each node: each primitive
 // is in exactly one leaf, inside the boxes of every node above it, each node is reached once, and
 // no walk needs more stack entries than the kernels have. Returns the most entries a walk needs.
-uint32_t CheckWide(const Bvh& t, std::span<const RcBvh8Node> wide,
-                   std::span<const Bounds3f> boxes) {
+uint32_t CheckWide(const Bvh& t, std::span<const RcBvh8Node> wide, std::span<const Bounds3f> boxes,
+                   uint32_t stackEntries = kStackEntries) {
     EXPECT_FALSE(wide.empty());
     if (wide.empty()) return 0;
     std::vector<int> seen(boxes.size(), 0);
@@ -114,7 +115,7 @@ uint32_t CheckWide(const Bvh& t, std::span<const RcBvh8Node> wide,
     }
     for (size_t p = 0; p < boxes.size(); ++p) EXPECT_EQ(seen[p], 1) << "primitive " << p;
     for (size_t i = 0; i < visited.size(); ++i) EXPECT_TRUE(visited[i]) << "orphan node " << i;
-    EXPECT_LE(deepest, kStackEntries);
+    EXPECT_LE(deepest, stackEntries);
     return deepest;
 }
 
@@ -272,6 +273,34 @@ TEST(BvhCollapse, SideHeavyChainStaysWithinTheKernelsStack) {
     // The budget is used, not just kept: the top nodes have eight children.
     EXPECT_GT(CheckWide(t, wide, boxes), kStackEntries - 8);
     EXPECT_EQ(wide[0].nChildren, 8u);
+}
+
+TEST(BvhCollapse, WalksStayWithinAnyStackAsHighAsTheTree) {
+    // Seeded random trees, each collapsed for stacks from its own height up: the budget binds
+    // at the small ones and every walk must still fit.
+    for (uint32_t seed = 1; seed <= 12; ++seed) {
+        const std::vector<Bounds3f> boxes =
+            RandomBoxes(seed, 500 + 300 * seed, 0.5f + float(seed), /*flat=*/seed % 2 == 0);
+        const Bvh t = Build(boxes, 1e-4f);
+        for (uint32_t extra : {0u, 1u, 3u, 7u, 15u, 200u}) {
+            const uint32_t stack = t.maxDepth + extra;
+            const std::vector<RcBvh8Node> wide = Collapse(t, stack);
+            SCOPED_TRACE("seed " + std::to_string(seed) + ", stack " + std::to_string(stack));
+            CheckWide(t, wide, boxes, stack);
+        }
+    }
+    std::vector<Bounds3f> boxes;
+    const Bvh chain = SideHeavyChain(50, boxes);
+    for (uint32_t stack : {53u, 54u, 60u, 100u}) {
+        SCOPED_TRACE("chain, stack " + std::to_string(stack));
+        CheckWide(chain, Collapse(chain, stack), boxes, stack);
+    }
+    try {
+        Collapse(chain, 20);
+        FAIL() << "no error";
+    } catch (const std::runtime_error& e) {
+        EXPECT_STREQ(e.what(), "bvh: the tree needs a stack of 53 entries, more than 20");
+    }
 }
 
 TEST(BvhCollapse, LeavesTooLongForTheKernelsFail) {

@@ -57,8 +57,9 @@ constexpr uint32_t kStackEntries = 128;
 // The binary tree collapsed to nodes of up to eight children, nodes[0] the root, over the same
 // primIndex: each node takes the children of its binary node, then repeatedly replaces the inner
 // child of the largest surface with that child's two children. A node has fewer children where
-// more would let a walk push more than kStackEntries entries. Fails (std::runtime_error) on a leaf
-// of more than RC_BVH8_MAX_LEAF primitives or on more than RC_BVH8_FIRST_MASK + 1 primitives.
-std::vector<RcBvh8Node> Collapse(const Bvh& tree);
+// more would let a walk push more than `stackEntries` entries. Fails (std::runtime_error) on a
+// leaf of more than RC_BVH8_MAX_LEAF primitives, on more than RC_BVH8_FIRST_MASK + 1 primitives
+// and on a tree higher than `stackEntries` (Build's trees are at most kMaxDepth high).
+std::vector<RcBvh8Node> Collapse(const Bvh& tree, uint32_t stackEntries = kStackEntries);
 
 }  // namespace rayclass::bvh
