@@ -53,6 +53,8 @@ options:
   --reference             render with the double-precision host reference renderer
   --stats FILE.json       write ray counts and timings as JSON
   --exposure E            PNG only: scale by 2^E before tone mapping (default 0)
+  --exr-compression C     zip (default), piz or none: lossless; float radiance compresses
+                          poorly, and ZIP can take longer than a short render (see README)
   --batch-rays N          rays per kernel launch (default 262144)
   --cl-options STRING     extra OpenCL build options (e.g. -cl-fast-relaxed-math)
   --eye-rays P            first hits of the eye rays: raster (OpenGL hull projection, headless
@@ -76,6 +78,7 @@ struct RenderArgs {
     bool reference = false;
     std::string statsFile;
     float exposure = 0.0f;
+    std::string exrCompression;  // empty: the writer's default (zip)
     std::string eyeRays;  // empty: raster when a GL context can be made
     int depthBits = 32;
     double depthScale = 0;  // 0: automatic
@@ -171,6 +174,13 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
             r.statsFile = value();
         } else if (a == "--exposure") {
             r.exposure = ParseNumber<float>(a, value(), -64.0f, 64.0f);
+        } else if (a == "--exr-compression") {
+            r.exrCompression = value();
+            if (r.exrCompression != "zip" && r.exrCompression != "piz" &&
+                r.exrCompression != "none") {
+                throw UsageError("--exr-compression must be zip, piz or none, not '" +
+                                 r.exrCompression + "'");
+            }
         } else if (a == "--batch-rays") {
             r.options.batchRays = ParseNumber<uint32_t>(a, value(), 64, 1u << 24);
         } else if (a == "--cl-options") {
@@ -212,6 +222,9 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
         throw UsageError(r.output + ": unsupported output format '" + ext + "' (use .exr or .png)");
     }
     if (!r.aovs.empty() && ext != ".exr") throw UsageError("--aov needs an .exr output");
+    if (!r.exrCompression.empty() && ext != ".exr") {
+        throw UsageError("--exr-compression needs an .exr output");
+    }
     // Silently ignoring them would pass off a kernel or reference image as a raster experiment.
     if (!r.rasterOption.empty() && (r.reference || r.eyeRays == "kernel")) {
         throw UsageError(r.rasterOption + " sets up the raster eye-ray pass, which " +
@@ -332,6 +345,8 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
     if (statsFile) statsFile->Write(stats.ToJson().dump(2) + "\n");
     image::WriteOptions writeOptions;
     writeOptions.exposure = r.exposure;
+    if (r.exrCompression == "piz") writeOptions.exrCompression = image::ExrCompression::kPiz;
+    if (r.exrCompression == "none") writeOptions.exrCompression = image::ExrCompression::kNone;
     image::WriteImage(img, r.output, writeOptions);
     if (statsFile) statsFile->Commit();
     if (r.options.progress) {

@@ -56,11 +56,14 @@ int ExrThreads() { return int(std::max(1u, std::thread::hardware_concurrency()))
 
 }  // namespace
 
-void WriteExr(const Image& image, OutFile& file, const std::string& name) {
+void WriteExr(const Image& image, OutFile& file, const std::string& name,
+              ExrCompression compression) {
     if (image.width > INT_MAX || image.height > INT_MAX)
         throw std::runtime_error("image too large");
     Imf::Header header(int(image.width), int(image.height));
-    header.compression() = Imf::ZIP_COMPRESSION;
+    header.compression() = compression == ExrCompression::kZip   ? Imf::ZIP_COMPRESSION
+                           : compression == ExrCompression::kPiz ? Imf::PIZ_COMPRESSION
+                                                                 : Imf::NO_COMPRESSION;
     const Imath::Box2i& window = header.dataWindow();
     Imf::FrameBuffer frame;
     const glm::vec3* rgb = image.rgb.data();

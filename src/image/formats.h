@@ -37,7 +37,8 @@ class OutFile {
 };
 
 // Codecs: each throws std::exception (any kind) carrying a bare reason; callers add the path.
-void WriteExr(const Image& image, OutFile& file, const std::string& name);
+void WriteExr(const Image& image, OutFile& file, const std::string& name,
+              ExrCompression compression);
 void WritePng(const Image& image, OutFile& file, float exposure);
 Image ReadExr(const std::filesystem::path& file);
 Image ReadPng(const std::filesystem::path& file);

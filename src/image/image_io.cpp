@@ -121,7 +121,7 @@ void WriteImage(const Image& image, const fs::path& out, const WriteOptions& opt
         if (file.Failed()) throw std::runtime_error(file.Reason());
         try {
             if (format == Format::kExr) {
-                detail::WriteExr(image, file, out.string());
+                detail::WriteExr(image, file, out.string(), options.exrCompression);
             } else {
                 detail::WritePng(image, file, options.exposure);
             }

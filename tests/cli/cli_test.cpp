@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -154,8 +155,8 @@ TEST_F(Cli, RenderHelpDescribesEveryOption) {
     EXPECT_EQ(r.out.rfind("usage: rayclass render SCENE -o OUT.{exr,png} [options]\n", 0), 0u);
     for (const char* option :
          {"-o, --output", "--width", "--height", "--aov", "--max-depth", "--min-weight", "--device",
-          "--reference", "--stats", "--exposure", "--batch-rays", "--cl-options", "--depth-bits",
-          "--depth-scale", "-q, --quiet"}) {
+          "--reference", "--stats", "--exposure", "--exr-compression", "--batch-rays",
+          "--cl-options", "--depth-bits", "--depth-scale", "-q, --quiet"}) {
         EXPECT_NE(r.out.find(option), std::string::npos) << option;
     }
     EXPECT_EQ(r.err, "");
@@ -280,6 +281,14 @@ TEST_F(CliFailure, UsageErrorsExitWith2AndNameTheProblem) {
          2,
          "rayclass render: --accel must be classify, bvh, auto or brute, not 'kdtree'\n",
          "x.exr"},
+        {{"SCENE", "-o", "x.exr", "--exr-compression", "dwaa"},
+         2,
+         "rayclass render: --exr-compression must be zip, piz or none, not 'dwaa'\n",
+         "x.exr"},
+        {{"SCENE", "-o", "x.png", "--exr-compression", "none"},
+         2,
+         "rayclass render: --exr-compression needs an .exr output\n",
+         "x.png"},
         {{"SCENE", "-o", "x.exr", "--stats", "s.txt"},
          2,
          "rayclass render: --stats expects a .json file, not 's.txt'\n",
@@ -553,6 +562,27 @@ TEST_F(Cli, RenderWritesTheImageAndConsistentStatsAndNothingElse) {
                           0),
               0u)
         << r.err;
+}
+
+TEST_F(Cli, ExrCompressionsGiveTheSamePixels) {
+    std::vector<image::Image> images;
+    for (const char* compression : {"zip", "piz", "none"}) {
+        const std::string out = std::string(compression) + ".exr";
+        const Result r = Run({"render", Cornell(), "--width", "16", "--height", "12", "-o", out,
+                              "--exr-compression", compression, "--aov", "id", "-q"});
+        ASSERT_EQ(r.status, 0) << compression << ": " << r.err;
+        images.push_back(image::ReadImage(Work(out)));
+    }
+    for (size_t k = 1; k < images.size(); ++k) {
+        EXPECT_EQ(std::memcmp(images[k].rgb.data(), images[0].rgb.data(),
+                              images[0].rgb.size() * sizeof(glm::vec3)),
+                  0)
+            << k;
+        EXPECT_EQ(images[k].id, images[0].id) << k;
+    }
+    // Uncompressed is what it says: larger than ZIP.
+    EXPECT_GT(std::filesystem::file_size(Work("none.exr")),
+              std::filesystem::file_size(Work("zip.exr")));
 }
 
 TEST_F(Cli, QuietPngRenderReplacesThePreviousOutput) {

@@ -101,6 +101,23 @@ TEST_F(ImageIoTest, ExrUsesDocumentedChannelsAndZip) {
     EXPECT_EQ(file.header().compression(), Imf::ZIP_COMPRESSION);
 }
 
+TEST_F(ImageIoTest, EveryExrCompressionIsLosslessAndNamedInTheHeader) {
+    const Image image = AllLayers();
+    for (auto [compression, expected] : {std::pair{ExrCompression::kZip, Imf::ZIP_COMPRESSION},
+                                         std::pair{ExrCompression::kPiz, Imf::PIZ_COMPRESSION},
+                                         std::pair{ExrCompression::kNone, Imf::NO_COMPRESSION}}) {
+        WriteOptions options;
+        options.exrCompression = compression;
+        WriteImage(image, Path("c.exr"), options);
+        EXPECT_EQ(Imf::InputFile(Path("c.exr").c_str()).header().compression(), expected);
+        const Image back = ReadImage(Path("c.exr"));
+        EXPECT_TRUE(SameBits(back.rgb, image.rgb)) << int(expected);
+        EXPECT_TRUE(SameBits(back.depth, image.depth)) << int(expected);
+        EXPECT_TRUE(SameBits(back.id, image.id)) << int(expected);
+        EXPECT_TRUE(SameBits(back.normal, image.normal)) << int(expected);
+    }
+}
+
 TEST_F(ImageIoTest, ExrWithoutAovsReadsBackWithoutThem) {
     Image image(2, 2);
     image.rgb = {glm::vec3(1, 2, 3), glm::vec3(4, 5, 6), glm::vec3(7, 8, 9), glm::vec3(0.5f)};
