@@ -4,10 +4,12 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfThreading.h>
 
 #include <algorithm>
 #include <climits>
 #include <cstddef>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -50,9 +52,30 @@ bool HasChannel(const Imf::ChannelList& channels, const char* name) {
     return channel && channel->xSampling == 1 && channel->ySampling == 1;
 }
 
-// ZIP compression of a 1024x768 image with its AOV layers took 0.3 s on one thread, as long as
-// the render of Sibenik; OpenEXR compresses blocks of lines on its own threads.
-int ExrThreads() { return int(std::max(1u, std::thread::hardware_concurrency())); }
+// ZIP compression of a 1024x768 image with its AOV layers takes 0.3-0.4 s on one thread, as
+// long as a shallow render of Sibenik; OpenEXR compresses and decompresses blocks of lines on
+// the threads of its global pool. A file's thread count only sets how many blocks it keeps in
+// flight: the pool starts with no threads, and every block then runs on the caller's. So each
+// read or write sizes the pool to one thread per core and empties it again when done: no
+// threads outlive the call (a process that forks later must not inherit a pool whose threads
+// did not come along). The pool is global, hence one file at a time.
+class ExrThreads {
+  public:
+    ExrThreads() : lock_(Mutex()) {
+        Imf::setGlobalThreadCount(int(std::max(1u, std::thread::hardware_concurrency())));
+    }
+    ~ExrThreads() { Imf::setGlobalThreadCount(0); }
+    ExrThreads(const ExrThreads&) = delete;
+    ExrThreads& operator=(const ExrThreads&) = delete;
+    int Count() const { return Imf::globalThreadCount(); }
+
+  private:
+    static std::mutex& Mutex() {
+        static std::mutex m;
+        return m;
+    }
+    std::lock_guard<std::mutex> lock_;
+};
 
 }  // namespace
 
@@ -83,15 +106,17 @@ void WriteExr(const Image& image, OutFile& file, const std::string& name,
         AddChannel(header, frame, "normal.Z", Imf::FLOAT, &normal->z, kVec3Stride, window);
     }
     ExrStream stream(file, name);
+    const ExrThreads threads;
     // The line offset table is written by the destructor, which swallows errors; OutFile keeps
     // them for the caller.
-    Imf::OutputFile output(stream, header, ExrThreads());
+    Imf::OutputFile output(stream, header, threads.Count());
     output.setFrameBuffer(frame);
     output.writePixels(int(image.height));
 }
 
 Image ReadExr(const std::filesystem::path& path) {
-    Imf::InputFile input(path.c_str(), ExrThreads());
+    const ExrThreads threads;
+    Imf::InputFile input(path.c_str(), threads.Count());
     const Imf::Header& header = input.header();
     const Imath::Box2i& window = header.dataWindow();
     const Imf::ChannelList& channels = header.channels();
