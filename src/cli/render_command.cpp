@@ -55,7 +55,7 @@ options:
   --exposure E            PNG only: scale by 2^E before tone mapping (default 0)
   --exr-compression C     zip (default), piz or none: lossless; float radiance compresses
                           poorly, and ZIP can take longer than a short render (see README)
-  --batch-rays N          rays per kernel launch (default 262144)
+  --batch-rays N          rays per kernel launch (default 1048576)
   --cl-options STRING     extra OpenCL build options (e.g. -cl-fast-relaxed-math)
   --eye-rays P            first hits of the eye rays: raster (OpenGL hull projection, headless
                           EGL) or kernel (the OpenCL ray query); default raster when an OpenGL

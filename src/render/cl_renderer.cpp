@@ -277,8 +277,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     const uint32_t nLights = params.nLights;
     // Later generations are split into batches of the same size, so no buffer need be larger
     // than the image.
-    const size_t batch =
-        std::max<size_t>(1, std::min<size_t>(options_.batchRays, size_t(width) * height));
+    const size_t batch = BatchRays(options_.batchRays, size_t(width) * height, params.nLights,
+                                   ctx_.info().maxAllocBytes);
     // Per batch: the query's hits, the shading kernel's outputs.
     cl::Buffer hits = DeviceBuffer(ctx_, batch * sizeof(RcHit));
     ShadeBuffers shade;

@@ -1,5 +1,6 @@
 #include "rayclass/render/launch.h"
 
+#include <algorithm>
 #include <numeric>
 
 namespace rayclass::render {
@@ -8,6 +9,13 @@ cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes) {
     return clrt::Check("clCreateBuffer", [&] {
         return cl::Buffer(ctx.context(), CL_MEM_READ_WRITE, std::max<size_t>(1, bytes));
     });
+}
+
+size_t BatchRays(size_t requested, size_t imageRays, uint32_t nLights, uint64_t maxAllocBytes) {
+    const uint64_t perRay = std::max<uint64_t>(
+        {uint64_t(nLights) * sizeof(RcRay), 2 * sizeof(RcRay), 2 * sizeof(RcRayInfo)});
+    const uint64_t fits = maxAllocBytes / perRay;
+    return size_t(std::max<uint64_t>(1, std::min<uint64_t>({requested, imageRays, fits})));
 }
 
 void Launch(clrt::Context& ctx, cl::Kernel& kernel, size_t n, KernelTimer& timer) {

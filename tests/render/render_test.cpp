@@ -13,6 +13,7 @@
 #include "rayclass/image/compare.h"
 #include "rayclass/render/auto_query.h"
 #include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/launch.h"
 #include "rayclass/render/reference.h"
 #include "rayclass/scene/loader.h"
 
@@ -209,6 +210,17 @@ TEST(ClRenderer, BatchSizeDoesNotChangeTheImage) {
     const image::Image batched = ClRenderer(SharedContext(), scene, options).Render(s2);
     ASSERT_EQ(whole.rgb.size(), batched.rgb.size());
     for (size_t i = 0; i < whole.rgb.size(); ++i) ASSERT_EQ(whole.rgb[i], batched.rgb[i]) << i;
+}
+
+TEST(BatchRays, TheRequestBoundedByTheImageAndOneDeviceAllocation) {
+    constexpr uint64_t kGiB = uint64_t(1) << 30;
+    EXPECT_EQ(BatchRays(1u << 20, 1024 * 768, 1, 4 * kGiB), 1024u * 768u);  // the image
+    EXPECT_EQ(BatchRays(1u << 20, 1920 * 1080, 1, 4 * kGiB), 1u << 20);     // the request
+    // 256 lights: a batch's shadow rays (32 bytes each) in 1 GiB.
+    EXPECT_EQ(BatchRays(1u << 20, 1920 * 1080, 256, kGiB), kGiB / (256 * sizeof(RcRay)));
+    // No light: the two secondary rays' records bound it.
+    EXPECT_EQ(BatchRays(1u << 20, 1920 * 1080, 0, 64 << 20), (64u << 20) / (2 * sizeof(RcRayInfo)));
+    EXPECT_EQ(BatchRays(1u << 20, 1920 * 1080, 1u << 20, 1024), 1u);  // never none
 }
 
 TEST(ClRenderer, DepthLimitStopsMirrorsFacingEachOther) {

@@ -29,6 +29,11 @@ cl::Buffer UploadVector(clrt::Context& ctx, const std::vector<T>& v) {
 // A read-write buffer of at least one byte.
 cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes);
 
+// Rays per batch: `requested`, at most the image's rays, and few enough that the largest buffer
+// a batch needs per ray (its shadow rays, one per light, or its two secondary rays and their
+// records) fits one allocation of the device. At least one.
+size_t BatchRays(size_t requested, size_t imageRays, uint32_t nLights, uint64_t maxAllocBytes);
+
 template <typename... Args>
 void SetArgs(cl::Kernel& kernel, const Args&... args) {
     clrt::Check("clSetKernelArg", [&] {
