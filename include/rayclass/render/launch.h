@@ -56,8 +56,8 @@ class GrowingBuffer {
     const cl::Buffer& Reserve(clrt::Context& ctx, size_t bytes);
     // Reserves room for `data` and enqueues a non-blocking copy of it (keep `data` alive and
     // unchanged until the queue has passed the copy).
-    template <typename T>
-    const cl::Buffer& Upload(clrt::Context& ctx, const std::vector<T>& data) {
+    template <typename T, typename Allocator>
+    const cl::Buffer& Upload(clrt::Context& ctx, const std::vector<T, Allocator>& data) {
         Reserve(ctx, data.size() * sizeof(T));
         if (!data.empty()) {
             clrt::Check("clEnqueueWriteBuffer", [&] {
