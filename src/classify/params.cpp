@@ -58,7 +58,7 @@ float ParseFloat(const std::string& name, const std::string& value, float lo, fl
 
 const char* ParamNames() {
     return "min-rays, min-candidates, splits-per-list, split, min-origin-fraction, "
-           "min-dir-fraction, dir-weight, threads, task-rays, plan-rays";
+           "min-dir-fraction, dir-weight, threads, task-rays, plan-rays, vertex-gather";
 }
 
 void SetParam(Params& params, const std::string& name, const std::string& value) {
@@ -87,6 +87,8 @@ void SetParam(Params& params, const std::string& name, const std::string& value)
         params.taskRays = ParseCount(name, value, 0);
     } else if (name == "plan-rays") {
         params.planRays = ParseCount(name, value, 0);
+    } else if (name == "vertex-gather") {
+        params.vertexGatherCost = ParseFloat(name, value, 0.0f, 1e30f, false, "a number >= 0");
     } else if (name == "threads") {
         params.threads = std::min<uint32_t>(ParseCount(name, value, 0), 256);
     } else {

@@ -45,7 +45,8 @@ options:
   --classify NAME=VALUE   a cost-function setting of the classification (repeatable): min-rays,
                           min-candidates, splits-per-list, split (midpoint|median),
                           min-origin-fraction, min-dir-fraction, dir-weight, threads
-                          (classification threads, 0 = one per core), task-rays, plan-rays
+                          (classification threads, 0 = one per core), task-rays, plan-rays,
+                          vertex-gather (--kernel auto's price of a vertex-style block)
   --ray-encoding E        ray directions as float (default) or polar16: packed 16-bit polar
                           angles, the thesis's compact form (costs accuracy, see README)
   --triangle-test T       moller (default) or watertight (Woop et al. 2013; brute, scalar and

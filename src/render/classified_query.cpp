@@ -26,15 +26,19 @@ struct ClassifiedBatch final : PreparedBatch {
     std::vector<uint32_t> fragmentLeaves;  // leaves the fragment-style kernel answers
 };
 
-// Auto's choice per leaf: the style of fewer loop iterations, a fragment packet's per candidate
-// against the vertex style's per ray and block of 16 candidates, the latter weighed 3x (chart 1
-// of docs/bench: at equal tests per ray the vertex style ran 1.9-3.5x slower). So only leaves of
-// a few rays with long lists take the vertex style. It replaced "fragment for at least 16 rays
-// whose directions span at most 0.5", which sent cornell.json's mirror, refraction and diffuse
-// rays to the vertex style at 0.3-0.5x the fragment style's speed (raybench, 2 alternating
-// rounds: reflection 8.4-9.1 -> 18.7-23.1 Mrays/s, always-fragment 21-25; the large scenes
-// within the noise).
+// Auto's choice per leaf: the style of less work in units of a fragment packet's test of one
+// candidate. A vertex-style leaf costs kVertexIteration per ray and block of 16 candidates
+// (chart 1 of docs/bench: at equal tests per ray the vertex style ran 1.9-3.5x slower) plus
+// Params::vertexGatherCost per block, for rc_gather_blocks's copy of the block's triangles.
+// On PoCL on these 2-core Xeons that copy cost 148 ns a block against 11.7 ns a fragment
+// iteration (sibenik_mirror), hence kCpuGatherCost. Without it auto sent 2.2 million blocks of
+// sibenik_mirror's deep generations to the vertex style; with it no leaf is cheaper as vertex
+// style (that needs more iterations per block than the 16 candidates a block holds), and the
+// render's query, gather and shading kernels took 1.02-1.11 s instead of 1.37-1.55 s
+// (conference_mirror 0.85-1.03 against 1.18-1.48 s; 3 alternating runs). Other devices keep
+// the rule without the gather until measured.
 constexpr uint64_t kVertexIteration = 3;
+constexpr float kCpuGatherCost = 13.0f;
 
 class ClassifiedQuery final : public RayQuery {
   public:
@@ -45,6 +49,9 @@ class ClassifiedQuery final : public RayQuery {
           hierarchy_(scene, params),
           shadowHierarchy_(hierarchy_),  // a copy: it shares the presorted face lists
           style_(style),
+          gatherCost_(params.vertexGatherCost >= 0.0f ? params.vertexGatherCost
+                      : ctx.info().type == "cpu"      ? kCpuGatherCost
+                                                      : 0.0f),
           queryScalar_(program, "rc_query_scalar"),
           occludedScalar_(program, "rc_occluded_scalar"),
           gather_(program, "rc_gather_blocks"),
@@ -153,7 +160,9 @@ class ClassifiedQuery final : public RayQuery {
             if (style == KernelStyle::kAuto) {
                 const uint64_t packets = (leaf.rayCount + 15) / 16,
                                blocks = (leaf.candCount + 15) / 16;
-                fragment = packets * leaf.candCount <= kVertexIteration * leaf.rayCount * blocks;
+                fragment =
+                    double(packets * leaf.candCount) <=
+                    (double(kVertexIteration * leaf.rayCount) + gatherCost_) * double(blocks);
             }
             (fragment ? out.fragmentLeaves : out.vertexLeaves).push_back(l);
         }
@@ -349,6 +358,7 @@ class ClassifiedQuery final : public RayQuery {
     classify::Hierarchy hierarchy_;
     classify::Hierarchy shadowHierarchy_;
     KernelStyle style_;
+    float gatherCost_;  // auto's price of a vertex-style candidate block (Params)
     cl::Kernel queryScalar_, occludedScalar_, gather_, queryVertexShade_, occludedVertex_,
         queryFragment_, occludedFragment_, shadeIds_, shadeLights_;
     ClassifiedBatch shadowBatch_;

@@ -21,6 +21,9 @@ TEST(SetParam, SetsEveryNamedParameter) {
     SetParam(p, "threads", "3");
     SetParam(p, "task-rays", "5000");
     SetParam(p, "plan-rays", "0");
+    EXPECT_LT(p.vertexGatherCost, 0.0f);  // the device's default
+    SetParam(p, "vertex-gather", "0");
+    EXPECT_EQ(p.vertexGatherCost, 0.0f);
     EXPECT_EQ(p.threads, 3u);
     EXPECT_EQ(p.taskRays, 5000u);
     EXPECT_EQ(p.planRays, 0u);
@@ -52,6 +55,14 @@ TEST(SetParam, UnknownNameListsTheValidNames) {
                              "min-origin-fraction", "min-dir-fraction"}) {
         EXPECT_NE(m.find(name), std::string::npos) << name << " missing from: " << m;
     }
+}
+
+TEST(SetParam, VertexGatherIsANonNegativeNumber) {
+    EXPECT_EQ(MessageOf("vertex-gather", "-1"),
+              "classify parameter vertex-gather=-1: expected a number >= 0");
+    EXPECT_EQ(MessageOf("vertex-gather", "x"),
+              "classify parameter vertex-gather=x: expected a number >= 0");
+    EXPECT_EQ(MessageOf("vertex-gather", "12.5"), "no error");
 }
 
 TEST(SetParam, RejectsValuesThatDoNotParseOrAreOutOfRange) {

@@ -111,6 +111,12 @@ TEST_P(RenderMatchesReference, WithinBounds) {
         EXPECT_EQ(stats.shadowRaysFromLight, c.lightsInBox ? stats.raysByKind["shadow"] : 0u)
             << style;
     }
+    // Auto without the gather's price (a GPU's default) answers some leaves of a batch in each
+    // style: the mixed batch must give the same image too.
+    options.kernel = "auto";
+    options.classifyParams = {{"vertex-gather", "0"}};
+    renderLikeBrute("auto, vertex-gather=0");
+    options.classifyParams.clear();
     // The BVH query uses the same routines and tie-break: identical too.
     {
         options.accel = "bvh";

@@ -55,6 +55,13 @@ struct Params {
     float splitGain = 0.25f;  // fraction of a list a split is expected to drop per child
     int maxDepth = 60;
 
+    // Kernel style auto's price of a vertex-style leaf's candidate block beyond its rays' tests:
+    // the gather kernel's copy of the block's triangles, in fragment-packet iterations
+    // (render/classified_query.cpp). Negative: the device's default, 13 on CPU devices
+    // (measured with PoCL, where it leaves every leaf to the fragment style) and 0 on others
+    // (not measured: no GPU was at hand).
+    float vertexGatherCost = -1.0f;
+
     // Threads that subdivide a generation (0: one per core, or one for fewer than 32k rays).
     // The result does not depend on it.
     uint32_t threads = 0;
@@ -86,7 +93,8 @@ struct Params {
 // Sets one parameter by its command-line name (`--classify NAME=VALUE`):
 //   min-rays N, min-candidates N, splits-per-list N (N >= 1), split midpoint|median,
 //   min-origin-fraction F, min-dir-fraction F (0 <= F <= 1), dir-weight W (W > 0),
-//   threads N (0: one per core), task-rays N (0: automatic), plan-rays N (0: never).
+//   threads N (0: one per core), task-rays N (0: automatic), plan-rays N (0: never),
+//   vertex-gather F (F >= 0).
 // Throws rayclass::UsageError naming the valid names or values when `name` is unknown or `value`
 // does not parse completely or is out of range.
 void SetParam(Params& params, const std::string& name, const std::string& value);
