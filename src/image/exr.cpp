@@ -59,9 +59,11 @@ bool HasChannel(const Imf::ChannelList& channels, const char* name) {
 // read or write sizes the pool to one thread per core and empties it again when done: no
 // threads outlive the call (a process that forks later must not inherit a pool whose threads
 // did not come along). The pool is global, hence one file at a time.
+std::mutex exrPoolMutex;
+
 class ExrThreads {
   public:
-    ExrThreads() : lock_(Mutex()) {
+    ExrThreads() : lock_(exrPoolMutex) {
         Imf::setGlobalThreadCount(int(std::max(1u, std::thread::hardware_concurrency())));
     }
     ~ExrThreads() { Imf::setGlobalThreadCount(0); }
@@ -70,10 +72,6 @@ class ExrThreads {
     int Count() const { return Imf::globalThreadCount(); }
 
   private:
-    static std::mutex& Mutex() {
-        static std::mutex m;
-        return m;
-    }
     std::lock_guard<std::mutex> lock_;
 };
 
