@@ -60,7 +60,7 @@ class AutoQuery final : public RayQuery {
 
     void BeginGeneration(uint32_t generation, const cl::Buffer& rays, uint32_t n,
                          KernelTimer& timer) override {
-        (void)generation;
+        classified_->BeginGeneration(generation, rays, n, timer);
         nearest_.NextGeneration();
         shadow_.NextGeneration();
         shadowSampled_ = false;

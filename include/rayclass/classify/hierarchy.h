@@ -7,7 +7,8 @@
 // to the tight 5D bounds of its rays, so children need not cover their parent. Every split node
 // therefore owns a remainder: a leaf for the rest of its interval. A later generation routes each
 // ray to the child whose interval contains it, else to the remainder, which the cost function may
-// split in turn; rays of several generations thus share one hierarchy.
+// split in turn; several batches of rays thus share one hierarchy. (The renderer shares one per
+// generation: routing a generation through an earlier one's splits cost more than it saved.)
 //
 // Candidate lists hold every primitive whose padded box the node's beam may reach (conservative,
 // never drops a primitive a ray of the node hits), in the order of the box's near X, which the

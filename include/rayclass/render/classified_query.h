@@ -1,6 +1,6 @@
 // The ray query through the ray classification: the host classifies each batch of rays into the
-// lazily built 5D hierarchy (one hierarchy per render, shared by every generation, so later
-// generations land in the remainders of earlier ones), sends the leaves' ray ids and candidate
+// lazily built 5D hierarchy (one per generation, so a generation's later batches land in the
+// remainders of its earlier ones), sends the leaves' ray ids and candidate
 // lists as flat arrays, and one of three kernel styles (cl/classified.cl) answers the rays of
 // every leaf. The rays themselves are already on the device.
 #pragma once
