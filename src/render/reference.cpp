@@ -138,8 +138,9 @@ class Tracer {
             V n = glm::cross(p1 - p0, p2 - p0);
             const double len = glm::length(n);
             s.ng = len > 0.0 ? n / len : -ray.d;
-            s.ns =
-                tri.hasNormals ? w * V(tri.n[0]) + hit.u * V(tri.n[1]) + hit.v * V(tri.n[2]) : s.ng;
+            s.ns = tri.hasNormals
+                       ? glm::normalize(w * V(tri.n[0]) + hit.u * V(tri.n[1]) + hit.v * V(tri.n[2]))
+                       : s.ng;
             s.material = tri.material;
         } else if (id < scene_.QuadricBase()) {
             const auto& sp = scene_.spheres[id - scene_.SphereBase()];
@@ -163,7 +164,6 @@ class Tracer {
         }
         s.entering = glm::dot(ray.d, s.ng) < 0.0;
         if (!s.entering) s.ng = -s.ng;
-        s.ns = glm::normalize(s.ns);
         if (glm::dot(s.ns, s.ng) < 0.0) s.ns = -s.ns;
         return s;
     }
