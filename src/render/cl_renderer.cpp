@@ -343,6 +343,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         // device queries and shades batch k.
         clrt::Check("clFinish", [&] { q.finish(); });
         const auto tGeneration = Clock::now();
+        const double hostBefore = query->HostSeconds();
+        const uint64_t testsBefore = stats.intersectionTests;
         if (!(generation == 0 && eyeHits_)) {
             query->BeginGeneration(generation, pages[0].rays, uint32_t(std::min(batch, nRays)),
                                    timer);
@@ -457,6 +459,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         stats.raysByKind["refraction"] += nRefraction;
         gen.spawned = nextPixels.size();
         gen.seconds = SecondsSince(tGeneration);
+        gen.hostClassifySeconds = query->HostSeconds() - hostBefore;
+        gen.intersectionTests = stats.intersectionTests - testsBefore;
         query->DescribeGeneration(gen);
         if (generation == 0 && eyeHits_) gen.query = eyeHits_->Name();
         stats.raysByKind["shadow"] += gen.shadowRays;

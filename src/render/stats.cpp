@@ -20,9 +20,14 @@ nlohmann::json RenderStats::ToJson() const {
     j["rays_by_kind"] = raysByKind;
     nlohmann::json gens = nlohmann::json::array();
     for (const auto& g : generations) {
-        nlohmann::json gen = {{"rays", g.rays},       {"shadow_rays", g.shadowRays},
-                              {"spawned", g.spawned}, {"seconds", g.seconds},
-                              {"query", g.query},     {"shadow_query", g.shadowQuery}};
+        nlohmann::json gen = {{"rays", g.rays},
+                              {"shadow_rays", g.shadowRays},
+                              {"spawned", g.spawned},
+                              {"seconds", g.seconds},
+                              {"host_classify_seconds", g.hostClassifySeconds},
+                              {"intersection_tests", g.intersectionTests},
+                              {"query", g.query},
+                              {"shadow_query", g.shadowQuery}};
         const std::pair<const char*, double> costs[] = {
             {"classified_predicted", g.classifiedNs},
             {"bvh_sample", g.bvhSampleNs},

@@ -539,8 +539,15 @@ TEST_F(Cli, RenderWritesTheImageAndConsistentStatsAndNothingElse) {
     EXPECT_EQ(Sum(gens, "rays"), eye + reflection + refraction);
     EXPECT_EQ(Sum(gens, "shadow_rays"), shadow);
     // Ray classification tests some primitives per ray, never more than brute force would (25
-    // per ray: every primitive).
+    // per ray: every primitive). The generations split the tests and the host classification.
     const uint64_t tests = stats.at("intersection_tests");
+    EXPECT_EQ(Sum(gens, "intersection_tests"), tests);
+    double hostClassify = 0;
+    for (size_t i = 0; i < gens.size(); ++i) {
+        EXPECT_GE(gens[i].at("host_classify_seconds").get<double>(), 0.0) << "generation " << i;
+        hostClassify += gens[i].at("host_classify_seconds").get<double>();
+    }
+    EXPECT_NEAR(hostClassify, stats.at("time_s").at("host_classify").get<double>(), 1e-9);
     EXPECT_GE(tests, eye);
     EXPECT_LE(tests, (eye + reflection + refraction + shadow) * 25);
     EXPECT_GT(stats.at("mrays_per_s").get<double>(), 0.0);

@@ -14,6 +14,8 @@ struct GenerationStats {
     uint64_t shadowRays = 0;  // shadow rays queried
     uint64_t spawned = 0;     // secondary rays this generation spawned for the next
     double seconds = 0;       // wall time from its first batch to its last
+    double hostClassifySeconds = 0;  // of it, the classification's host work (all threads)
+    uint64_t intersectionTests = 0;  // primitive tests of its nearest-hit and shadow queries
     // What answered its nearest-hit and shadow queries (RayQuery::Name(), or what auto chose).
     std::string query, shadowQuery;
     // --accel auto: the costs per ray (ns) its choices compared, the classification's as
