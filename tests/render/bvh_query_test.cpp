@@ -13,6 +13,7 @@
 #include <random>
 #include <vector>
 
+#include "quad.h"
 #include "rayclass/bvh/bvh.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/cl_renderer.h"
@@ -40,11 +41,7 @@ scene::Scene GridOfSquares() {
                         p[(axis + 2) % 3] = float(b);
                         return p;
                     };
-                    scene::Triangle t;
-                    t.p = {at(i, j), at(i + 1, j), at(i + 1, j + 1)};
-                    s.triangles.push_back(t);
-                    t.p = {at(i, j), at(i + 1, j + 1), at(i, j + 1)};
-                    s.triangles.push_back(t);
+                    AddQuad(s, at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
                 }
             }
         }

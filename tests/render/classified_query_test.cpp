@@ -10,6 +10,7 @@
 #include <random>
 #include <vector>
 
+#include "quad.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/auto_query.h"
 #include "rayclass/render/device_scene.h"
@@ -36,11 +37,7 @@ void AddTiledBox(scene::Scene& s, float half, int tiles) {
                         p[(axis + 2) % 3] = half * (2.0f * float(b) / float(tiles) - 1.0f);
                         return p;
                     };
-                    scene::Triangle t;
-                    t.p = {at(i, j), at(i + 1, j), at(i + 1, j + 1)};
-                    s.triangles.push_back(t);
-                    t.p = {at(i, j), at(i + 1, j + 1), at(i, j + 1)};
-                    s.triangles.push_back(t);
+                    AddQuad(s, at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
                 }
             }
         }
