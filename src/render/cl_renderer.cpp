@@ -169,8 +169,11 @@ void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& q
     // What neither the kernels' profiling nor the host timers cover: copies between host and
     // device, buffer allocation, launch overhead and waiting.
     double accounted = hostSeconds + query.HostSeconds();
-    for (const char* key : {"program_build", "classify_setup", "bvh_build"}) {
-        if (stats.timeS.count(key)) accounted += stats.timeS[key];
+    for (const auto& [key, seconds] : stats.timeS) {
+        if (key == "program_build" || key == "classify_setup" || key == "bvh_build" ||
+            key.starts_with("eye_hits_")) {
+            accounted += seconds;
+        }
     }
     for (const auto& [name, seconds] : ks) accounted += seconds;
     stats.timeS["transfer_and_other"] = std::max(0.0, stats.timeS["render"] - accounted);

@@ -562,6 +562,20 @@ TEST_F(Cli, RenderWritesTheImageAndConsistentStatsAndNothingElse) {
         EXPECT_TRUE(times.contains(kernel)) << kernel;
     }
     EXPECT_LE(times.at("program_build").get<double>(), times.at("total").get<double>());
+    // transfer_and_other is what the other timers of the render leave of it (the raster pass's
+    // eye hits included).
+    double parts = 0;
+    for (const auto& [key, seconds] : times.items()) {
+        if (key.starts_with("kernel_") || key.starts_with("eye_hits_") || key == "host" ||
+            key == "host_classify" || key == "program_build" || key == "classify_setup" ||
+            key == "bvh_build") {
+            parts += seconds.get<double>();
+        }
+    }
+    const double other = times.at("transfer_and_other").get<double>();
+    if (other > 0) {
+        EXPECT_NEAR(parts + other, times.at("render").get<double>(), 1e-6);
+    }
 
     // Without -q, one line on stderr names the output, its size and the rays.
     EXPECT_EQ(r.err.rfind("rayclass: x.exr (64x48, " +
