@@ -381,7 +381,7 @@ int main(int argc, char** argv) try {
         std::vector<RcRay> rays;
         std::vector<RcRayInfo> info;
         cl::Buffer raysBuf;
-        render::ShadeBuffers shade;
+        render::ShadeBuffers shade = render::MakeShadeBuffers(ctx, n, nLights);
         if (shadow) {
             for (const auto& r : set) rays.push_back(ToRc(r));
             raysBuf = Upload(ctx, rays);
@@ -395,13 +395,6 @@ int main(int argc, char** argv) try {
             shade.rayInfo = Upload(ctx, info);
         }
         const cl::Buffer out = Device(ctx, size_t(n) * (shadow ? 1 : sizeof(RcHit)));
-        shade.radiance = Device(ctx, size_t(n) * sizeof(rc_float4));
-        shade.normals = Device(ctx, size_t(n) * sizeof(rc_float4));
-        shade.shadow = {Device(ctx, size_t(n) * nLights * sizeof(RcRay)),
-                        Device(ctx, size_t(n) * nLights * sizeof(rc_float4))};
-        shade.secondary = {Device(ctx, 2 * size_t(n) * sizeof(RcRay)),
-                           Device(ctx, 2 * size_t(n) * sizeof(RcRayInfo))};
-        shade.spawned = Device(ctx, 2 * size_t(n));
 
         for (const std::string& method : methods) {
             if (method == "brute" && sc.PrimitiveCount() > bruteMaxPrims) continue;

@@ -148,6 +148,22 @@ std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& progr
     return query;
 }
 
+}  // namespace
+
+ShadeBuffers MakeShadeBuffers(clrt::Context& ctx, size_t rays, uint32_t nLights) {
+    ShadeBuffers shade;
+    shade.radiance = DeviceBuffer(ctx, rays * sizeof(rc_float4));
+    shade.normals = DeviceBuffer(ctx, rays * sizeof(rc_float4));
+    shade.shadow = {DeviceBuffer(ctx, rays * nLights * sizeof(RcRay)),
+                    DeviceBuffer(ctx, rays * nLights * sizeof(rc_float4))};
+    shade.secondary = {DeviceBuffer(ctx, 2 * rays * sizeof(RcRay)),
+                       DeviceBuffer(ctx, 2 * rays * sizeof(RcRayInfo))};
+    shade.spawned = DeviceBuffer(ctx, 2 * rays);
+    return shade;
+}
+
+namespace {
+
 // Kernel times, query time and what no timer covers, once the render is done.
 void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& query,
                  double hostSeconds, Clock::time_point tStart) {
@@ -284,14 +300,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                                    ctx_.info().maxAllocBytes);
     // Per batch: the query's hits, the shading kernel's outputs.
     cl::Buffer hits = DeviceBuffer(ctx_, batch * sizeof(RcHit));
-    ShadeBuffers shade;
-    shade.radiance = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
-    shade.normals = DeviceBuffer(ctx_, batch * sizeof(rc_float4));
-    shade.shadow = {DeviceBuffer(ctx_, batch * nLights * sizeof(RcRay)),
-                    DeviceBuffer(ctx_, batch * nLights * sizeof(rc_float4))};
-    shade.secondary = {DeviceBuffer(ctx_, 2 * batch * sizeof(RcRay)),
-                       DeviceBuffer(ctx_, 2 * batch * sizeof(RcRayInfo))};
-    shade.spawned = DeviceBuffer(ctx_, 2 * batch);
+    ShadeBuffers shade = MakeShadeBuffers(ctx_, batch, nLights);
     const cl::Buffer &radiance = shade.radiance, &normals = shade.normals, &spawned = shade.spawned;
     const ShadowBuffers& shadow = shade.shadow;
     const RayBuffers& secondary = shade.secondary;

@@ -117,13 +117,8 @@ struct Fixture {
             info[i].kind = RC_RAY_EYE;
         }
         const cl::Buffer rayBuf = Upload(rays), hits = Device(n * sizeof(RcHit));
-        ShadeBuffers shade;
+        ShadeBuffers shade = MakeShadeBuffers(Ctx(), n, Params().nLights);
         shade.rayInfo = Upload(info);
-        shade.radiance = Device(n * sizeof(rc_float4));
-        shade.normals = Device(n * sizeof(rc_float4));
-        shade.shadow = {Device(n * sizeof(RcRay)), Device(n * sizeof(rc_float4))};
-        shade.secondary = {Device(2 * n * sizeof(RcRay)), Device(2 * n * sizeof(RcRayInfo))};
-        shade.spawned = Device(2 * n);
         KernelTimer timer;
         std::unique_ptr<PreparedBatch> prepared = q.Prepare(rayBuf, n, Ctx().queue());
         const uint64_t tests = q.Intersect(rayBuf, n, prepared.get(), hits, shade, timer).tests;

@@ -59,6 +59,10 @@ struct ShadeBuffers {
     cl::Buffer spawned;
 };
 
+// ShadeBuffers for batches of up to `rays` rays and `nLights` lights (rayInfo left unset: it is
+// the batch's own).
+ShadeBuffers MakeShadeBuffers(clrt::Context& ctx, size_t rays, uint32_t nLights);
+
 struct QueryResult {
     uint64_t tests = 0;   // primitive intersection tests done
     bool shaded = false;  // the query's kernels shaded every ray too (into ShadeBuffers)
