@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <condition_variable>
@@ -36,8 +37,11 @@ constexpr uint32_t kParallelSortMin = 16384;
 constexpr uint32_t kParallelRaysMin = 32768;
 // Plans for fewer rays move them on one thread.
 constexpr uint32_t kParallelPlanRays = 131072;
-// Batches with fewer candidates copy their leaves' lists on one thread.
+// Batches with fewer candidates in the workers' own arrays copy them on one thread.
 constexpr size_t kParallelCopyMin = size_t(1) << 17;
+// Entries of output room a worker claims at a time for its leaves' lists (a longer list claims
+// its own). Claims are rare enough not to contend; a worker leaves less than a chunk unused.
+constexpr size_t kOutputListChunk = size_t(1) << 16;
 // Nodes with more than max(kTaskRaysMin, rays / kTasks) rays hand their later children to the
 // task queue: enough tasks to balance the threads, few enough that their kept lists cost little
 // (Conference with mirror rays, batches of 2^18: render 1.29 s with a minimum of 4,096 rays,
@@ -145,6 +149,10 @@ struct Hierarchy::Schedule {
     int threads = 1;
     int busy = 0;  // threads inside a task
     uint32_t cut;  // nodes with more rays hand their later children to the queue
+    // The output's lists: room for `listRoom` entries, of which [0, listsEnd) are claimed.
+    RcCandidate* lists = nullptr;
+    size_t listRoom = 0;
+    std::atomic<size_t> listsEnd{0};
 };
 
 void Hierarchy::Subdivide(LeafBatch& out) {
@@ -181,6 +189,12 @@ void Hierarchy::Subdivide(LeafBatch& out) {
         schedule.queue.push_back({FaceRoot(f), begin[f], end[f], 0, faceBounds[f],
                                   View(all, all.Size()), false, PlanAt(), &NewPart(begin[f])});
     }
+    // The leaves' lists are written straight into out.candidates (see ListRoom), not into the
+    // workers' arrays and copied there, which cost a second copy of every list and its pages
+    // (sibenik_mirror, 1024 x 768: 445k page faults in all).
+    Regrow(out.candidates, std::min<size_t>(listRoom_, kOwnList - 1));
+    schedule.lists = out.candidates.data();
+    schedule.listRoom = out.candidates.size();
     const int threads = Threads(n);
     schedule.threads = threads;
     if (workers_.size() < size_t(threads)) workers_.resize(size_t(threads));
@@ -188,13 +202,13 @@ void Hierarchy::Subdivide(LeafBatch& out) {
         w.counters = {};
         w.schedule = &schedule;
         w.leaves.clear();
-        w.candidates.clear();
+        w.listAt = w.listEnd = 0;
         w.nodes.clear();
         w.kept.chunk = w.kept.used = w.stack.chunk = w.stack.used = 0;
         w.plans.clear();
     }
     OnThreads(threads, [&](int t) { Work(workers_[size_t(t)], t); });
-    Join(out);
+    Join(out, schedule.listsEnd.load());
     rayOut_ = nullptr;
     // The ray buffers by the rays they hold (two ping-pong buffers and the routing
     // destinations): their face slabs reserve kFaceCount times as much address space, of which
@@ -294,7 +308,7 @@ void Hierarchy::Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, u
     s.changed.notify_one();
 }
 
-void Hierarchy::Join(LeafBatch& out) {
+void Hierarchy::Join(LeafBatch& out, size_t listsEnd) {
     // Parts in ray order, their nodes appended in that order.
     std::vector<Part*> parts(nParts_);
     for (size_t p = 0; p < nParts_; ++p) parts[p] = &parts_[p];
@@ -305,12 +319,13 @@ void Hierarchy::Join(LeafBatch& out) {
         part->base = base;
         base += uint32_t(part->nodeEnd - part->nodeBegin);
     }
+    // Leaves whose lists lie in their worker's own array keep a pointer to them.
     struct Placed {
         RcLeaf leaf;
-        const RcCandidate* candidates;
+        const RcCandidate* own;
     };
     std::vector<Placed> leaves;
-    size_t nCandidates = 0;
+    size_t nOwn = 0;
     for (Part* part : parts) {
         auto fix = [b = part->base](uint32_t& id) {
             if ((id & kLocal) && id < kPending) id = b + (id & ~kLocal);
@@ -330,8 +345,10 @@ void Hierarchy::Join(LeafBatch& out) {
         for (size_t i = part->leafBegin; i < part->leafEnd; ++i) {
             RcLeaf leaf = w.leaves[i];
             fix(leaf.node);
-            leaves.push_back({leaf, w.candidates.data() + leaf.candBegin});
-            nCandidates += leaf.candCount;
+            const bool own = (leaf.candBegin & kOwnList) != 0;
+            leaves.push_back(
+                {leaf, own ? w.candidates.data() + (leaf.candBegin & ~kOwnList) : nullptr});
+            if (own) nOwn += leaf.candCount;
         }
     }
     for (Part* part : parts) {
@@ -346,37 +363,45 @@ void Hierarchy::Join(LeafBatch& out) {
                                     : part->linkNode;
         Link(nodes_[parent], part->linkField) = part->base;
     }
-    // Leaves in ray order (their ranges are disjoint and cover rayIndex), lists in leaf order.
+    // Leaves in ray order (their ranges are disjoint and cover rayIndex).
     std::sort(leaves.begin(), leaves.end(),
               [](const Placed& a, const Placed& b) { return a.leaf.rayBegin < b.leaf.rayBegin; });
     out.leaves.resize(leaves.size());
-    // Grown without copying the old lists or zeroing the new room: the copy below writes every
-    // entry (and first touches the new pages on every thread). Growing the vector in place cost
-    // one thread 0.2 s in the last generation of sibenik_mirror.
-    Regrow(out.candidates, nCandidates);
-    uint32_t at = 0;
+    std::vector<uint32_t> ownLeaves;
+    size_t at = listsEnd;
     for (size_t i = 0; i < leaves.size(); ++i) {
         out.leaves[i] = leaves[i].leaf;
-        out.leaves[i].candBegin = at;
+        if (!leaves[i].own) continue;
+        out.leaves[i].candBegin = uint32_t(at);
         at += leaves[i].leaf.candCount;
+        ownLeaves.push_back(uint32_t(i));
     }
-    // The lists' copy, split between the threads at a leaf near the middle of the candidates.
-    const int threads = nCandidates >= kParallelCopyMin ? Threads(nInserted_) : 1;
-    std::vector<size_t> from(size_t(threads) + 1, leaves.size());
+    // The lists the room could not take go after the claimed ones: shrinking first means growing
+    // past the capacity moves only the claimed part.
+    out.candidates.resize(listsEnd);
+    out.candidates.resize(listsEnd + nOwn);
+    listRoom_ = 2 * out.candidates.size();
+    if (nOwn == 0) return;
+    // Their copy, split between the threads at a leaf near the middle of the entries.
+    const int threads = nOwn >= kParallelCopyMin ? Threads(nInserted_) : 1;
+    std::vector<size_t> from(size_t(threads) + 1, ownLeaves.size());
     from[0] = 0;
     for (int t = 1; t < threads; ++t) {
-        const uint32_t want = uint32_t(nCandidates * size_t(t) / size_t(threads));
-        from[size_t(t)] =
-            size_t(std::partition_point(out.leaves.begin(), out.leaves.end(),
-                                        [&](const RcLeaf& l) { return l.candBegin < want; }) -
-                   out.leaves.begin());
+        const size_t want = listsEnd + nOwn * size_t(t) / size_t(threads);
+        from[size_t(t)] = size_t(
+            std::partition_point(ownLeaves.begin(), ownLeaves.end(),
+                                 [&](uint32_t l) { return out.leaves[l].candBegin < want; }) -
+            ownLeaves.begin());
     }
     OnThreads(threads, [&](int t) {
-        for (size_t i = from[size_t(t)]; i < from[size_t(t) + 1]; ++i) {
-            std::copy_n(leaves[i].candidates, out.leaves[i].candCount,
-                        out.candidates.begin() + out.leaves[i].candBegin);
+        for (size_t k = from[size_t(t)]; k < from[size_t(t) + 1]; ++k) {
+            const uint32_t l = ownLeaves[k];
+            std::copy_n(leaves[l].own, out.leaves[l].candCount,
+                        out.candidates.begin() + out.leaves[l].candBegin);
         }
     });
+    // Used when the room ran out, which the next generations' room avoids: not kept.
+    for (Worker& w : workers_) ScratchVector<RcCandidate>().swap(w.candidates);
 }
 
 Bounds6 Hierarchy::Bounds(int face, int buf, uint32_t begin, uint32_t end) const {
@@ -828,16 +853,37 @@ void Hierarchy::EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end,
     // sorted by near X, so everything after that is cut at once (Filter has already cut it when
     // the leaf filtered its own list).
     const size_t n = size_t(std::upper_bound(list.x0, list.x0 + list.n, endHi) - list.x0);
-    std::vector<RcCandidate>& candidates = w.candidates;
-    leaf.candBegin = uint32_t(candidates.size());
     leaf.candCount = uint32_t(n);
-    candidates.resize(leaf.candBegin + n);
-    RcCandidate* cand = candidates.data() + leaf.candBegin;
+    RcCandidate* cand = ListRoom(w, n, leaf.candBegin);
     for (size_t i = 0; i < n; ++i) cand[i] = {list.prim[i], list.x0[i]};
     leaf.face = At(w, node).face;
     leaf.node = node;
     w.leaves.push_back(leaf);
     w.counters.maxDepth = std::max<uint32_t>(w.counters.maxDepth, At(w, node).depth);
+}
+
+RcCandidate* Hierarchy::ListRoom(Worker& w, size_t n, uint32_t& begin) {
+    if (n > w.listEnd - w.listAt) {
+        Schedule& s = *w.schedule;
+        const size_t take = std::max(n, kOutputListChunk);
+        size_t at = s.listsEnd.load(std::memory_order_relaxed);
+        do {
+            if (at + take > s.listRoom) {
+                begin = kOwnList | uint32_t(w.candidates.size());
+                w.candidates.resize(w.candidates.size() + n);
+                return w.candidates.data() + (begin & ~kOwnList);
+            }
+        } while (!s.listsEnd.compare_exchange_weak(at, at + take, std::memory_order_relaxed));
+        if (take == n) {  // a list of a chunk or more: the current chunk stays
+            begin = uint32_t(at);
+            return s.lists + at;
+        }
+        w.listAt = at;
+        w.listEnd = at + take;
+    }
+    begin = uint32_t(w.listAt);
+    w.listAt += n;
+    return w.schedule->lists + begin;
 }
 
 uint32_t Hierarchy::Route(const Ray5& r) const {

@@ -190,9 +190,11 @@ class ClassifiedQuery final : public RayQuery {
                       const ShadeBuffers* shade, KernelTimer& timer) {
         const bool shadow = shade == nullptr;
         const auto t0 = Clock::now();
-        const cl::Buffer& leaves = leavesBuf_.Upload(ctx_, cb.batch.leaves);
-        const cl::Buffer& rayIndex = rayIndexBuf_.Upload(ctx_, cb.batch.rayIndex);
-        const cl::Buffer& candidates = candidatesBuf_.Upload(ctx_, cb.batch.candidates);
+        // The batch's arrays are not written again before its kernels are done: SumTests below
+        // waits for the query kernels, the last to read them.
+        const cl::Buffer& leaves = leavesBuf_.Share(ctx_, cb.batch.leaves);
+        const cl::Buffer& rayIndex = rayIndexBuf_.Share(ctx_, cb.batch.rayIndex);
+        const cl::Buffer& candidates = candidatesBuf_.Share(ctx_, cb.batch.candidates);
         uint64_t tests = 0;
         if (style_ == KernelStyle::kScalar) {
             const cl::Buffer& rayLeaf = rayLeafBuf_.Upload(ctx_, cb.rayLeaf);

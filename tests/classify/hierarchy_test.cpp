@@ -358,22 +358,39 @@ TEST(Hierarchy, StridedViewsClassifyLikePackedRays) {
     }
 }
 
+// Every leaf's list lies inside the batch's candidates, and no two overlap.
+void ExpectListsApart(const LeafBatch& b) {
+    std::vector<std::pair<size_t, size_t>> ranges;
+    for (const RcLeaf& leaf : b.leaves) {
+        ASSERT_LE(size_t(leaf.candBegin) + leaf.candCount, b.candidates.size());
+        if (leaf.candCount > 0)
+            ranges.emplace_back(leaf.candBegin, leaf.candBegin + leaf.candCount);
+    }
+    std::sort(ranges.begin(), ranges.end());
+    for (size_t i = 1; i < ranges.size(); ++i) {
+        ASSERT_LE(ranges[i - 1].second, ranges[i].first) << "lists overlap";
+    }
+}
+
+// The same leaves with the same lists; where the lists lie depends on which thread wrote them.
 void ExpectSameLeaves(const LeafBatch& a, const LeafBatch& b, bool sameNodeIds) {
     EXPECT_EQ(a.rayIndex, b.rayIndex);
     EXPECT_EQ(a.missed, b.missed);
     EXPECT_EQ(a.nRays, b.nRays);
+    ExpectListsApart(a);
+    ExpectListsApart(b);
     ASSERT_EQ(a.leaves.size(), b.leaves.size());
     for (size_t l = 0; l < a.leaves.size(); ++l) {
         const RcLeaf &x = a.leaves[l], &y = b.leaves[l];
         ASSERT_TRUE(x.rayBegin == y.rayBegin && x.rayCount == y.rayCount &&
-                    x.candBegin == y.candBegin && x.candCount == y.candCount && x.face == y.face &&
+                    x.candCount == y.candCount && x.face == y.face &&
                     (!sameNodeIds || x.node == y.node))
             << "leaf " << l;
-    }
-    ASSERT_EQ(a.candidates.size(), b.candidates.size());
-    for (size_t c = 0; c < a.candidates.size(); ++c) {
-        ASSERT_EQ(a.candidates[c].prim, b.candidates[c].prim) << "candidate " << c;
-        ASSERT_EQ(a.candidates[c].nearX, b.candidates[c].nearX) << "candidate " << c;
+        for (uint32_t c = 0; c < x.candCount; ++c) {
+            const RcCandidate &p = a.candidates[x.candBegin + c],
+                              &q = b.candidates[y.candBegin + c];
+            ASSERT_TRUE(p.prim == q.prim && p.nearX == q.nearX) << "leaf " << l << " entry " << c;
+        }
     }
 }
 
@@ -565,6 +582,41 @@ TEST(Hierarchy, ResetClassifiesLikeAFreshHierarchy) {
     EXPECT_EQ(used.Nodes().size(), size_t(kFaceCount));
     ExpectSameLeaves(used.Classify(second), fresh.Classify(second), true);
     ExpectSameNodes(used, fresh);
+}
+
+// Leaves write their lists straight into room reserved in the output, twice the last
+// generation's lists; lists that find it full go to their thread's own array and are copied
+// after the room's. Whether a generation's lists fit, overflow, or both, the leaves are those of
+// a fresh hierarchy (whose first generation has no room: every list overflows).
+TEST(Hierarchy, ListsThatOutgrowTheirRoomAreTheSame) {
+    const scene::Scene s = RandomScene(95, 400, 6, 2);
+    const auto small = RandomRays(96, 2000), big = RandomRays(97, 30000);
+    Params p = DeepParams(s);
+    p.threads = 2;
+    p.taskRays = 512;
+    Hierarchy used(s, p);
+    const LeafBatch first = used.Classify(small);
+    size_t firstLists = 0;
+    for (const RcLeaf& leaf : first.leaves) firstLists += leaf.candCount;
+    // No room: one list after the other.
+    EXPECT_EQ(first.candidates.size(), firstLists);
+    for (const auto* rays : {&big, &big, &small}) {
+        used.Reset();
+        Hierarchy fresh(s, p);
+        const LeafBatch got = used.Classify(*rays), ref = fresh.Classify(*rays);
+        ExpectSameLeaves(got, ref, true);
+        ExpectSameHits(Query(s, got, *rays), BruteForce(s, *rays));
+    }
+    // The big generation's lists outgrow the room the small one left (2 x firstLists): some are
+    // claimed in chunks (which leave gaps), the rest overflow.
+    used.Reset();
+    used.Classify(small);
+    used.Reset();
+    const LeafBatch mixed = used.Classify(big);
+    size_t lists = 0;
+    for (const RcLeaf& leaf : mixed.leaves) lists += leaf.candCount;
+    ASSERT_GT(lists, 2 * firstLists);
+    EXPECT_GT(mixed.candidates.size(), lists) << "no list was claimed in the room";
 }
 
 // Nodes with many rays plan their next levels of splits and bucket the rays into the plan's

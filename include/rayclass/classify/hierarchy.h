@@ -86,8 +86,10 @@ struct Node {
 struct LeafBatch {
     std::vector<RcLeaf> leaves;
     std::vector<rc_uint> rayIndex;        // leaves' rays, contiguous per leaf
-    // Leaves' lists, contiguous per leaf, sorted by nearX. Scratch: a deep generation's lists
-    // (180 MB on sibenik_mirror) are written once, by every thread, and never zeroed first.
+    // Leaves' lists, contiguous per leaf, sorted by nearX, in the order the threads wrote them
+    // (with gaps between the chunks they claimed). Scratch: a deep generation's lists (180 MB on
+    // sibenik_mirror) are written once, by every thread, and never zeroed first; its capacity
+    // is room reserved for the next generation, of which only the pages written are touched.
     ScratchVector<RcCandidate> candidates;
     std::vector<rc_uint> missed;          // rays that miss the scene box: answered "no hit"
     uint32_t nRays = 0;                   // rays of the generation (leaf rays + missed)
@@ -179,6 +181,9 @@ class Hierarchy {
     // is a link to the root of another task, set when the parts are joined.
     static constexpr uint32_t kLocal = 0x80000000u;
     static constexpr uint32_t kPending = kNoNode - 1;
+    // A worker's leaf whose list lies in the worker's own array (candBegin's top bit): the
+    // output's room was used up. The output's lists stay below 2^31 entries (16 GiB).
+    static constexpr uint32_t kOwnList = 0x80000000u;
 
     // What one task made: ranges of the arrays of the worker that ran it.
     struct Part {
@@ -231,10 +236,12 @@ class Hierarchy {
         BuildCounters counters;
         Schedule* schedule = nullptr;
         Part* part = nullptr;  // of the running task
-        // What the tasks it ran made, one after another (Part ranges index them; a leaf's
-        // candBegin indexes `candidates`).
+        // What the tasks it ran made, one after another (Part ranges index them). A leaf's
+        // candBegin indexes the output's lists, or with kOwnList set the worker's own
+        // `candidates`, where lists go once the output's room is claimed.
         std::vector<RcLeaf> leaves;
-        std::vector<RcCandidate> candidates;
+        ScratchVector<RcCandidate> candidates;
+        size_t listAt = 0, listEnd = 0;  // the rest of the chunk of output room it claimed
         std::vector<Node> nodes;
         ListArena stack;  // the lists of the nodes on the path being built
         ListArena kept;   // lists of nodes whose later children are tasks
@@ -258,6 +265,8 @@ class Hierarchy {
                    uint32_t end, uint32_t count[3]);
     void EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
                   const ListView& list, float endHi);
+    // Room for a list of n entries: sets `begin` to where it lies (see Worker::leaves).
+    RcCandidate* ListRoom(Worker& w, size_t n, uint32_t& begin);
     ListView Filter(Worker& w, const Bounds6& tight, const ListView& list, bool keep);
     bool ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays, const ListView& list,
                      int& dim) const;
@@ -291,8 +300,9 @@ class Hierarchy {
     }
     // Maps the generation's rays into buffer 0: face f's rays are [faceBegin[f], faceEnd[f]).
     void ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* faceBounds, LeafBatch& out);
-    // Joins the tasks' parts into `out` (whose rayIndex the leaves have filled).
-    void Join(LeafBatch& out);
+    // Joins the tasks' parts into `out` (whose rayIndex the leaves have filled, and whose lists
+    // the first `listsEnd` entries of out.candidates hold, bar the workers' own).
+    void Join(LeafBatch& out, size_t listsEnd);
     Part& NewPart(uint32_t begin);
     int Threads(uint32_t nRays) const;
 
@@ -328,6 +338,9 @@ class Hierarchy {
     std::vector<Worker> workers_;
     std::deque<Part> parts_;  // the first nParts_ belong to this generation's tasks
     size_t nParts_ = 0;
+    // Output room for the next generation's lists: twice the last one's (a mirror generation's
+    // lists grow 1.3-1.6x over the one before on sibenik_mirror).
+    size_t listRoom_ = 0;
     BuildCounters counters_;
 };
 

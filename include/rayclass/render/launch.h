@@ -68,6 +68,21 @@ class GrowingBuffer {
         return buffer_;
     }
 
+    // The same for arrays that stay unchanged until the kernels that read them have finished:
+    // on a CPU device a buffer over `data` itself, which PoCL reads in place (sibenik_mirror's
+    // deep generations copied 180 MB of leaf lists a batch, and faulted in the pages of a second
+    // copy of them).
+    template <typename T, typename Allocator>
+    const cl::Buffer& Share(clrt::Context& ctx, const std::vector<T, Allocator>& data) {
+        if (ctx.info().type != "cpu" || data.empty()) return Upload(ctx, data);
+        buffer_ = clrt::Check("clCreateBuffer", [&] {
+            return cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR,
+                              data.size() * sizeof(T), const_cast<T*>(data.data()));
+        });
+        capacity_ = 0;  // not ours to write: Reserve makes a buffer again
+        return buffer_;
+    }
+
   private:
     cl::Buffer buffer_;
     size_t capacity_ = 0;
