@@ -1,12 +1,14 @@
 // Per-test costs of the cost function (include/rayclass/classify/params.h): one float
-// intersection test of geometry/intersect.h per primitive type, and one candidate box test of the
-// list filter. Each iteration tests one ray against 4096 random primitives, so the figure per
-// test is the time per iteration / 4096 (items_per_second inverts it).
+// intersection test of geometry/intersect.h per primitive type, one candidate box test of the
+// list filter and one ray moved by a partition. Each iteration tests one ray against 4096 random
+// primitives (or moves the benchmark's rays once), so the figure per test is the time per
+// iteration / 4096 (items_per_second inverts it).
 #include <benchmark/benchmark.h>
 
 #include <random>
 
 #include "filter.h"
+#include "partition.h"
 #include "rayclass/classify/query.h"
 
 namespace {
@@ -96,6 +98,33 @@ void BM_FilterBoxes(benchmark::State& state) {
     state.counters["kept"] = double(kept);
     state.SetItemsProcessed(int64_t(state.iterations()) * kPrims);
 }
+// A node's two-way partition of its rays between the ping-pong buffers, all six coordinates and
+// the ids moved (mirror rays: nothing is constant), half of the rays to each side.
+void BM_PartitionRays(benchmark::State& state) {
+    const uint32_t n = uint32_t(state.range(0));
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> pos(-1.0f, 1.0f);
+    ScratchVector<float> from[classify::kCoords], to[classify::kCoords];
+    ScratchVector<uint32_t> fromId(n), toId(n);
+    for (int k = 0; k < classify::kCoords; ++k) {
+        from[k].resize(n);
+        to[k].resize(n);
+        for (uint32_t i = 0; i < n; ++i) from[k][i] = pos(rng);
+    }
+    for (uint32_t i = 0; i < n; ++i) fromId[i] = i;
+    classify::PartitionIo io = classify::Between(from, to, fromId, toId);
+    io.key = from[1].data();
+    classify::Bounds6 left, right;
+    uint32_t mid = 0;
+    for (auto _ : state) {
+        mid = classify::PartitionRays((1 << classify::kCoords) - 1, io, 0.0f, 0, n, left, right);
+        benchmark::DoNotOptimize(toId.data());
+    }
+    state.counters["left"] = double(mid);
+    state.SetItemsProcessed(int64_t(state.iterations()) * n);
+}
+BENCHMARK(BM_PartitionRays)->Arg(4096)->Arg(65536);
+
 BENCHMARK(BM_FilterBoxes)->Arg(0)->Arg(1)->ArgNames({"wide"});
 
 }  // namespace
