@@ -220,8 +220,8 @@ void Hierarchy::Subdivide(LeafBatch& out) {
         counters_.plans += w.counters.plans;
         counters_.sharedPlans += w.counters.sharedPlans;
         counters_.maxDepth = std::max(counters_.maxDepth, w.counters.maxDepth);
+        // (The workers' own lists are gone by now: Join frees them.)
         scratch += w.keys.capacity() * 4 + w.leaves.capacity() * sizeof(RcLeaf) +
-                   w.candidates.capacity() * sizeof(RcCandidate) +
                    w.nodes.capacity() * sizeof(Node);
         for (const auto* a : {&w.stack, &w.kept}) {
             for (const auto& l : a->chunks) scratch += l.Bytes();

@@ -157,10 +157,10 @@ ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
     s.testsPerRay = double(tests) / n;
 
     s.hierarchyBytes = h.MemoryBytes();
+    // The lists count by size: their capacity beyond it is room reserved for the next
+    // generation, untouched unless an earlier generation wrote it.
     s.leafBytes =
         batch.leaves.capacity() * sizeof(RcLeaf) + batch.rayIndex.capacity() * sizeof(rc_uint) +
-        // The lists' capacity beyond their size is room for the next generation,
-        // untouched unless an earlier generation wrote it.
         batch.candidates.size() * sizeof(RcCandidate) + batch.missed.capacity() * sizeof(rc_uint);
     s.peakRssBytes = PeakRssBytes();
     return s;
