@@ -72,10 +72,19 @@ void BM_FilterBoxes(benchmark::State& state) {
     classify::Hierarchy::FaceList in, out;
     in.Resize(kPrims);
     out.Resize(kPrims);
+    // Boxes in [-1, 1.1] on every axis, in 16-bit steps as the face lists hold them.
+    classify::ListFrame frame;
+    frame.base[0] = frame.base[1] = frame.base[2] = -1.0f;
+    frame.step = 2.1f / 65534.0f * 1.0001f;
     for (int i = 0; i < kPrims; ++i) {
         const float x = pos(rng), y = pos(rng), z = pos(rng);
-        in.x0[i] = x; in.x1[i] = x + 0.1f; in.y0[i] = y; in.y1[i] = y + 0.1f;
-        in.z0[i] = z; in.z1[i] = z + 0.1f; in.prim[i] = uint32_t(i);
+        in.x0[i] = classify::StepsBelow(frame, 0, x);
+        in.x1[i] = classify::StepsAbove(frame, 0, x + 0.1f);
+        in.y0[i] = classify::StepsBelow(frame, 1, y);
+        in.y1[i] = classify::StepsAbove(frame, 1, y + 0.1f);
+        in.z0[i] = classify::StepsBelow(frame, 2, z);
+        in.z1[i] = classify::StepsAbove(frame, 2, z + 0.1f);
+        in.prim[i] = uint32_t(i);
     }
     // Arg 0: a beam about as selective as mid-level nodes of sibenik's mirror rays (a few %
     // kept). Arg 1: one that keeps about 40 %, as the filters of 1k-32k boxes that make most of
@@ -88,8 +97,8 @@ void BM_FilterBoxes(benchmark::State& state) {
         b.lo = {-1.0f, -0.3f, -0.3f, -0.3f, -0.2f};
         b.hi = {-0.9f, 0.3f, 0.3f, 0.3f, 0.2f};
     }
-    const auto test = classify::MakeBeamTest(b, 10.0f);
-    const classify::ListView view = classify::View(in, kPrims);
+    const auto test = classify::MakeBeamTest(frame, b, 10.0f);
+    const classify::ListView view = classify::View(in, kPrims, &frame);
     size_t kept = 0;
     for (auto _ : state) {
         kept = classify::FilterList(test, view, classify::Out(out, 0));

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
+#include <limits>
 
 #if defined(__AVX512F__)
 #include "avx512.h"
@@ -16,7 +18,19 @@ constexpr float kTinySlope = 1e-30f;
 float WidenUpper(float s) { return s == 0.0f ? kTinySlope : s; }
 float WidenLower(float s) { return s == 0.0f ? -kTinySlope : s; }
 
-#if defined(__AVX512F__)
+// Steps are at most 65535, where a float's ulp is 2^-8: converting a world coordinate into steps
+// errs by a few of those. The beam grows by this margin, so that rounding never narrows it.
+constexpr float kStepMargin = 1.0f / 32.0f;
+
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__) && \
+    defined(__AVX512VBMI2__)
+#define RC_FILTER_AVX512 1
+
+// 16 boxes' coordinate in steps, as floats (maskz: see avx512.h).
+inline __m512 Widen16(__m256i steps) {
+    return _mm512_maskz_cvtepi32_ps(__mmask16(0xFFFF),
+                                    _mm512_maskz_cvtepu16_epi32(__mmask16(0xFFFF), steps));
+}
 
 template <int kSigns>
 size_t FilterAvx512(const BeamTest& t, const ListView& in, const ListOut& out) {
@@ -27,29 +41,19 @@ size_t FilterAvx512(const BeamTest& t, const ListView& in, const ListOut& out) {
     const __m512 rv1 = _mm512_set1_ps(t.rv1), rv0 = _mm512_set1_ps(t.rv0);
     const __m512 reach = _mm512_set1_ps(t.reach);
     const __m512 zero = _mm512_setzero_ps();
-    float* ox0 = out.x0;
-    float* ox1 = out.x1;
-    float* oy0 = out.y0;
-    float* oy1 = out.y1;
-    float* oz0 = out.z0;
-    float* oz1 = out.z1;
-    uint32_t* oprim = out.prim;
+    const uint16_t* const src[6] = {in.x0, in.x1, in.y0, in.y1, in.z0, in.z1};
+    uint16_t* const dst[6] = {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1};
     size_t k = 0;
     for (size_t i = 0; i < in.n; i += 16) {
-        const size_t rest = in.n - i;
-        const __mmask16 live = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
-        const __m512 bx0 = _mm512_maskz_loadu_ps(live, in.x0 + i);
-        const __m512 bx1 = _mm512_maskz_loadu_ps(live, in.x1 + i);
-        const __m512 by0 = _mm512_maskz_loadu_ps(live, in.y0 + i);
-        const __m512 by1 = _mm512_maskz_loadu_ps(live, in.y1 + i);
-        const __m512 bz0 = _mm512_maskz_loadu_ps(live, in.z0 + i);
-        const __m512 bz1 = _mm512_maskz_loadu_ps(live, in.z1 + i);
-        __m512 lo = Max16(_mm512_sub_ps(bx0, x1), zero);
-        __m512 hi = Min16(_mm512_sub_ps(bx1, x0), reach);
-        const __m512 c0 = _mm512_mul_ps(_mm512_sub_ps(by0, y1), ru1);
-        const __m512 c1 = _mm512_mul_ps(_mm512_sub_ps(by1, y0), ru0);
-        const __m512 e0 = _mm512_mul_ps(_mm512_sub_ps(bz0, z1), rv1);
-        const __m512 e1 = _mm512_mul_ps(_mm512_sub_ps(bz1, z0), rv0);
+        const __mmask16 live = LiveLanes16(in.n, i);
+        __m256i q[6];
+        for (int a = 0; a < 6; ++a) q[a] = _mm256_maskz_loadu_epi16(live, src[a] + i);
+        __m512 lo = Max16(_mm512_sub_ps(Widen16(q[0]), x1), zero);
+        __m512 hi = Min16(_mm512_sub_ps(Widen16(q[1]), x0), reach);
+        const __m512 c0 = _mm512_mul_ps(_mm512_sub_ps(Widen16(q[2]), y1), ru1);
+        const __m512 c1 = _mm512_mul_ps(_mm512_sub_ps(Widen16(q[3]), y0), ru0);
+        const __m512 e0 = _mm512_mul_ps(_mm512_sub_ps(Widen16(q[4]), z1), rv1);
+        const __m512 e1 = _mm512_mul_ps(_mm512_sub_ps(Widen16(q[5]), z0), rv0);
         if constexpr (kSigns & 1) lo = Max16(lo, c0); else hi = Min16(hi, c0);
         if constexpr (kSigns & 2) hi = Min16(hi, c1); else lo = Max16(lo, c1);
         if constexpr (kSigns & 4) lo = Max16(lo, e0); else hi = Min16(hi, e0);
@@ -57,15 +61,11 @@ size_t FilterAvx512(const BeamTest& t, const ListView& in, const ListOut& out) {
         const __mmask16 keep = _mm512_mask_cmp_ps_mask(live, lo, hi, _CMP_LE_OQ);
         if (!keep) continue;
         // Compress in registers and store with a mask: compress-to-memory is microcoded on Zen 4.
-        const __mmask16 dst = __mmask16((1u << std::popcount(unsigned(keep))) - 1u);
-        _mm512_mask_storeu_ps(ox0 + k, dst, _mm512_maskz_compress_ps(keep, bx0));
-        _mm512_mask_storeu_ps(ox1 + k, dst, _mm512_maskz_compress_ps(keep, bx1));
-        _mm512_mask_storeu_ps(oy0 + k, dst, _mm512_maskz_compress_ps(keep, by0));
-        _mm512_mask_storeu_ps(oy1 + k, dst, _mm512_maskz_compress_ps(keep, by1));
-        _mm512_mask_storeu_ps(oz0 + k, dst, _mm512_maskz_compress_ps(keep, bz0));
-        _mm512_mask_storeu_ps(oz1 + k, dst, _mm512_maskz_compress_ps(keep, bz1));
+        const __mmask16 kept = __mmask16((1u << std::popcount(unsigned(keep))) - 1u);
+        for (int a = 0; a < 6; ++a)
+            _mm256_mask_storeu_epi16(dst[a] + k, kept, _mm256_maskz_compress_epi16(keep, q[a]));
         const __m512i p = _mm512_maskz_loadu_epi32(live, in.prim + i);
-        _mm512_mask_storeu_epi32(oprim + k, dst, _mm512_maskz_compress_epi32(keep, p));
+        _mm512_mask_storeu_epi32(out.prim + k, kept, _mm512_maskz_compress_epi32(keep, p));
         k += size_t(std::popcount(unsigned(keep)));
     }
     return k;
@@ -83,16 +83,62 @@ size_t Dispatch(const BeamTest& t, const ListView& in, const ListOut& out) {
 
 #endif
 
+// World coordinate c on `axis` in steps, unrounded (double: exact enough for either rounding).
+double ToSteps(const ListFrame& f, int axis, float c) {
+    return (double(c) - double(f.base[axis])) / double(f.step);
+}
+
 }  // namespace
 
-BeamTest MakeBeamTest(const Box5& box, float reach) {
+ListFrame MakeListFrame(const float lo[3], const float hi[3]) {
+    ListFrame frame;
+    if (!(lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2])) return frame;
+    double extent = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        frame.base[k] = lo[k];
+        extent = std::max(extent, double(hi[k]) - double(lo[k]));
+    }
+    // The frame spans the boxes, and 65534 steps rounded up keep the highest bound below 65535
+    // whatever the rounding: every bound maps into 16 bits.
+    const float step = float(extent / 65534.0);
+    frame.step = double(step) * 65534.0 >= extent
+                     ? step
+                     : std::nextafter(step, std::numeric_limits<float>::infinity());
+    if (!(frame.step > 0.0f)) frame.step = 1.0f;  // every box a point: any step holds it
+    return frame;
+}
+
+uint16_t StepsBelow(const ListFrame& frame, int axis, float lo) {
+    return uint16_t(std::clamp(std::floor(ToSteps(frame, axis, lo)), 0.0, 65535.0));
+}
+
+uint16_t StepsAbove(const ListFrame& frame, int axis, float hi) {
+    return uint16_t(std::clamp(std::ceil(ToSteps(frame, axis, hi)), 0.0, 65535.0));
+}
+
+float WorldBelow(const ListFrame& frame, int axis, uint16_t steps) {
+    // At most any float bound b that StepsBelow took to `steps`: that rounded down, so the
+    // world value lies at or below b, and rounding to the nearest float cannot pass b.
+    return float(double(frame.base[axis]) + double(steps) * double(frame.step));
+}
+
+size_t CountUpTo(const ListView& list, float endHi) {
+    const float limit = float(ToSteps(*list.frame, 0, endHi)) + kStepMargin;
+    return size_t(std::upper_bound(list.x0, list.x0 + list.n, limit,
+                                   [](float v, uint16_t q) { return v < float(q); }) -
+                  list.x0);
+}
+
+BeamTest MakeBeamTest(const ListFrame& frame, const Box5& box, float reach) {
+    auto below = [&](int axis) { return float(ToSteps(frame, axis, box.lo[axis])) - kStepMargin; };
+    auto above = [&](int axis) { return float(ToSteps(frame, axis, box.hi[axis])) + kStepMargin; };
     BeamTest t;
-    t.x0 = box.lo[0];
-    t.x1 = box.hi[0];
-    t.y0 = box.lo[1];
-    t.y1 = box.hi[1];
-    t.z0 = box.lo[2];
-    t.z1 = box.hi[2];
+    t.x0 = below(0);
+    t.x1 = above(0);
+    t.y0 = below(1);
+    t.y1 = above(1);
+    t.z0 = below(2);
+    t.z1 = above(2);
     const float u1 = WidenUpper(box.hi[3]);
     const float u0 = WidenLower(box.lo[3]);
     const float v1 = WidenUpper(box.hi[4]);
@@ -101,7 +147,7 @@ BeamTest MakeBeamTest(const Box5& box, float reach) {
     t.ru0 = 1.0f / u0;
     t.rv1 = 1.0f / v1;
     t.rv0 = 1.0f / v0;
-    t.reach = reach;
+    t.reach = float(double(reach) / double(frame.step)) + kStepMargin;
     t.signs = (u1 > 0.0f ? 1 : 0) | (u0 > 0.0f ? 2 : 0) | (v1 > 0.0f ? 4 : 0) | (v0 > 0.0f ? 8 : 0);
     return t;
 }
@@ -122,7 +168,7 @@ bool BeamMayReach(const BeamTest& t, float bx0, float bx1, float by0, float by1,
 }
 
 size_t FilterList(const BeamTest& t, const ListView& in, const ListOut& out) {
-#if defined(__AVX512F__)
+#if defined(RC_FILTER_AVX512)
     return Dispatch(t, in, out);
 #else
     size_t k = 0;

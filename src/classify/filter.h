@@ -20,19 +20,19 @@
 
 namespace rayclass::classify {
 
-inline ListView View(const Hierarchy::FaceList& l, size_t n) {
-    return {l.x0.data(), l.x1.data(), l.y0.data(),   l.y1.data(),
-            l.z0.data(), l.z1.data(), l.prim.data(), n};
+inline ListView View(const Hierarchy::FaceList& l, size_t n, const ListFrame* frame) {
+    return {l.x0.data(), l.x1.data(),   l.y0.data(), l.y1.data(), l.z0.data(),
+            l.z1.data(), l.prim.data(), n,           frame};
 }
 
 // Where a filter writes its kept boxes: n entries from these pointers on.
 struct ListOut {
-    float* x0;
-    float* x1;
-    float* y0;
-    float* y1;
-    float* z0;
-    float* z1;
+    uint16_t* x0;
+    uint16_t* x1;
+    uint16_t* y0;
+    uint16_t* y1;
+    uint16_t* z0;
+    uint16_t* z1;
     uint32_t* prim;
 };
 
@@ -42,6 +42,21 @@ inline ListOut Out(Hierarchy::FaceList& l, size_t at) {
             l.z0.data() + at, l.z1.data() + at, l.prim.data() + at};
 }
 
+// The frame of boxes within [lo, hi] (X, Y, Z of a face; the default frame when lo > hi).
+ListFrame MakeListFrame(const float lo[3], const float hi[3]);
+
+// The stored bounds of box [lo, hi] on `axis` of `frame`: steps rounded outwards (double
+// arithmetic, so that lo >= base and hi <= base + 65534 step map into 16 bits).
+uint16_t StepsBelow(const ListFrame& frame, int axis, float lo);
+uint16_t StepsAbove(const ListFrame& frame, int axis, float hi);
+// The world coordinate of `steps` on `axis`, never above a bound that StepsBelow took there (the
+// near X of a leaf's candidate).
+float WorldBelow(const ListFrame& frame, int axis, uint16_t steps);
+// The number of the first n entries of `list` whose near X is at most `endHi` (world units; the
+// list is sorted by it): never fewer than hold a box that starts before endHi.
+size_t CountUpTo(const ListView& list, float endHi);
+
+// A beam in `frame`'s steps (x0 .. z1 grown by a rounding margin, reach in steps).
 struct BeamTest {
     float x0, x1, y0, y1, z0, z1;
     float ru1, ru0, rv1, rv0;  // reciprocals of the (widened) slope bounds
@@ -49,9 +64,10 @@ struct BeamTest {
     int signs;                 // bit 0: u1 > 0, 1: u0 > 0, 2: v1 > 0, 3: v0 > 0
 };
 
-BeamTest MakeBeamTest(const Box5& box, float reach);
+// The test of `box` (world units of the face) whose rays travel at most `reach` along X.
+BeamTest MakeBeamTest(const ListFrame& frame, const Box5& box, float reach);
 
-// Scalar form of the test, for tests and as the reference of the vector filter.
+// Scalar form of the test on a box in steps, for tests and as the reference of the vector filter.
 bool BeamMayReach(const BeamTest& t, float bx0, float bx1, float by0, float by1, float bz0,
                   float bz1);
 

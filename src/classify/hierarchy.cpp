@@ -85,19 +85,28 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
     // The faces' lists are independent: built on every core.
     auto buildFace = [&](int face) {
         std::vector<float> nearX(nPrims);
-        for (uint32_t id = 0; id < nPrims; ++id) nearX[id] = BoxInFace(face, boxes[id]).lo[0];
+        float lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+        for (uint32_t id = 0; id < nPrims; ++id) {
+            const Box5 b = BoxInFace(face, boxes[id]);
+            nearX[id] = b.lo[0];
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = std::min(lo[k], b.lo[k]);
+                hi[k] = std::max(hi[k], b.hi[k]);
+            }
+        }
+        const ListFrame& frame = listFrame_[face] = MakeListFrame(lo, hi);
         // The distance order: near side along the face's main axis, ties by id for determinism.
         const std::vector<uint32_t> order = SortedOrder(nearX);
         FaceList& l = (*lists)[face];
         l.Resize(nPrims);
         for (uint32_t i = 0; i < nPrims; ++i) {
             const Box5 b = BoxInFace(face, boxes[order[i]]);
-            l.x0[i] = b.lo[0];
-            l.x1[i] = b.hi[0];
-            l.y0[i] = b.lo[1];
-            l.y1[i] = b.hi[1];
-            l.z0[i] = b.lo[2];
-            l.z1[i] = b.hi[2];
+            l.x0[i] = StepsBelow(frame, 0, b.lo[0]);
+            l.x1[i] = StepsAbove(frame, 0, b.hi[0]);
+            l.y0[i] = StepsBelow(frame, 1, b.lo[1]);
+            l.y1[i] = StepsAbove(frame, 1, b.hi[1]);
+            l.z0[i] = StepsBelow(frame, 2, b.lo[2]);
+            l.z1[i] = StepsAbove(frame, 2, b.hi[2]);
             l.prim[i] = order[i];
         }
     };
@@ -187,7 +196,8 @@ void Hierarchy::Subdivide(LeafBatch& out) {
         if (begin[f] == end[f]) continue;
         const FaceList& all = (*faceLists_)[f];
         schedule.queue.push_back({FaceRoot(f), begin[f], end[f], 0, faceBounds[f],
-                                  View(all, all.Size()), false, PlanAt(), &NewPart(begin[f])});
+                                  View(all, all.Size(), &listFrame_[f]), false, PlanAt(),
+                                  &NewPart(begin[f])});
     }
     // The leaves' lists are written straight into out.candidates (see ListRoom), not into the
     // workers' arrays and copied there, which cost a second copy of every list and its pages
@@ -428,7 +438,7 @@ constexpr size_t kSamples = 64;             // boxes tested for the estimate
 // The list up to the node's end (see Filter).
 ListView CutAtEnd(const Bounds6& tight, const ListView& list) {
     ListView in = list;
-    in.n = size_t(std::upper_bound(in.x0, in.x0 + in.n, tight.hi[kDims]) - in.x0);
+    in.n = CountUpTo(list, tight.hi[kDims]);
     return in;
 }
 
@@ -436,7 +446,7 @@ ListView CutAtEnd(const Bounds6& tight, const ListView& list) {
 float SampledKeepFraction(const Bounds6& tight, const ListView& list) {
     const ListView in = CutAtEnd(tight, list);
     if (in.n < kSampledFilterMin) return 0.0f;
-    const BeamTest t = MakeBeamTest(tight.ToBox5(), tight.hi[kDims] - tight.lo[0]);
+    const BeamTest t = MakeBeamTest(*in.frame, tight.ToBox5(), tight.hi[kDims] - tight.lo[0]);
     size_t kept = 0, tested = 0;
     const size_t stride = in.n / kSamples;
     for (size_t i = stride / 2; i < in.n; i += stride) {
@@ -474,15 +484,15 @@ ListView Hierarchy::Filter(Worker& w, const Bounds6& tight, const ListView& list
     // No ray of the node gets past X = end, and the list is sorted by near X: cut it there first.
     const float endHi = tight.hi[kDims];
     ListView in = list;
-    in.n = size_t(std::upper_bound(in.x0, in.x0 + in.n, endHi) - in.x0);
+    in.n = CountUpTo(list, endHi);
     ListArena& arena = keep ? w.kept : w.stack;
     const ListOut out = Take(arena, in.n);
     // Every ray's reach is its end minus its start X, so the node's is at most endHi - lo X.
     const float reach = endHi - tight.lo[0];
-    const size_t kept = FilterList(MakeBeamTest(tight.ToBox5(), reach), in, out);
+    const size_t kept = FilterList(MakeBeamTest(*list.frame, tight.ToBox5(), reach), in, out);
     w.counters.boxTests += in.n;
     arena.used += kept;
-    return {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1, out.prim, kept};
+    return {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1, out.prim, kept, list.frame};
 }
 
 void Hierarchy::RouteRays(int face, const Box5& box0, const Box5& box1, int buf, uint32_t begin,
@@ -852,10 +862,10 @@ void Hierarchy::EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end,
     // The current nearest-hit bound: no ray of the leaf gets past X = endHi, and the list is
     // sorted by near X, so everything after that is cut at once (Filter has already cut it when
     // the leaf filtered its own list).
-    const size_t n = size_t(std::upper_bound(list.x0, list.x0 + list.n, endHi) - list.x0);
+    const size_t n = CountUpTo(list, endHi);
     leaf.candCount = uint32_t(n);
     RcCandidate* cand = ListRoom(w, n, leaf.candBegin);
-    for (size_t i = 0; i < n; ++i) cand[i] = {list.prim[i], list.x0[i]};
+    for (size_t i = 0; i < n; ++i) cand[i] = {list.prim[i], WorldBelow(*list.frame, 0, list.x0[i])};
     leaf.face = At(w, node).face;
     leaf.node = node;
     w.leaves.push_back(leaf);

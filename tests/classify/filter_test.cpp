@@ -1,0 +1,240 @@
+// The candidate filter on 16-bit boxes (src/classify/filter.h) against the beam test in double
+// precision on the boxes before they were rounded to steps: it may keep more, never less.
+#include "filter.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace rayclass::classify {
+namespace {
+
+struct WorldBox {
+    float lo[3], hi[3];
+};
+
+// Whether some ray of `beam` (origins in its X, Y, Z box, slopes in its u, v box, travelling at
+// most `reach` along X) meets `b`, in double: the real-arithmetic test of filter.h's comment.
+bool ExactMayReach(const Box5& beam, double reach, const WorldBox& b) {
+    double lo = std::max(double(b.lo[0]) - beam.hi[0], 0.0);
+    double hi = std::min(double(b.hi[0]) - beam.lo[0], reach);
+    // slope * s >= below and slope' * s <= above, for the slope bounds of one axis.
+    auto side = [&](double slope, double bound, bool atLeast) {
+        if (slope == 0.0) {
+            if (atLeast ? bound > 0.0 : bound < 0.0) hi = -1.0;  // no s >= 0 satisfies it
+            return;
+        }
+        const double s = bound / slope;
+        if ((slope > 0.0) == atLeast) {
+            lo = std::max(lo, s);
+        } else {
+            hi = std::min(hi, s);
+        }
+    };
+    side(beam.hi[3], double(b.lo[1]) - beam.hi[1], true);
+    side(beam.lo[3], double(b.hi[1]) - beam.lo[1], false);
+    side(beam.hi[4], double(b.lo[2]) - beam.hi[2], true);
+    side(beam.lo[4], double(b.hi[2]) - beam.lo[2], false);
+    return lo <= hi;
+}
+
+struct QuantizedList {
+    ListFrame frame;
+    Hierarchy::FaceList list;
+    std::vector<WorldBox> world;  // in list order (sorted by near X)
+};
+
+// n random boxes around [-4, 6]^3: from points (zero extent) to wide ones, some touching the
+// frame's bounds, quantized as the face lists are.
+QuantizedList RandomList(std::mt19937& rng, size_t n) {
+    std::uniform_real_distribution<float> pos(-4.0f, 6.0f), size(0.0f, 1.5f);
+    std::bernoulli_distribution point(0.1);
+    QuantizedList q;
+    q.world.resize(n);
+    for (WorldBox& b : q.world) {
+        for (int k = 0; k < 3; ++k) {
+            b.lo[k] = pos(rng);
+            b.hi[k] = point(rng) ? b.lo[k] : b.lo[k] + size(rng);
+        }
+    }
+    std::sort(q.world.begin(), q.world.end(),
+              [](const WorldBox& a, const WorldBox& b) { return a.lo[0] < b.lo[0]; });
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (const WorldBox& b : q.world) {
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], b.lo[k]);
+            hi[k] = std::max(hi[k], b.hi[k]);
+        }
+    }
+    q.frame = MakeListFrame(lo, hi);
+    q.list.Resize(n);
+    uint16_t* const l[3] = {q.list.x0.data(), q.list.y0.data(), q.list.z0.data()};
+    uint16_t* const h[3] = {q.list.x1.data(), q.list.y1.data(), q.list.z1.data()};
+    for (size_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            l[k][i] = StepsBelow(q.frame, k, q.world[i].lo[k]);
+            h[k][i] = StepsAbove(q.frame, k, q.world[i].hi[k]);
+        }
+        q.list.prim[i] = uint32_t(i);
+    }
+    return q;
+}
+
+// A random beam: an origin box inside the boxes' range and slopes in [-1, 1], some bounds exactly
+// zero (the filter widens those).
+Box5 RandomBeam(std::mt19937& rng) {
+    std::uniform_real_distribution<float> pos(-4.0f, 6.0f), size(0.0f, 2.0f), slope(-1.0f, 1.0f);
+    std::bernoulli_distribution zero(0.15);
+    Box5 b;
+    for (int k = 0; k < 3; ++k) {
+        b.lo[k] = pos(rng);
+        b.hi[k] = b.lo[k] + size(rng);
+    }
+    for (int k = 3; k < 5; ++k) {
+        float a = zero(rng) ? 0.0f : slope(rng), c = zero(rng) ? 0.0f : slope(rng);
+        if (a > c) std::swap(a, c);
+        b.lo[k] = a;
+        b.hi[k] = c;
+    }
+    return b;
+}
+
+// A beam that only grazes box b: its origins touch one side of b (or end where b starts, along
+// X) and its slopes on that axis start at zero, so a box rounded inwards by any amount is missed.
+Box5 GrazingBeam(std::mt19937& rng, const WorldBox& b, int variant) {
+    std::uniform_real_distribution<float> size(0.01f, 1.0f), slope(0.05f, 1.0f);
+    Box5 beam;
+    for (int k = 0; k < 3; ++k) {
+        beam.lo[k] = b.lo[k] - size(rng);
+        beam.hi[k] = b.hi[k] + size(rng);
+    }
+    beam.lo[3] = -slope(rng);
+    beam.hi[3] = slope(rng);
+    beam.lo[4] = -slope(rng);
+    beam.hi[4] = slope(rng);
+    const int axis = 1 + (variant >> 1) % 2;  // Y or Z
+    if (variant == 4) {
+        beam.lo[0] = b.hi[0];  // origins start where the box ends along X
+    } else if (variant & 1) {
+        beam.lo[axis] = b.hi[axis];  // origins above the box, slopes rising from zero
+        beam.hi[axis] = b.hi[axis] + size(rng);
+        beam.lo[axis + 2] = 0.0f;
+    } else {
+        beam.hi[axis] = b.lo[axis];  // origins below it, slopes falling to zero
+        beam.lo[axis] = b.lo[axis] - size(rng);
+        beam.hi[axis + 2] = 0.0f;
+    }
+    return beam;
+}
+
+TEST(Filter, KeepsEveryBoxTheBeamMeetsAndMatchesTheScalarTest) {
+    std::mt19937 rng(11);
+    size_t met = 0, kept = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+        // Lengths around the vector width, with a tail.
+        const size_t n = size_t(1 + trial % 53) * (trial % 4 == 0 ? 37 : 1);
+        const QuantizedList q = RandomList(rng, n);
+        const Box5 beam = trial % 2 ? RandomBeam(rng)
+                                    : GrazingBeam(rng, q.world[size_t(trial) % n], (trial / 2) % 5);
+        const float reach = std::uniform_real_distribution<float>(0.01f, 12.0f)(rng);
+        const BeamTest t = MakeBeamTest(q.frame, beam, reach);
+        Hierarchy::FaceList out;
+        out.Resize(n);
+        const size_t k = FilterList(t, View(q.list, n, &q.frame), Out(out, 0));
+        // The kept boxes, in order: exactly those the scalar test keeps.
+        std::vector<uint32_t> scalar;
+        for (size_t i = 0; i < n; ++i) {
+            if (BeamMayReach(t, q.list.x0[i], q.list.x1[i], q.list.y0[i], q.list.y1[i],
+                             q.list.z0[i], q.list.z1[i]))
+                scalar.push_back(uint32_t(i));
+        }
+        ASSERT_EQ(std::vector<uint32_t>(out.prim.begin(), out.prim.begin() + long(k)), scalar)
+            << "trial " << trial;
+        for (size_t j = 0; j < k; ++j) {
+            const uint32_t i = out.prim[j];
+            ASSERT_EQ(out.x0[j], q.list.x0[i]);
+            ASSERT_EQ(out.x1[j], q.list.x1[i]);
+            ASSERT_EQ(out.y0[j], q.list.y0[i]);
+            ASSERT_EQ(out.y1[j], q.list.y1[i]);
+            ASSERT_EQ(out.z0[j], q.list.z0[i]);
+            ASSERT_EQ(out.z1[j], q.list.z1[i]);
+        }
+        // Conservative: every box the exact test says the beam meets is kept.
+        size_t next = 0;
+        for (size_t i = 0; i < n; ++i) {
+            const bool exact = ExactMayReach(beam, reach, q.world[i]);
+            while (next < scalar.size() && scalar[next] < i) ++next;
+            const bool isKept = next < scalar.size() && scalar[next] == i;
+            EXPECT_TRUE(!exact || isKept) << "trial " << trial << ", box " << i;
+            met += exact ? 1 : 0;
+        }
+        kept += k;
+    }
+    // The trials test something: beams that meet some boxes and miss others.
+    EXPECT_GT(met, 1000u);
+    EXPECT_LT(kept, 3 * met);
+}
+
+TEST(Filter, StepsRoundOutwardsAndTheNearXOfACandidateNeverExceedsItsBox) {
+    std::mt19937 rng(12);
+    const QuantizedList q = RandomList(rng, 5000);
+    for (size_t i = 0; i < q.world.size(); ++i) {
+        const WorldBox& b = q.world[i];
+        const uint16_t* const l[3] = {q.list.x0.data(), q.list.y0.data(), q.list.z0.data()};
+        const uint16_t* const h[3] = {q.list.x1.data(), q.list.y1.data(), q.list.z1.data()};
+        for (int k = 0; k < 3; ++k) {
+            ASSERT_LE(double(q.frame.base[k]) + double(l[k][i]) * q.frame.step, double(b.lo[k]));
+            ASSERT_GE(double(q.frame.base[k]) + double(h[k][i]) * q.frame.step, double(b.hi[k]));
+            // One step of slack at most.
+            ASSERT_GT(double(q.frame.base[k]) + double(l[k][i] + 1) * q.frame.step,
+                      double(b.lo[k]));
+        }
+        ASSERT_LE(WorldBelow(q.frame, 0, q.list.x0[i]), b.lo[0]);
+    }
+    // The highest bound fits in 16 bits without clamping: the frame spans the boxes.
+    const uint16_t* const h[3] = {q.list.x1.data(), q.list.y1.data(), q.list.z1.data()};
+    uint16_t top = 0;
+    for (int k = 0; k < 3; ++k) top = std::max(top, *std::max_element(h[k], h[k] + 5000));
+    EXPECT_GE(top, 65533);
+    EXPECT_LE(top, 65534);
+}
+
+TEST(Filter, CutAtTheEndKeepsEveryBoxStartingBeforeIt) {
+    std::mt19937 rng(13);
+    const QuantizedList q = RandomList(rng, 3000);
+    const ListView view = View(q.list, q.world.size(), &q.frame);
+    std::uniform_real_distribution<float> end(-5.0f, 8.0f);
+    for (int trial = 0; trial < 500; ++trial) {
+        // Ends on a box's near X exactly as well as anywhere.
+        const float endHi = trial % 2 ? q.world[size_t(trial) % q.world.size()].lo[0] : end(rng);
+        const size_t n = CountUpTo(view, endHi);
+        const size_t exact = size_t(std::count_if(
+            q.world.begin(), q.world.end(), [&](const WorldBox& b) { return b.lo[0] <= endHi; }));
+        ASSERT_GE(n, exact) << "end " << endHi;
+        // At most the boxes within a step of the end come along.
+        const size_t slack =
+            size_t(std::count_if(q.world.begin(), q.world.end(), [&](const WorldBox& b) {
+                return b.lo[0] <= endHi + 2.0f * q.frame.step;
+            }));
+        ASSERT_LE(n, slack) << "end " << endHi;
+    }
+}
+
+TEST(Filter, FramesOfPointsAndEmptySetsAreUsable) {
+    const float p[3] = {2.0f, -3.0f, 0.5f};
+    const ListFrame point = MakeListFrame(p, p);
+    EXPECT_GT(point.step, 0.0f);
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(StepsBelow(point, k, p[k]), 0);
+        EXPECT_EQ(StepsAbove(point, k, p[k]), 0);
+    }
+    const float lo[3] = {1.0f, 1.0f, 1.0f}, hi[3] = {0.0f, 0.0f, 0.0f};
+    const ListFrame empty = MakeListFrame(lo, hi);
+    EXPECT_EQ(empty.step, 1.0f);
+}
+
+}  // namespace
+}  // namespace rayclass::classify
