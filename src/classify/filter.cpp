@@ -116,12 +116,6 @@ uint16_t StepsAbove(const ListFrame& frame, int axis, float hi) {
     return uint16_t(std::clamp(std::ceil(ToSteps(frame, axis, hi)), 0.0, 65535.0));
 }
 
-float WorldBelow(const ListFrame& frame, int axis, uint16_t steps) {
-    // At most any float bound b that StepsBelow took to `steps`: that rounded down, so the
-    // world value lies at or below b, and rounding to the nearest float cannot pass b.
-    return float(double(frame.base[axis]) + double(steps) * double(frame.step));
-}
-
 size_t CountUpTo(const ListView& list, float endHi) {
     const float limit = float(ToSteps(*list.frame, 0, endHi)) + kStepMargin;
     return size_t(std::upper_bound(list.x0, list.x0 + list.n, limit,

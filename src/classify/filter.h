@@ -13,6 +13,7 @@
 // Zero slope bounds are widened to +-1e-30, which keeps the test conservative and finite.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -49,9 +50,12 @@ ListFrame MakeListFrame(const float lo[3], const float hi[3]);
 // arithmetic, so that lo >= base and hi <= base + 65534 step map into 16 bits).
 uint16_t StepsBelow(const ListFrame& frame, int axis, float lo);
 uint16_t StepsAbove(const ListFrame& frame, int axis, float hi);
-// The world coordinate of `steps` on `axis`, never above a bound that StepsBelow took there (the
-// near X of a leaf's candidate).
-float WorldBelow(const ListFrame& frame, int axis, uint16_t steps);
+// The world coordinate of `steps` on `axis` (the near X of a leaf's candidate), never above a
+// float bound that StepsBelow took there: that rounded down, so the exact value lies at or below
+// the bound, and the fused multiply-add rounds the exact value once, to the nearest float.
+inline float WorldBelow(const ListFrame& frame, int axis, uint16_t steps) {
+    return std::fma(float(steps), frame.step, frame.base[axis]);
+}
 // The number of the first n entries of `list` whose near X is at most `endHi` (world units; the
 // list is sorted by it): never fewer than hold a box that starts before endHi.
 size_t CountUpTo(const ListView& list, float endHi);
