@@ -168,21 +168,50 @@ __mmask16 Orient16(const CommonEnds& ends, __mmask16 live, Rays16& r) {
 }  // namespace
 
 uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t firstId, uint32_t* next,
-                            Bounds6* faceBounds, std::vector<rc_uint>& missed) {
+                            Bounds6* faceBounds, HeldCoords& held, std::vector<rc_uint>& missed) {
     uint64_t fromEnd = 0;
     float* c[kCoords];
     for (int k = 0; k < kCoords; ++k) c[k] = coord_[0][k].data();
     uint32_t* ids = id_[0].data();
+    constexpr unsigned kAllCoords = (1u << kCoords) - 1u;
+    uint32_t start[kFaceCount];
+    for (int f = 0; f < kFaceCount; ++f) {
+        start[f] = next[f];
+        held.seen[f] = false;
+        held.mask[f] = 0;
+    }
+    // Face f's first ray: every coordinate is held until a ray differs there.
+    auto see = [&](int f) {
+        const bool first = !held.seen[f];
+        held.seen[f] = true;
+        if (first) held.mask[f] = kAllCoords;
+        return first;
+    };
+    // Coordinate k of face f differs from the held value at position `at`: the rays before it
+    // get the value after all, and the coordinate is stored from then on.
+    auto release = [&](int f, int k, uint32_t at) {
+        std::fill_n(c[k] + start[f], at - start[f], held.value[f][k]);
+        held.mask[f] &= ~(1u << k);
+    };
     // Where each face's X leaves the scene box: ends beyond it are cut there, so the rays that
     // leave the box share one end, which then stays a constant that partitions do not move.
     float faceEnd[kFaceCount];
     for (int f = 0; f < kFaceCount; ++f) faceEnd[f] = BoxInFace(f, sceneBox_).hi[0];
     // A ray that ToRay5 maps: written at its face's next position.
     auto put = [&](const Ray5& r, uint32_t id) {
-        const uint32_t at = next[r.face]++;
+        const int f = r.face;
+        const uint32_t at = next[f]++;
         const float p[kCoords] = {r.p[0], r.p[1], r.p[2],
-                                  r.p[3], r.p[4], std::min(r.p[0] + r.reach, faceEnd[r.face])};
-        for (int k = 0; k < kCoords; ++k) c[k][at] = p[k];
+                                  r.p[3], r.p[4], std::min(r.p[0] + r.reach, faceEnd[f])};
+        if (see(f)) std::copy_n(p, kCoords, held.value[f]);
+        for (int k = 0; k < kCoords; ++k) {
+            if ((held.mask[f] >> k) & 1u) {
+                if (std::bit_cast<uint32_t>(p[k]) == std::bit_cast<uint32_t>(held.value[f][k]))
+                    continue;
+                release(f, k, at);
+            }
+            c[k][at] = p[k];
+        }
         ids[at] = id;
         GrowBounds(faceBounds[r.face], p);
     };
@@ -261,8 +290,20 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
             const uint32_t cnt = uint32_t(std::popcount(unsigned(m)));
             const __mmask16 dst = __mmask16((1u << cnt) - 1u);
             const uint32_t w = next[f];
+            const bool first = see(f);
             for (int k = 0; k < kCoords; ++k) {
-                _mm512_mask_storeu_ps(c[k] + w, dst, _mm512_maskz_compress_ps(m, p[k]));
+                const __m512 packed = _mm512_maskz_compress_ps(m, p[k]);
+                if (first) held.value[f][k] = _mm512_cvtss_f32(packed);
+                if ((held.mask[f] >> k) & 1u) {
+                    // (Held values join the bounds at the end.)
+                    const __m512i value =
+                        _mm512_set1_epi32(std::bit_cast<int32_t>(held.value[f][k]));
+                    if (_mm512_mask_cmpeq_epi32_mask(dst, _mm512_castps_si512(packed), value) ==
+                        dst)
+                        continue;
+                    release(f, k, w);
+                }
+                _mm512_mask_storeu_ps(c[k] + w, dst, packed);
                 accLo[f][k] = _mm512_mask_min_ps(accLo[f][k], m, accLo[f][k], p[k]);
                 accHi[f][k] = _mm512_mask_max_ps(accHi[f][k], m, accHi[f][k], p[k]);
             }
@@ -287,6 +328,7 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
             faceBounds[f].lo[k] = std::min(faceBounds[f].lo[k], ReduceMin(accLo[f][k]));
             faceBounds[f].hi[k] = std::max(faceBounds[f].hi[k], ReduceMax(accHi[f][k]));
         }
+        if (held.seen[f]) GrowBounds(faceBounds[f], held.value[f]);
     }
 #endif
     for (; i < n; ++i) {
@@ -326,6 +368,7 @@ void Hierarchy::ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* face
         uint64_t fromEnd = 0;
         uint32_t start[kFaceCount], next[kFaceCount];
         Bounds6 bounds[kFaceCount];
+        HeldCoords held;
         std::vector<rc_uint> missed;
     };
     std::vector<Piece> pieces;
@@ -353,7 +396,7 @@ void Hierarchy::ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* face
         for (size_t i = size_t(t); i < pieces.size(); i += size_t(threads)) {
             Piece& p = pieces[i];
             for (auto& b : p.bounds) b = EmptyBounds();
-            p.fromEnd = Convert(p.rays, *p.ends, p.firstId, p.next, p.bounds, p.missed);
+            p.fromEnd = Convert(p.rays, *p.ends, p.firstId, p.next, p.bounds, p.held, p.missed);
         }
     });
     bool moves = false;
@@ -362,6 +405,17 @@ void Hierarchy::ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* face
             moves = moves || (p.next[f] > p.start[f] && p.start[f] != faceEnd[f]);
             faceEnd[f] += p.next[f] - p.start[f];
             Merge(faceBounds[f], p.bounds[f]);
+        }
+    }
+    // A coordinate a piece held that varies over the face after all (pieces agreed on
+    // different values) is read from now on: it gets its value.
+    for (int f = 0; f < kFaceCount; ++f) {
+        for (const Piece& p : pieces) {
+            for (int k = 0; k < kCoords; ++k) {
+                if (((p.held.mask[f] >> k) & 1u) && Varies(faceBounds[f], k))
+                    std::fill_n(coord_[0][k].data() + p.start[f], p.next[f] - p.start[f],
+                                p.held.value[f][k]);
+            }
         }
     }
     if (moves) {
@@ -381,7 +435,7 @@ void Hierarchy::ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* face
                     }
                 };
                 if (k < kCoords) {
-                    move(coord_[0][k].data());
+                    if (Varies(faceBounds[f], k)) move(coord_[0][k].data());
                 } else {
                     move(id_[0].data());
                 }

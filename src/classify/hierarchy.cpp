@@ -185,7 +185,7 @@ void Hierarchy::Subdivide(LeafBatch& out) {
     // unbounded rays) are never moved.
     for (int f = 0; f < kFaceCount; ++f) {
         for (int k = 0; k < kCoords; ++k) {
-            active_[f][k] = faceBounds[f].lo[k] < faceBounds[f].hi[k];
+            active_[f][k] = Varies(faceBounds[f], k);
             constant_[f][k] = faceBounds[f].lo[k];
         }
     }

@@ -55,6 +55,9 @@ inline void GrowBounds(Bounds6& b, const float* p) {
     }
 }
 
+// Whether coordinate k varies among the rays of bounds b: only such coordinates are stored.
+inline bool Varies(const Bounds6& b, int k) { return b.lo[k] < b.hi[k]; }
+
 inline Bounds6 EmptyBounds() {
     Bounds6 b;
     for (int k = 0; k < kCoords; ++k) {

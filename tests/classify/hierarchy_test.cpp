@@ -569,6 +569,69 @@ TEST(Hierarchy, ConversionDoesNotDependOnTheThreadCount) {
     }
 }
 
+// Convert stores a face's coordinate only once its rays differ there (eye rays' origins and the
+// ends of unbounded rays are never stored). Where they differ late, within an array or only
+// between arrays, the rays before get the held value; where they never differ, the held value
+// is the node boxes' constant. An eye's array alone, and two arrays from two eyes inserted apart
+// or as one: the leaves contain their rays and are the same on every thread count.
+TEST(Hierarchy, HeldCoordinatesAreStoredOnceTheyVary) {
+    const scene::Scene s = RandomScene(111, 400, 6, 2);
+    std::mt19937 rng(112);
+    std::uniform_real_distribution<float> cone(-0.5f, 0.5f);
+    auto eyeRays = [&](glm::vec3 eye, int n, int boundedFrom, bool someOutside) {
+        std::vector<Ray> rays;
+        for (int i = 0; i < n; ++i) {
+            Ray r;
+            r.origin = eye;
+            r.direction = glm::normalize(glm::vec3(1.0f, cone(rng), cone(rng)));
+            if (i >= boundedFrom) r.tMax = 1.7f;
+            // These start outside the box: the slow path maps them, clipped.
+            if (someOutside && i % 97 == 40) r.origin = eye - 3.0f * r.direction;
+            rays.push_back(r);
+        }
+        return rays;
+    };
+    // Multiples of 16 rays, so that both ways of inserting cut the same runs of 16.
+    const auto a = eyeRays({-0.9f, 0.1f, 0.2f}, 2000, 2000, false);
+    const auto b = eyeRays({-0.8f, -0.2f, 0.1f}, 2400, 1001, true);
+    std::vector<Ray> both = a;
+    both.insert(both.end(), b.begin(), b.end());
+    enum Mode { kAlone, kApart, kAsOne };
+    std::vector<LeafBatch> got[2];  // a alone; a and b
+    for (const Mode mode : {kAlone, kApart, kAsOne}) {
+        const std::vector<Ray>& all = mode == kAlone ? a : both;
+        const auto brute = BruteForce(s, all);
+        std::vector<LeafBatch>& same = got[mode == kAlone ? 0 : 1];
+        for (const uint32_t threads : {1u, 2u, 3u}) {
+            SCOPED_TRACE("mode " + std::to_string(int(mode)) + ", " + std::to_string(threads) +
+                         " threads");
+            Params p = DeepParams(s);
+            p.threads = threads;
+            Hierarchy h(s, p);
+            if (mode == kApart) {
+                h.Insert(a);
+                h.Insert(b);
+            } else {
+                h.Insert(all);
+            }
+            same.push_back(h.Subdivide());
+            const LeafBatch& batch = same.back();
+            ExpectEveryRayOnce(batch, uint32_t(all.size()));
+            ExpectSameHits(Query(s, batch, all), brute);
+            for (const RcLeaf& leaf : batch.leaves) {
+                for (uint32_t j = 0; j < leaf.rayCount; ++j) {
+                    const uint32_t id = batch.rayIndex[leaf.rayBegin + j];
+                    Ray5 r;
+                    ASSERT_TRUE(ToRay5(all[id], h.SceneBox(), r));
+                    ASSERT_TRUE(h.Nodes()[leaf.node].box.Contains(r.p)) << "ray " << id;
+                }
+            }
+            EXPECT_GT(batch.leaves.size(), 20u);
+            ExpectSameLeaves(batch, same[0], false);
+        }
+    }
+}
+
 // Reset forgets every split (a new frame, as raybench --warm uses it): the next generation
 // classifies exactly as in a fresh hierarchy, node ids included.
 TEST(Hierarchy, ResetClassifiesLikeAFreshHierarchy) {
