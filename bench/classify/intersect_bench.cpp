@@ -107,10 +107,12 @@ void BM_FilterBoxes(benchmark::State& state) {
     state.counters["kept"] = double(kept);
     state.SetItemsProcessed(int64_t(state.iterations()) * kPrims);
 }
-// A node's two-way partition of its rays between the ping-pong buffers, all six coordinates and
-// the ids moved (mirror rays: nothing is constant), half of the rays to each side.
+// A node's two-way partition of its rays between the ping-pong buffers, half of the rays to each
+// side; `active` the coordinates moved with the ids: 63 all six (mirror rays), 56 direction and
+// end (shadow rays from their light), 24 direction only (eye rays).
 void BM_PartitionRays(benchmark::State& state) {
     const uint32_t n = uint32_t(state.range(0));
+    const int active = int(state.range(1));
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> pos(-1.0f, 1.0f);
     ScratchVector<float> from[classify::kCoords], to[classify::kCoords];
@@ -122,17 +124,19 @@ void BM_PartitionRays(benchmark::State& state) {
     }
     for (uint32_t i = 0; i < n; ++i) fromId[i] = i;
     classify::PartitionIo io = classify::Between(from, to, fromId, toId);
-    io.key = from[1].data();
+    io.key = from[3].data();
     classify::Bounds6 left, right;
     uint32_t mid = 0;
     for (auto _ : state) {
-        mid = classify::PartitionRays((1 << classify::kCoords) - 1, io, 0.0f, 0, n, left, right);
+        mid = classify::PartitionRays(active, io, 0.0f, 0, n, left, right);
         benchmark::DoNotOptimize(toId.data());
     }
     state.counters["left"] = double(mid);
     state.SetItemsProcessed(int64_t(state.iterations()) * n);
 }
-BENCHMARK(BM_PartitionRays)->Arg(4096)->Arg(65536);
+BENCHMARK(BM_PartitionRays)
+    ->ArgsProduct({{4096, 65536}, {63, 56, 24}})
+    ->ArgNames({"rays", "active"});
 
 BENCHMARK(BM_FilterBoxes)->Arg(0)->Arg(1)->ArgNames({"wide"});
 

@@ -4,6 +4,7 @@
 #include <array>
 #include <barrier>
 #include <bit>
+#include <utility>
 #include <vector>
 
 #if defined(__AVX512F__)
@@ -56,6 +57,17 @@ PartitionIo Between(const ScratchVector<float>* from, ScratchVector<float>* to,
 
 namespace {
 
+// Calls f(std::integral_constant<int, k>) for each coordinate k set in kActive. Every index is
+// then a constant, so the compiler keeps per-coordinate arrays of registers in registers: with a
+// loop over k (even unrolled) GCC 12 also stored each accumulator to the stack on every block.
+template <int kActive, typename F>
+inline void ForActive(F&& f) {
+    [&]<int... K>(std::integer_sequence<int, K...>) {
+        ((((kActive >> K) & 1) ? f(std::integral_constant<int, K>{}) : void()), ...);
+    }
+    (std::make_integer_sequence<int, kCoords>{});
+}
+
 // kActive is a template argument so that the per-coordinate registers stay registers.
 template <int kActive>
 uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint32_t end,
@@ -64,18 +76,18 @@ uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint3
 #if defined(__AVX512F__)
     const __m512 m = _mm512_set1_ps(value);
     __m512 lLo[kCoords], lHi[kCoords], rLo[kCoords], rHi[kCoords];
-    for (int k = 0; k < kCoords; ++k) {
+    ForActive<kActive>([&](auto k) {
         lLo[k] = rLo[k] = _mm512_set1_ps(kInf);
         lHi[k] = rHi[k] = _mm512_set1_ps(-kInf);
-    }
+    });
     // Local copies: stores through the destination pointers could otherwise alias `io`, and the
     // compiler would reload every pointer after every store.
     const float* src[kCoords];
     float* dst[kCoords];
-    for (int k = 0; k < kCoords; ++k) {
+    ForActive<kActive>([&](auto k) {
         src[k] = io.src[k];
         dst[k] = io.dst[k];
-    }
+    });
     const float* const key = io.key;
     const uint32_t* const srcId = io.srcId;
     uint32_t* const dstId = io.dstId;
@@ -88,9 +100,7 @@ uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint3
         const uint32_t nl = uint32_t(std::popcount(unsigned(left)));
         const uint32_t nr = uint32_t(std::popcount(unsigned(right)));
         const __mmask16 ml = __mmask16((1u << nl) - 1u), mr = __mmask16((1u << nr) - 1u);
-#pragma GCC unroll 6
-        for (int k = 0; k < kCoords; ++k) {
-            if (!((kActive >> k) & 1)) continue;
+        ForActive<kActive>([&](auto k) {
             const __m512 v = _mm512_maskz_loadu_ps(live, src[k] + i);
             _mm512_mask_storeu_ps(dst[k] + l, ml, _mm512_maskz_compress_ps(left, v));
             _mm512_mask_storeu_ps(dst[k] + r - nr, mr, _mm512_maskz_compress_ps(right, v));
@@ -98,20 +108,19 @@ uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint3
             lHi[k] = _mm512_mask_max_ps(lHi[k], left, lHi[k], v);
             rLo[k] = _mm512_mask_min_ps(rLo[k], right, rLo[k], v);
             rHi[k] = _mm512_mask_max_ps(rHi[k], right, rHi[k], v);
-        }
+        });
         const __m512i id = _mm512_maskz_loadu_epi32(live, srcId + i);
         _mm512_mask_storeu_epi32(dstId + l, ml, _mm512_maskz_compress_epi32(left, id));
         _mm512_mask_storeu_epi32(dstId + r - nr, mr, _mm512_maskz_compress_epi32(right, id));
         l += nl;
         r -= nr;
     }
-    for (int k = 0; k < kCoords; ++k) {
-        if (!((kActive >> k) & 1)) continue;
+    ForActive<kActive>([&](auto k) {
         leftBox.lo[k] = ReduceMin(lLo[k]);
         leftBox.hi[k] = ReduceMax(lHi[k]);
         rightBox.lo[k] = ReduceMin(rLo[k]);
         rightBox.hi[k] = ReduceMax(rHi[k]);
-    }
+    });
 #else
     for (uint32_t i = begin; i < end; ++i) {
         const bool isLeft = io.key[i] < value;
