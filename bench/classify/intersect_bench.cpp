@@ -138,6 +138,45 @@ BENCHMARK(BM_PartitionRays)
     ->ArgsProduct({{4096, 65536}, {63, 56, 24}})
     ->ArgNames({"rays", "active"});
 
+// A plan's four levels of splits at once (16 cells) over the rays of a 1024-wide image in
+// scanline order (coordinates 3 and 4 its columns and rows, the others random), on one thread;
+// `active` as for BM_PartitionRays.
+void BM_BucketRays(benchmark::State& state) {
+    const uint32_t n = uint32_t(state.range(0));
+    const int activeMask = int(state.range(1));
+    std::mt19937 rng(6);
+    std::uniform_real_distribution<float> pos(-1.0f, 1.0f);
+    ScratchVector<float> from[classify::kCoords], to[classify::kCoords];
+    ScratchVector<uint32_t> fromId(n), toId(n);
+    for (int k = 0; k < classify::kCoords; ++k) {
+        from[k].resize(n);
+        to[k].resize(n);
+        for (uint32_t i = 0; i < n; ++i) from[k][i] = pos(rng);
+    }
+    const uint32_t rows = (n + 1023) / 1024;
+    for (uint32_t i = 0; i < n; ++i) {
+        from[3][i] = float(i % 1024) / 512.0f - 1.0f;
+        from[4][i] = float(i / 1024) / float(rows) * 2.0f - 1.0f;
+        fromId[i] = i;
+    }
+    bool active[classify::kCoords];
+    for (int k = 0; k < classify::kCoords; ++k) active[k] = (activeMask >> k) & 1;
+    const int dim[4] = {3, 4, 3, 4};
+    // Heap order: each cell a quarter of the image's width and height.
+    const float value[15] = {0.0f,  0.0f, 0.0f, -0.5f, -0.5f, 0.5f, 0.5f, -0.5f,
+                             -0.5f, 0.5f, 0.5f, -0.5f, -0.5f, 0.5f, 0.5f};
+    const classify::CellRule rule{4, dim, value};
+    const classify::PartitionIo io = classify::Between(from, to, fromId, toId);
+    uint32_t cellBegin[17];
+    classify::Bounds6 cell[16];
+    for (auto _ : state) {
+        classify::BucketRays(io, active, rule, 0, n, cellBegin, cell, 1);
+        benchmark::DoNotOptimize(toId.data());
+    }
+    state.SetItemsProcessed(int64_t(state.iterations()) * n);
+}
+BENCHMARK(BM_BucketRays)->ArgsProduct({{65536, 786432}, {63, 24}})->ArgNames({"rays", "active"});
+
 BENCHMARK(BM_FilterBoxes)->Arg(0)->Arg(1)->ArgNames({"wide"});
 
 }  // namespace
