@@ -258,21 +258,64 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
                                  _mm512_cmp_ps_mask(sz, blo[2], _CMP_GE_OQ) &
                                  _mm512_cmp_ps_mask(sz, bhi[2], _CMP_LE_OQ);
         const __m512 dsum = _mm512_add_ps(_mm512_add_ps(dx, dy), dz);
-        const __mmask16 fast =
-            __mmask16(live & inside & _mm512_cmp_ps_mask(da, zero, _CMP_GT_OQ) &
-                      _mm512_cmp_ps_mask(_mm512_and_ps(dsum, absMask), fmax, _CMP_LE_OQ) &
-                      _mm512_cmp_ps_mask(tmin, tmax, _CMP_LT_OQ));
+        const __mmask16 mappable =
+            __mmask16(live & _mm512_cmp_ps_mask(da, zero, _CMP_GT_OQ) &
+                      _mm512_cmp_ps_mask(_mm512_and_ps(dsum, absMask), fmax, _CMP_LE_OQ));
+        __mmask16 fast = __mmask16(mappable & inside & _mm512_cmp_ps_mask(tmin, tmax, _CMP_LT_OQ));
+        // Rays that start outside the box (the camera of a scene seen from outside, a light
+        // beyond it): ToRay5Clipped's slab clip, operation for operation, so the points are
+        // bit-identical. Lanes it rejects, and those with an origin that is not finite, take the
+        // scalar path below.
+        __m512 start[3] = {sx, sy, sz};
+        __m512 segLo = tmin, segHi = tmax;
+        const __m512 osum = _mm512_add_ps(_mm512_add_ps(ox, oy), oz);
+        const __mmask16 outside =
+            __mmask16(mappable & ~inside &
+                      _mm512_cmp_ps_mask(_mm512_and_ps(osum, absMask), fmax, _CMP_LE_OQ));
+        if (outside) {
+            const __m512 o[3] = {ox, oy, oz}, d[3] = {dx, dy, dz};
+            __m512 tEnter = tmin, tExit = tmax;
+            __mmask16 clip = outside;
+            for (int k = 0; k < 3; ++k) {
+                // An axis-parallel ray misses unless it lies within the slab; it never narrows
+                // the interval.
+                const __mmask16 flat = _mm512_cmp_ps_mask(d[k], zero, _CMP_EQ_OQ);
+                clip &= __mmask16(~(flat & (_mm512_cmp_ps_mask(o[k], blo[k], _CMP_LT_OQ) |
+                                            _mm512_cmp_ps_mask(o[k], bhi[k], _CMP_GT_OQ))));
+                const __m512 inv = _mm512_div_ps(one, _mm512_mask_blend_ps(flat, d[k], one));
+                const __m512 t0 = _mm512_mul_ps(_mm512_sub_ps(blo[k], o[k]), inv);
+                const __m512 t1 = _mm512_mul_ps(_mm512_sub_ps(bhi[k], o[k]), inv);
+                // The ordered pair, then std::max(tEnter, near) and std::min(tExit, far).
+                const __m512 near = Min16(t1, t0), far = Max16(t0, t1);
+                tEnter = _mm512_mask_max_ps(tEnter, __mmask16(~flat), near, tEnter);
+                tExit = _mm512_mask_min_ps(tExit, __mmask16(~flat), far, tExit);
+            }
+            clip &= _mm512_cmp_ps_mask(tEnter, tExit, _CMP_LE_OQ) &
+                    _mm512_cmp_ps_mask(tEnter, tmax, _CMP_LT_OQ);
+            for (int k = 0; k < 3; ++k) {
+                // glm::clamp(o + tEnter d, lo, hi) = min(max(., lo), hi).
+                const __m512 p = _mm512_add_ps(o[k], _mm512_mul_ps(tEnter, d[k]));
+                const __m512 clamped = Min16(bhi[k], Max16(blo[k], p));
+                start[k] = _mm512_mask_blend_ps(clip, start[k], clamped);
+            }
+            segLo = _mm512_mask_blend_ps(clip, segLo, tEnter);
+            segHi = _mm512_mask_blend_ps(clip, segHi, tExit);
+            fast |= clip;
+        }
         // Frame: X = s p_a, Y = p_b, Z = p_c with b = a + 1, c = a + 2 (mod 3).
-        const __m512 pa = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, sz, sy), sx);
+        const auto [qx, qy, qz] = start;
+        const __m512 pa = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, qz, qy), qx);
         const __m512 x = _mm512_mask_xor_ps(pa, neg, pa, signMask);
-        const __m512 y = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, sx, sz), sy);
-        const __m512 z = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, sy, sx), sz);
+        const __m512 y = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, qx, qz), qy);
+        const __m512 z = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, qy, qx), qz);
         const __m512 db = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dx, dz), dy);
         const __m512 dc = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dy, dx), dz);
         const __m512 inv = _mm512_div_ps(one, _mm512_mask_blend_ps(fast, one, da));
         const __m512 u = _mm512_mul_ps(db, inv);
         const __m512 v = _mm512_mul_ps(dc, inv);
-        const __m512 reach = Min16(_mm512_mul_ps(_mm512_sub_ps(tmax, tmin), da), fmax);
+        // Not finite (or beyond the largest float) becomes the largest float, as in both scalar
+        // paths.
+        const __m512 reach = Min16(_mm512_mul_ps(_mm512_sub_ps(segHi, segLo), da), fmax);
         const __m512 hiA =
             _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, bhi[2], bhi[1]), bhi[0]);
         const __m512 loA =

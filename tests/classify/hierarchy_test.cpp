@@ -3,8 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
+#include <iterator>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -629,6 +632,115 @@ TEST(Hierarchy, HeldCoordinatesAreStoredOnceTheyVary) {
             EXPECT_GT(batch.leaves.size(), 20u);
             ExpectSameLeaves(batch, same[0], false);
         }
+    }
+}
+
+// Rays that start outside the scene box are clipped to it on the way into 5D. Every leaf below a
+// face root has its rays' tight bounds as its box, so comparing those boxes with the bounds of
+// ToRay5's points checks the conversion bit for bit: eyes outside the box on every side, starts
+// moved by tMin, ends before and inside the box, axis-parallel rays inside and outside a slab,
+// rays along a face plane, rays that point away, and far random rays.
+TEST(Hierarchy, ClippedRaysMapExactlyAsToRay5) {
+    const scene::Scene s = RandomScene(121, 300, 5, 2);
+    std::mt19937 rng(122);
+    std::uniform_real_distribution<float> in(-1.0f, 1.0f), far(-5.0f, 5.0f), unit(0.0f, 1.0f);
+    Hierarchy probe(s, DeepParams(s));
+    const Bounds3f box = probe.SceneBox();
+    std::vector<Ray> rays;
+    const glm::vec3 eyes[] = {{-3.0f, 0.1f, 0.2f},  {3.2f, -0.3f, 0.1f}, {0.2f, 3.5f, -0.1f},
+                              {-0.1f, -3.1f, 0.3f}, {0.1f, -0.2f, 4.0f}, {0.3f, 0.2f, -3.3f},
+                              {2.5f, 2.5f, 2.5f}};
+    for (int i = 0; i < 3000; ++i) {
+        Ray r;
+        const glm::vec3 eye = eyes[size_t(i) % std::size(eyes)];
+        r.origin = eye;
+        r.direction = glm::normalize(glm::vec3(in(rng), in(rng), in(rng)) - eye);
+        switch (i % 11) {
+            case 1:
+                r.tMin = 0.5f * unit(rng);
+                break;  // still outside
+            case 2:
+                r.tMax = 0.5f + 4.0f * unit(rng);
+                break;  // may end before
+            case 3:
+                r.direction = -r.direction;
+                break;  // points away
+            case 4:
+                r.origin = glm::vec3(far(rng), far(rng), far(rng));  // anywhere
+                r.direction = RandomDirection(rng);
+                break;
+            case 5: {  // axis-parallel, inside or outside the other two slabs, just outside
+                const int a = i % 3;
+                r.origin = glm::vec3(in(rng), in(rng), in(rng)) * 1.5f;
+                r.origin[a] = box.lo[a] - 0.05f - 0.3f * unit(rng);
+                r.direction = glm::vec3(0.0f);
+                r.direction[a] = 1.0f;
+                break;
+            }
+            case 6: {  // along the box's lower y plane, from outside in x
+                r.origin = glm::vec3(-4.0f, box.lo.y, in(rng));
+                r.direction = glm::normalize(glm::vec3(1.0f, 0.0f, 0.3f * in(rng)));
+                break;
+            }
+            default:
+                break;
+        }
+        rays.push_back(r);
+    }
+    const auto brute = BruteForce(s, rays);
+    for (const uint32_t threads : {1u, 2u}) {
+        SCOPED_TRACE(std::to_string(threads) + " threads");
+        Params p = DeepParams(s);
+        p.threads = threads;
+        Hierarchy h(s, p);
+        const LeafBatch batch = h.Classify(rays);
+        ExpectEveryRayOnce(batch, uint32_t(rays.size()));
+        ExpectSameHits(Query(s, batch, rays), brute);
+        std::vector<bool> missed(rays.size(), false);
+        for (const uint32_t id : batch.missed) missed[id] = true;
+        int clipped = 0, compared = 0;
+        for (uint32_t i = 0; i < rays.size(); ++i) {
+            Ray5 r;
+            const bool mapped = ToRay5(rays[i], box, r);
+            ASSERT_EQ(mapped, !missed[i]) << "ray " << i;
+            const glm::vec3 start = rays[i].origin + rays[i].tMin * rays[i].direction;
+            clipped +=
+                mapped && glm::any(glm::lessThan(start, box.lo) || glm::greaterThan(start, box.hi));
+        }
+        EXPECT_GT(clipped, 1500);
+        for (const RcLeaf& leaf : batch.leaves) {
+            const Node& node = h.Nodes()[leaf.node];
+            if (node.depth == 0 || node.isRemainder) continue;
+            Box5 tight;
+            tight.lo.fill(std::numeric_limits<float>::infinity());
+            tight.hi.fill(-std::numeric_limits<float>::infinity());
+            float endHi = -std::numeric_limits<float>::infinity();
+            for (uint32_t j = 0; j < leaf.rayCount; ++j) {
+                Ray5 r;
+                ASSERT_TRUE(ToRay5(rays[batch.rayIndex[leaf.rayBegin + j]], box, r));
+                for (int k = 0; k < kDims; ++k) {
+                    tight.lo[k] = std::min(tight.lo[k], r.p[k]);
+                    tight.hi[k] = std::max(tight.hi[k], r.p[k]);
+                }
+                endHi = std::max(endHi, std::min(r.p[0] + r.reach, BoxInFace(r.face, box).hi[0]));
+            }
+            // The clipped reach ends the lists: no entry starts beyond the leaf's last end (but
+            // for the lists' 16-bit rounding).
+            for (uint32_t c = 0; c < leaf.candCount; ++c) {
+                ASSERT_LE(batch.candidates[leaf.candBegin + c].nearX, endHi + 1e-3f)
+                    << "leaf node " << leaf.node << " entry " << c;
+            }
+            for (int k = 0; k < kDims; ++k) {
+                ASSERT_EQ(std::bit_cast<uint32_t>(node.box.lo[k]),
+                          std::bit_cast<uint32_t>(tight.lo[k]))
+                    << "leaf node " << leaf.node << " coordinate " << k;
+                ASSERT_EQ(std::bit_cast<uint32_t>(node.box.hi[k]),
+                          std::bit_cast<uint32_t>(tight.hi[k]))
+                    << "leaf node " << leaf.node << " coordinate " << k;
+            }
+            ++compared;
+        }
+        EXPECT_GT(compared, 50);
     }
 }
 
