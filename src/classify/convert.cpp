@@ -268,6 +268,7 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
         // scalar path below.
         __m512 start[3] = {sx, sy, sz};
         __m512 segLo = tmin, segHi = tmax;
+        __mmask16 rejected = 0;  // lanes the clip finds to miss the box, as ToRay5Clipped would
         const __m512 osum = _mm512_add_ps(_mm512_add_ps(ox, oy), oz);
         const __mmask16 outside =
             __mmask16(mappable & ~inside &
@@ -301,6 +302,7 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
             segLo = _mm512_mask_blend_ps(clip, segLo, tEnter);
             segHi = _mm512_mask_blend_ps(clip, segHi, tExit);
             fast |= clip;
+            rejected = __mmask16(outside & ~clip);
         }
         // Frame: X = s p_a, Y = p_b, Z = p_c with b = a + 1, c = a + 2 (mod 3).
         const auto [qx, qy, qz] = start;
@@ -357,6 +359,10 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
         while (slow) {
             const int j = std::countr_zero(slow);
             slow &= slow - 1;
+            if ((rejected >> j) & 1u) {
+                missed.push_back(firstId + uint32_t(i) + uint32_t(j));
+                continue;
+            }
             const Ray ray = ends.Oriented(rays[i + size_t(j)]);
             Ray5 r5;
             if (DirectionFace(ray.direction) < kFaceCount && ToRay5Clipped(ray, sceneBox_, r5)) {
@@ -489,7 +495,9 @@ void Hierarchy::ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* face
         out.missed.insert(out.missed.end(), p.missed.begin(), p.missed.end());
         counters_.fromEnd += p.fromEnd;
     }
-    std::sort(out.missed.begin(), out.missed.end());
+    // The pieces come in id order and so do their misses: usually nothing is left to sort.
+    if (!std::is_sorted(out.missed.begin(), out.missed.end()))
+        std::sort(out.missed.begin(), out.missed.end());
 }
 
 }  // namespace rayclass::classify

@@ -639,7 +639,8 @@ TEST(Hierarchy, HeldCoordinatesAreStoredOnceTheyVary) {
 // face root has its rays' tight bounds as its box, so comparing those boxes with the bounds of
 // ToRay5's points checks the conversion bit for bit: eyes outside the box on every side, starts
 // moved by tMin, ends before and inside the box, axis-parallel rays inside and outside a slab,
-// rays along a face plane, rays that point away, and far random rays.
+// rays along a face plane, rays that touch an edge at one point, rays that point away, and far
+// random rays.
 TEST(Hierarchy, ClippedRaysMapExactlyAsToRay5) {
     const scene::Scene s = RandomScene(121, 300, 5, 2);
     std::mt19937 rng(122);
@@ -680,6 +681,12 @@ TEST(Hierarchy, ClippedRaysMapExactlyAsToRay5) {
             case 6: {  // along the box's lower y plane, from outside in x
                 r.origin = glm::vec3(-4.0f, box.lo.y, in(rng));
                 r.direction = glm::normalize(glm::vec3(1.0f, 0.0f, 0.3f * in(rng)));
+                break;
+            }
+            case 7: {  // touches the box's edge x = lo.x, y = hi.y: enters x as it leaves y
+                const float delta = 0.0625f;  // exact steps from the box's faces
+                r.origin = glm::vec3(box.lo.x - delta, box.hi.y - delta, 0.9f * in(rng));
+                r.direction = glm::vec3(1.0f, 1.0f, 0.0f);
                 break;
             }
             default:
