@@ -110,26 +110,35 @@ void BM_FilterBoxes(benchmark::State& state) {
 // A node's two-way partition of its rays between the ping-pong buffers, half of the rays to each
 // side; `active` the coordinates moved with the ids: 63 all six (mirror rays), 56 direction and
 // end (shadow rays from their light), 24 direction only (eye rays).
+// n rays in the ping-pong buffers' structure of arrays: random coordinates, ids in order.
+struct RayBuffers {
+    ScratchVector<float> from[classify::kCoords], to[classify::kCoords];
+    ScratchVector<uint32_t> fromId, toId;
+
+    RayBuffers(uint32_t n, uint32_t seed) : fromId(n), toId(n) {
+        std::mt19937 rng(seed);
+        std::uniform_real_distribution<float> pos(-1.0f, 1.0f);
+        for (int k = 0; k < classify::kCoords; ++k) {
+            from[k].resize(n);
+            to[k].resize(n);
+            for (uint32_t i = 0; i < n; ++i) from[k][i] = pos(rng);
+        }
+        for (uint32_t i = 0; i < n; ++i) fromId[i] = i;
+    }
+    classify::PartitionIo Io() { return classify::Between(from, to, fromId, toId); }
+};
+
 void BM_PartitionRays(benchmark::State& state) {
     const uint32_t n = uint32_t(state.range(0));
     const int active = int(state.range(1));
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<float> pos(-1.0f, 1.0f);
-    ScratchVector<float> from[classify::kCoords], to[classify::kCoords];
-    ScratchVector<uint32_t> fromId(n), toId(n);
-    for (int k = 0; k < classify::kCoords; ++k) {
-        from[k].resize(n);
-        to[k].resize(n);
-        for (uint32_t i = 0; i < n; ++i) from[k][i] = pos(rng);
-    }
-    for (uint32_t i = 0; i < n; ++i) fromId[i] = i;
-    classify::PartitionIo io = classify::Between(from, to, fromId, toId);
-    io.key = from[3].data();
+    RayBuffers b(n, 5);
+    classify::PartitionIo io = b.Io();
+    io.key = b.from[3].data();
     classify::Bounds6 left, right;
     uint32_t mid = 0;
     for (auto _ : state) {
         mid = classify::PartitionRays(active, io, 0.0f, 0, n, left, right);
-        benchmark::DoNotOptimize(toId.data());
+        benchmark::DoNotOptimize(b.toId.data());
     }
     state.counters["left"] = double(mid);
     state.SetItemsProcessed(int64_t(state.iterations()) * n);
@@ -144,20 +153,11 @@ BENCHMARK(BM_PartitionRays)
 void BM_BucketRays(benchmark::State& state) {
     const uint32_t n = uint32_t(state.range(0));
     const int activeMask = int(state.range(1));
-    std::mt19937 rng(6);
-    std::uniform_real_distribution<float> pos(-1.0f, 1.0f);
-    ScratchVector<float> from[classify::kCoords], to[classify::kCoords];
-    ScratchVector<uint32_t> fromId(n), toId(n);
-    for (int k = 0; k < classify::kCoords; ++k) {
-        from[k].resize(n);
-        to[k].resize(n);
-        for (uint32_t i = 0; i < n; ++i) from[k][i] = pos(rng);
-    }
+    RayBuffers b(n, 6);
     const uint32_t rows = (n + 1023) / 1024;
     for (uint32_t i = 0; i < n; ++i) {
-        from[3][i] = float(i % 1024) / 512.0f - 1.0f;
-        from[4][i] = float(i / 1024) / float(rows) * 2.0f - 1.0f;
-        fromId[i] = i;
+        b.from[3][i] = float(i % 1024) / 512.0f - 1.0f;
+        b.from[4][i] = float(i / 1024) / float(rows) * 2.0f - 1.0f;
     }
     bool active[classify::kCoords];
     for (int k = 0; k < classify::kCoords; ++k) active[k] = (activeMask >> k) & 1;
@@ -166,12 +166,12 @@ void BM_BucketRays(benchmark::State& state) {
     const float value[15] = {0.0f,  0.0f, 0.0f, -0.5f, -0.5f, 0.5f, 0.5f, -0.5f,
                              -0.5f, 0.5f, 0.5f, -0.5f, -0.5f, 0.5f, 0.5f};
     const classify::CellRule rule{4, dim, value};
-    const classify::PartitionIo io = classify::Between(from, to, fromId, toId);
+    const classify::PartitionIo io = b.Io();
     uint32_t cellBegin[17];
     classify::Bounds6 cell[16];
     for (auto _ : state) {
         classify::BucketRays(io, active, rule, 0, n, cellBegin, cell, 1);
-        benchmark::DoNotOptimize(toId.data());
+        benchmark::DoNotOptimize(b.toId.data());
     }
     state.SetItemsProcessed(int64_t(state.iterations()) * n);
 }
