@@ -381,6 +381,31 @@ RC_SHADE_INLINE int16 rc_packet_triangle(const RcLanes16* L, RcTriangle tri, flo
            (*t > L->tmin) & (*t < L->tmax);
 }
 
+/* rc_intersect_sphere for 16 rays against one sphere, the same operations lane by lane, below
+ * each lane's own bound: the lanes that hit inside (tmin, tmax), with t. */
+RC_SHADE_INLINE int16 rc_packet_sphere(const RcLanes16* L, float4 centerRadius, float16 tmax,
+                                       float16* t) {
+    const float16 Dx = L->dx, Dy = L->dy, Dz = L->dz;
+    const float16 fx = L->ox - centerRadius.x, fy = L->oy - centerRadius.y,
+                  fz = L->oz - centerRadius.z;
+    const float r = centerRadius.w;
+    const float16 a = Dx * Dx + Dy * Dy + Dz * Dz;
+    const float16 b = -(fx * Dx + fy * Dy + fz * Dz);
+    const float16 ba = b / a;
+    const float16 lx = fx + ba * Dx, ly = fy + ba * Dy, lz = fz + ba * Dz;
+    const float16 disc = a * (r * r - (lx * lx + ly * ly + lz * lz));
+    const float16 c = (fx * fx + fy * fy + fz * fz) - r * r;
+    const float16 q = b + copysign(sqrt(disc), b);
+    const float16 r0 = select(c / q, (float16)(0.0f), q == 0.0f);
+    const float16 r1 = q / a;
+    const int16 swap = r0 > r1;
+    const float16 t0 = select(r0, r1, swap), t1 = select(r1, r0, swap);
+    const int16 in0 = (t0 > L->tmin) & (t0 < tmax);
+    const int16 in1 = (t1 > L->tmin) & (t1 < tmax);
+    *t = select(t1, t0, in0);
+    return ~(disc < 0.0f) & (in0 | in1);
+}
+
 /* One work-item per packet: packetLeaf[p] and packetFirst[p] (the packet's first ray within its
  * leaf); the packet holds min(16, rayCount - first) rays. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_fragment(
@@ -418,8 +443,19 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
             bestU = select(bestU, u, better);
             bestV = select(bestV, v, better);
             bestPrim = select(bestPrim, (uint16)(prim), as_uint16(better));
+        } else if (prim < nT + nS) {
+            /* rc_intersect_primitive's bound: a hit at exactly bestT may still win on its id. */
+            const float16 bound = fmin(L.tmax, nextafter(bestT, (float16)(INFINITY)));
+            float16 t;
+            const int16 inside = rc_packet_sphere(&L, spheres[prim - nT].centerRadius, bound, &t);
+            const int16 better =
+                inside & ((t < bestT) | ((t == bestT) & ((uint16)(prim) < bestPrim)));
+            bestT = select(bestT, t, better);
+            bestU = select(bestU, (float16)(0.0f), better);
+            bestV = select(bestV, (float16)(0.0f), better);
+            bestPrim = select(bestPrim, (uint16)(prim), as_uint16(better));
         } else {
-            /* Spheres and quadrics are rare in triangle scenes: lane by lane. */
+            /* Quadrics are rare: lane by lane. */
             RcLaneArrays16 a;
             rc_store_lanes(&L, &a);
             float bt[16], bu[16], bv[16];
@@ -467,7 +503,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
 
 /* Any hit before each lane's tmax (the light), 16 shadow rays of one leaf in lockstep: a lane is
  * done once blocked or once the candidates start beyond its end X; the packet stops when every
- * lane is done. The triangle test is rc_intersect_triangle's, lane by lane. */
+ * lane is done. The triangle and sphere tests are rc_intersect_triangle's and
+ * rc_intersect_sphere's, lane by lane. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_fragment(
     __global const RcRay* rays, __global const uint* rayIndex, __global const uint* packetLeaf,
     __global const uint* packetFirst, uint nPackets, __global const RcLeaf* leaves,
@@ -496,6 +533,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
             const int16 inside = rc_packet_triangle(&L,
                                                     triangles[prim], &t, &u, &v);
             hit |= ~beyond & inside;
+        } else if (prim < nT + nS) {
+            float16 t;
+            hit |= ~beyond & rc_packet_sphere(&L, spheres[prim - nT].centerRadius, L.tmax, &t);
         } else {
             RcLaneArrays16 a;
             rc_store_lanes(&L, &a);
