@@ -324,22 +324,6 @@ RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const RcRay* rays, __global co
     return l;
 }
 
-/* Lane k of a packet as a ray, for the lane-by-lane tests of spheres and quadrics. */
-typedef struct RcLaneArrays16 {
-    float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], tmin[16], tmax[16];
-} RcLaneArrays16;
-
-RC_SHADE_INLINE void rc_store_lanes(const RcLanes16* L, RcLaneArrays16* a) {
-    vstore16(L->ox, 0, a->ox);
-    vstore16(L->oy, 0, a->oy);
-    vstore16(L->oz, 0, a->oz);
-    vstore16(L->dx, 0, a->dx);
-    vstore16(L->dy, 0, a->dy);
-    vstore16(L->dz, 0, a->dz);
-    vstore16(L->tmin, 0, a->tmin);
-    vstore16(L->tmax, 0, a->tmax);
-}
-
 /* On a CPU device (PoCL compiles the kernels for the host's x86-64) the next work-item a thread
  * runs is the next packet: fetching that packet's rays while this one tests its candidates hides
  * the cache misses of its scattered ray loads. */
@@ -406,6 +390,41 @@ RC_SHADE_INLINE int16 rc_packet_sphere(const RcLanes16* L, float4 centerRadius, 
     return ~(disc < 0.0f) & (in0 | in1);
 }
 
+/* rc_intersect_quadric for 16 rays against one quadric, the same operations lane by lane, below
+ * each lane's own bound: the lanes that hit inside (tmin, tmax) within the clip box, with t. A
+ * lane of the linear case (a = 0) takes its one root as both of the pair. */
+RC_SHADE_INLINE int16 rc_packet_quadric(const RcLanes16* L, __global const RcQuadric* q,
+                                        float16 tmax, float16* t) {
+    const float4 c0 = q->c0, c1 = q->c1, c2 = q->c2;
+    const float16 Ox = L->ox, Oy = L->oy, Oz = L->oz, Dx = L->dx, Dy = L->dy, Dz = L->dz;
+    const float16 a = c0.x * Dx * Dx + c0.y * Dy * Dy + c0.z * Dz * Dz + c0.w * Dx * Dy +
+                      c1.x * Dx * Dz + c1.y * Dy * Dz;
+    const float16 b = 2.0f * (c0.x * Ox * Dx + c0.y * Oy * Dy + c0.z * Oz * Dz) +
+                      c0.w * (Ox * Dy + Oy * Dx) + c1.x * (Ox * Dz + Oz * Dx) +
+                      c1.y * (Oy * Dz + Oz * Dy) + c1.z * Dx + c1.w * Dy + c2.x * Dz;
+    const float16 c = c0.x * Ox * Ox + c0.y * Oy * Oy + c0.z * Oz * Oz + c0.w * Ox * Oy +
+                      c1.x * Ox * Oz + c1.y * Oy * Oz + c1.z * Ox + c1.w * Oy + c2.x * Oz + c2.y;
+    const int16 linear = a == 0.0f;
+    const float16 disc = b * b - 4.0f * a * c;
+    const float16 qq = -0.5f * (b + copysign(sqrt(disc), b));
+    const float16 q0 = qq / a;
+    const float16 q1 = select(c / qq, q0, qq == 0.0f);
+    const int16 swap = q0 > q1;
+    const float16 root = -c / b;
+    const float16 r0 = select(select(q0, q1, swap), root, linear);
+    const float16 r1 = select(select(q1, q0, swap), root, linear);
+    const int16 valid = select(~(disc < 0.0f), b != 0.0f, linear);
+    const float3 lo = q->boxMin.xyz, hi = q->boxMax.xyz;
+    const float16 x0 = Ox + r0 * Dx, y0 = Oy + r0 * Dy, z0 = Oz + r0 * Dz;
+    const float16 x1 = Ox + r1 * Dx, y1 = Oy + r1 * Dy, z1 = Oz + r1 * Dz;
+    const int16 in0 = (r0 > L->tmin) & (r0 < tmax) & (x0 >= lo.x) & (x0 <= hi.x) & (y0 >= lo.y) &
+                      (y0 <= hi.y) & (z0 >= lo.z) & (z0 <= hi.z);
+    const int16 in1 = (r1 > L->tmin) & (r1 < tmax) & (x1 >= lo.x) & (x1 <= hi.x) & (y1 >= lo.y) &
+                      (y1 <= hi.y) & (z1 >= lo.z) & (z1 <= hi.z);
+    *t = select(r1, r0, in0);
+    return valid & (in0 | in1);
+}
+
 /* One work-item per packet: packetLeaf[p] and packetFirst[p] (the packet's first ray within its
  * leaf); the packet holds min(16, rayCount - first) rays. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_fragment(
@@ -455,33 +474,15 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
             bestV = select(bestV, (float16)(0.0f), better);
             bestPrim = select(bestPrim, (uint16)(prim), as_uint16(better));
         } else {
-            /* Quadrics are rare: lane by lane. */
-            RcLaneArrays16 a;
-            rc_store_lanes(&L, &a);
-            float bt[16], bu[16], bv[16];
-            uint bp[16];
-            vstore16(bestT, 0, bt);
-            vstore16(bestU, 0, bu);
-            vstore16(bestV, 0, bv);
-            vstore16(bestPrim, 0, bp);
-            for (uint k = 0; k < 16; ++k) {
-                RcHit h;
-                h.t = bt[k];
-                h.prim = bp[k];
-                h.u = bu[k];
-                h.v = bv[k];
-                rc_intersect_primitive(prim, (float3)(a.ox[k], a.oy[k], a.oz[k]),
-                                       (float3)(a.dx[k], a.dy[k], a.dz[k]), a.tmin[k], a.tmax[k],
-                                       triangles, spheres, quadrics, nT, nS, &h);
-                bt[k] = h.t;
-                bp[k] = h.prim;
-                bu[k] = h.u;
-                bv[k] = h.v;
-            }
-            bestT = vload16(0, bt);
-            bestU = vload16(0, bu);
-            bestV = vload16(0, bv);
-            bestPrim = vload16(0, bp);
+            const float16 bound = fmin(L.tmax, nextafter(bestT, (float16)(INFINITY)));
+            float16 t;
+            const int16 inside = rc_packet_quadric(&L, quadrics + (prim - nT - nS), bound, &t);
+            const int16 better =
+                inside & ((t < bestT) | ((t == bestT) & ((uint16)(prim) < bestPrim)));
+            bestT = select(bestT, t, better);
+            bestU = select(bestU, (float16)(0.0f), better);
+            bestV = select(bestV, (float16)(0.0f), better);
+            bestPrim = select(bestPrim, (uint16)(prim), as_uint16(better));
         }
     }
     float bt[16], bu[16], bv[16];
@@ -503,8 +504,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
 
 /* Any hit before each lane's tmax (the light), 16 shadow rays of one leaf in lockstep: a lane is
  * done once blocked or once the candidates start beyond its end X; the packet stops when every
- * lane is done. The triangle and sphere tests are rc_intersect_triangle's and
- * rc_intersect_sphere's, lane by lane. */
+ * lane is done. The triangle, sphere and quadric tests are those of intersect.cl, lane by
+ * lane. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_fragment(
     __global const RcRay* rays, __global const uint* rayIndex, __global const uint* packetLeaf,
     __global const uint* packetFirst, uint nPackets, __global const RcLeaf* leaves,
@@ -537,22 +538,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
             float16 t;
             hit |= ~beyond & rc_packet_sphere(&L, spheres[prim - nT].centerRadius, L.tmax, &t);
         } else {
-            RcLaneArrays16 a;
-            rc_store_lanes(&L, &a);
-            int h[16], b[16];
-            vstore16(hit, 0, h);
-            vstore16(beyond, 0, b);
-            for (uint k = 0; k < 16; ++k) {
-                if (h[k] || b[k]) continue;
-                RcHit best = rc_no_hit(a.tmax[k]);
-                h[k] = rc_intersect_primitive(prim, (float3)(a.ox[k], a.oy[k], a.oz[k]),
-                                              (float3)(a.dx[k], a.dy[k], a.dz[k]), a.tmin[k],
-                                              a.tmax[k], triangles, spheres, quadrics, nT, nS,
-                                              &best)
-                           ? -1
-                           : 0;
-            }
-            hit = vload16(0, h);
+            float16 t;
+            hit |= ~beyond & rc_packet_quadric(&L, quadrics + (prim - nT - nS), L.tmax, &t);
         }
     }
     int h[16];
