@@ -451,39 +451,25 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
             (bestPrim != (uint16)(RC_NO_HIT)) & (L.x + bestT * L.speed < cand.nearX);
         if (all(done)) break;
         const uint prim = cand.prim;
+        float16 t, u = 0.0f, v = 0.0f;
+        int16 inside;
         if (prim < nT) {
-            float16 t, u, v;
-            const int16 inside = rc_packet_triangle(&L,
-                                                    triangles[prim], &t, &u, &v);
-            /* Nearer, or equally near with a lower id: the depth test with the id tie-break. */
-            const int16 better =
-                inside & ((t < bestT) | ((t == bestT) & ((uint16)(prim) < bestPrim)));
-            bestT = select(bestT, t, better);
-            bestU = select(bestU, u, better);
-            bestV = select(bestV, v, better);
-            bestPrim = select(bestPrim, (uint16)(prim), as_uint16(better));
-        } else if (prim < nT + nS) {
+            inside = rc_packet_triangle(&L, triangles[prim], &t, &u, &v);
+        } else {
             /* rc_intersect_primitive's bound: a hit at exactly bestT may still win on its id. */
             const float16 bound = fmin(L.tmax, nextafter(bestT, (float16)(INFINITY)));
-            float16 t;
-            const int16 inside = rc_packet_sphere(&L, spheres[prim - nT].centerRadius, bound, &t);
-            const int16 better =
-                inside & ((t < bestT) | ((t == bestT) & ((uint16)(prim) < bestPrim)));
-            bestT = select(bestT, t, better);
-            bestU = select(bestU, (float16)(0.0f), better);
-            bestV = select(bestV, (float16)(0.0f), better);
-            bestPrim = select(bestPrim, (uint16)(prim), as_uint16(better));
-        } else {
-            const float16 bound = fmin(L.tmax, nextafter(bestT, (float16)(INFINITY)));
-            float16 t;
-            const int16 inside = rc_packet_quadric(&L, quadrics + (prim - nT - nS), bound, &t);
-            const int16 better =
-                inside & ((t < bestT) | ((t == bestT) & ((uint16)(prim) < bestPrim)));
-            bestT = select(bestT, t, better);
-            bestU = select(bestU, (float16)(0.0f), better);
-            bestV = select(bestV, (float16)(0.0f), better);
-            bestPrim = select(bestPrim, (uint16)(prim), as_uint16(better));
+            if (prim < nT + nS) {
+                inside = rc_packet_sphere(&L, spheres[prim - nT].centerRadius, bound, &t);
+            } else {
+                inside = rc_packet_quadric(&L, quadrics + (prim - nT - nS), bound, &t);
+            }
         }
+        /* Nearer, or equally near with a lower id: the depth test with the id tie-break. */
+        const int16 better = inside & ((t < bestT) | ((t == bestT) & ((uint16)(prim) < bestPrim)));
+        bestT = select(bestT, t, better);
+        bestU = select(bestU, u, better);
+        bestV = select(bestV, v, better);
+        bestPrim = select(bestPrim, (uint16)(prim), as_uint16(better));
     }
     float bt[16], bu[16], bv[16];
     uint bp[16];

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "quad.h"
+#include "query_io.h"
 #include "rayclass/bvh/bvh.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/cl_renderer.h"
@@ -110,37 +111,13 @@ struct Queries {
         p.nTriangles = uint32_t(scene.triangles.size());
         return p;
     }
-
-    cl::Buffer Upload(const std::vector<RcRay>& rays) const {
-        return cl::Buffer(Ctx().context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                          rays.size() * sizeof(RcRay), const_cast<RcRay*>(rays.data()));
-    }
-
-    std::vector<RcHit> Nearest(RayQuery& q, const std::vector<RcRay>& rays) const {
-        const uint32_t n = uint32_t(rays.size());
-        cl::Buffer hits(Ctx().context(), CL_MEM_READ_WRITE, n * sizeof(RcHit));
-        KernelTimer timer;
-        q.Intersect(Upload(rays), n, nullptr, hits, ShadeBuffers{}, timer);
-        std::vector<RcHit> out(n);
-        Ctx().queue().enqueueReadBuffer(hits, CL_TRUE, 0, n * sizeof(RcHit), out.data());
-        return out;
-    }
-
-    std::vector<uint8_t> Blocked(RayQuery& q, const std::vector<RcRay>& rays) const {
-        const uint32_t n = uint32_t(rays.size());
-        cl::Buffer blocked(Ctx().context(), CL_MEM_READ_WRITE, n);
-        KernelTimer timer;
-        q.Occluded(Upload(rays), rays, blocked, timer);
-        std::vector<uint8_t> out(n);
-        Ctx().queue().enqueueReadBuffer(blocked, CL_TRUE, 0, n, out.data());
-        return out;
-    }
 };
 
 TEST(BvhQuery, AxisParallelRaysAndRaysInFacePlanesHitWhatBruteForceHits) {
     Queries q;
     const std::vector<RcRay> rays = FragileRays(q.scene, INFINITY);
-    const std::vector<RcHit> bvh = q.Nearest(*q.bvh, rays), brute = q.Nearest(*q.brute, rays);
+    const std::vector<RcHit> bvh = NearestHits(Ctx(), *q.bvh, rays),
+                             brute = NearestHits(Ctx(), *q.brute, rays);
     uint32_t hits = 0, mismatches = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
         hits += brute[i].prim != RC_NO_HIT;
@@ -163,7 +140,8 @@ TEST(BvhQuery, AxisParallelRaysAndRaysInFacePlanesHitWhatBruteForceHits) {
 TEST(BvhQuery, AnyHitAnswersOfFragileRaysAreBruteForces) {
     Queries q;
     const std::vector<RcRay> rays = FragileRays(q.scene, 0.75f);
-    const std::vector<uint8_t> bvh = q.Blocked(*q.bvh, rays), brute = q.Blocked(*q.brute, rays);
+    const std::vector<uint8_t> bvh = BlockedAnswers(Ctx(), *q.bvh, rays),
+                               brute = BlockedAnswers(Ctx(), *q.brute, rays);
     uint32_t blocked = 0, mismatches = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
         blocked += brute[i] != 0;

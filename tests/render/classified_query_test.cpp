@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "quad.h"
+#include "query_io.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/auto_query.h"
 #include "rayclass/render/device_scene.h"
@@ -97,53 +98,22 @@ struct Fixture {
                                    classify::Params::ForScene(scene), KernelStyle::kFragment);
     }
 
-    template <typename T>
-    cl::Buffer Upload(const std::vector<T>& v) const {
-        return cl::Buffer(Ctx().context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
-                          v.size() * sizeof(T), const_cast<T*>(v.data()));
-    }
-    cl::Buffer Device(size_t bytes) const {
-        return cl::Buffer(Ctx().context(), CL_MEM_READ_WRITE, bytes);
-    }
-
     // Nearest hits of a batch, shaded as the renderer shades them; returns the tests done.
     uint64_t Nearest(RayQuery& q, const std::vector<RcRay>& rays,
                      std::vector<RcHit>* hitsOut = nullptr) const {
-        const uint32_t n = uint32_t(rays.size());
-        std::vector<RcRayInfo> info(n);
-        for (uint32_t i = 0; i < n; ++i) {
-            info[i].weight = {1.0f, 1.0f, 1.0f, 0.0f};
-            info[i].pixel = i;
-            info[i].kind = RC_RAY_EYE;
-        }
-        const cl::Buffer rayBuf = Upload(rays), hits = Device(n * sizeof(RcHit));
-        ShadeBuffers shade = MakeShadeBuffers(Ctx(), n, Params().nLights);
-        shade.rayInfo = Upload(info);
-        KernelTimer timer;
-        std::unique_ptr<PreparedBatch> prepared = q.Prepare(rayBuf, n, Ctx().queue());
-        const uint64_t tests = q.Intersect(rayBuf, n, prepared.get(), hits, shade, timer).tests;
-        q.Recycle(std::move(prepared));
-        if (hitsOut) {
-            hitsOut->resize(n);
-            Ctx().queue().enqueueReadBuffer(hits, CL_TRUE, 0, n * sizeof(RcHit), hitsOut->data());
-        }
-        Ctx().queue().finish();
-        return tests;
+        return NearestHits(Ctx(), q, rays, Params().nLights, hitsOut);
     }
 
     uint64_t Occluded(RayQuery& q, const std::vector<RcRay>& rays) const {
-        const uint32_t n = uint32_t(rays.size());
-        KernelTimer timer;
-        const uint64_t tests = q.Occluded(Upload(rays), rays, Device(n), timer);
-        Ctx().queue().finish();
+        uint64_t tests = 0;
+        BlockedAnswers(Ctx(), q, rays, &tests);
         return tests;
     }
 };
 
-void BeginGeneration(RayQuery& q, const Fixture& f, uint32_t generation,
-                     const std::vector<RcRay>& rays) {
+void BeginGeneration(RayQuery& q, uint32_t generation, const std::vector<RcRay>& rays) {
     KernelTimer timer;
-    q.BeginGeneration(generation, f.Upload(rays), uint32_t(rays.size()), timer);
+    q.BeginGeneration(generation, UploadVector(Ctx(), rays), uint32_t(rays.size()), timer);
 }
 
 TEST(ClassifiedQuery, EachGenerationIsClassifiedAsByANewQuery) {
@@ -166,10 +136,10 @@ TEST(ClassifiedQuery, EachGenerationIsClassifiedAsByANewQuery) {
 
     // The second set as the next generation.
     const std::unique_ptr<RayQuery> q = f.NewQuery();
-    BeginGeneration(*q, f, 0, first);
+    BeginGeneration(*q, 0, first);
     f.Nearest(*q, first);
     f.Occluded(*q, firstShadow);
-    BeginGeneration(*q, f, 1, second);
+    BeginGeneration(*q, 1, second);
     EXPECT_EQ(f.Nearest(*q, second, &laterHits), fresh);
     EXPECT_EQ(f.Occluded(*q, secondShadow), freshShadow);
     ASSERT_EQ(laterHits.size(), freshHits.size());
@@ -183,10 +153,10 @@ TEST(ClassifiedQuery, EachGenerationIsClassifiedAsByANewQuery) {
     // answers every batch here.
     const std::unique_ptr<RayQuery> a = MakeAutoQuery(
         Ctx(), f.NewQuery(), [&f] { return MakeBruteForceQuery(Ctx(), f.program, f.buffers); });
-    BeginGeneration(*a, f, 0, first);
+    BeginGeneration(*a, 0, first);
     f.Nearest(*a, first);
     f.Occluded(*a, firstShadow);
-    BeginGeneration(*a, f, 1, second);
+    BeginGeneration(*a, 1, second);
     EXPECT_EQ(f.Nearest(*a, second), fresh);
     EXPECT_EQ(f.Occluded(*a, secondShadow), freshShadow);
 }

@@ -10,6 +10,7 @@
 #include <random>
 #include <vector>
 
+#include "query_io.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/device_scene.h"
@@ -84,51 +85,13 @@ struct Queries {
         p.nQuadrics = uint32_t(scene.quadrics.size());
         return p;
     }
-
-    cl::Buffer Upload(const std::vector<RcRay>& rays) const {
-        return cl::Buffer(Ctx().context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
-                          rays.size() * sizeof(RcRay), const_cast<RcRay*>(rays.data()));
-    }
-
-    // Nearest hits, the batch prepared and shaded as the renderer does it.
-    std::vector<RcHit> Nearest(RayQuery& q, const std::vector<RcRay>& rays) const {
-        const uint32_t n = uint32_t(rays.size());
-        std::vector<RcRayInfo> info(n);
-        for (uint32_t i = 0; i < n; ++i) {
-            info[i].weight = {1.0f, 1.0f, 1.0f, 0.0f};
-            info[i].pixel = i;
-            info[i].kind = RC_RAY_EYE;
-        }
-        const cl::Buffer rayBuf = Upload(rays);
-        cl::Buffer hits(Ctx().context(), CL_MEM_READ_WRITE, n * sizeof(RcHit));
-        ShadeBuffers shade = MakeShadeBuffers(Ctx(), n, 0);
-        shade.rayInfo = cl::Buffer(Ctx().context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
-                                   n * sizeof(RcRayInfo), info.data());
-        KernelTimer timer;
-        std::unique_ptr<PreparedBatch> prepared = q.Prepare(rayBuf, n, Ctx().queue());
-        q.Intersect(rayBuf, n, prepared.get(), hits, shade, timer);
-        q.Recycle(std::move(prepared));
-        std::vector<RcHit> out(n);
-        Ctx().queue().enqueueReadBuffer(hits, CL_TRUE, 0, n * sizeof(RcHit), out.data());
-        return out;
-    }
-
-    std::vector<uint8_t> Blocked(RayQuery& q, const std::vector<RcRay>& rays) const {
-        const uint32_t n = uint32_t(rays.size());
-        cl::Buffer blocked(Ctx().context(), CL_MEM_READ_WRITE, n);
-        KernelTimer timer;
-        q.Occluded(Upload(rays), rays, blocked, timer);
-        std::vector<uint8_t> out(n);
-        Ctx().queue().enqueueReadBuffer(blocked, CL_TRUE, 0, n, out.data());
-        return out;
-    }
 };
 
 TEST(FragmentQuery, SpheresAndQuadricsHitWhatBruteForceHits) {
     Queries q;
     const std::vector<RcRay> rays = Rays(INFINITY);
-    const std::vector<RcHit> got = q.Nearest(*q.fragment, rays);
-    const std::vector<RcHit> brute = q.Nearest(*q.brute, rays);
+    const std::vector<RcHit> got = NearestHits(Ctx(), *q.fragment, rays);
+    const std::vector<RcHit> brute = NearestHits(Ctx(), *q.brute, rays);
     const uint32_t nS = uint32_t(q.scene.spheres.size());
     uint32_t spheres = 0, quadrics = 0, mismatches = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
@@ -149,8 +112,8 @@ TEST(FragmentQuery, SpheresAndQuadricsBlockWhatBruteForceBlocks) {
     Queries q;
     for (const float tmax : {0.3f, 1.0f}) {
         const std::vector<RcRay> rays = Rays(tmax);
-        const std::vector<uint8_t> got = q.Blocked(*q.fragment, rays);
-        const std::vector<uint8_t> brute = q.Blocked(*q.brute, rays);
+        const std::vector<uint8_t> got = BlockedAnswers(Ctx(), *q.fragment, rays);
+        const std::vector<uint8_t> brute = BlockedAnswers(Ctx(), *q.brute, rays);
         uint32_t blocked = 0, mismatches = 0;
         for (size_t i = 0; i < rays.size(); ++i) {
             blocked += brute[i];
