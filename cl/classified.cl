@@ -390,6 +390,15 @@ RC_SHADE_INLINE int16 rc_packet_sphere(const RcLanes16* L, float4 centerRadius, 
     return ~(disc < 0.0f) & (in0 | in1);
 }
 
+/* Whether root r of each lane counts for rc_intersect_quadric: inside (tmin, tmax), its point in
+ * the clip box [lo, hi]. */
+RC_SHADE_INLINE int16 rc_packet_root_counts(const RcLanes16* L, float16 r, float16 tmax, float3 lo,
+                                            float3 hi) {
+    const float16 x = L->ox + r * L->dx, y = L->oy + r * L->dy, z = L->oz + r * L->dz;
+    return (r > L->tmin) & (r < tmax) & (x >= lo.x) & (x <= hi.x) & (y >= lo.y) & (y <= hi.y) &
+           (z >= lo.z) & (z <= hi.z);
+}
+
 /* rc_intersect_quadric for 16 rays against one quadric, the same operations lane by lane, below
  * each lane's own bound: the lanes that hit inside (tmin, tmax) within the clip box, with t. A
  * lane of the linear case (a = 0) takes its one root as both of the pair. */
@@ -415,12 +424,8 @@ RC_SHADE_INLINE int16 rc_packet_quadric(const RcLanes16* L, __global const RcQua
     const float16 r1 = select(select(q1, q0, swap), root, linear);
     const int16 valid = select(~(disc < 0.0f), b != 0.0f, linear);
     const float3 lo = q->boxMin.xyz, hi = q->boxMax.xyz;
-    const float16 x0 = Ox + r0 * Dx, y0 = Oy + r0 * Dy, z0 = Oz + r0 * Dz;
-    const float16 x1 = Ox + r1 * Dx, y1 = Oy + r1 * Dy, z1 = Oz + r1 * Dz;
-    const int16 in0 = (r0 > L->tmin) & (r0 < tmax) & (x0 >= lo.x) & (x0 <= hi.x) & (y0 >= lo.y) &
-                      (y0 <= hi.y) & (z0 >= lo.z) & (z0 <= hi.z);
-    const int16 in1 = (r1 > L->tmin) & (r1 < tmax) & (x1 >= lo.x) & (x1 <= hi.x) & (y1 >= lo.y) &
-                      (y1 <= hi.y) & (z1 >= lo.z) & (z1 <= hi.z);
+    const int16 in0 = rc_packet_root_counts(L, r0, tmax, lo, hi);
+    const int16 in1 = rc_packet_root_counts(L, r1, tmax, lo, hi);
     *t = select(r1, r0, in0);
     return valid & (in0 | in1);
 }

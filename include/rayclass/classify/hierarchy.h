@@ -267,7 +267,7 @@ class Hierarchy {
     struct HeldCoords {
         bool seen[kFaceCount] = {};
         unsigned mask[kFaceCount] = {};
-        float value[kFaceCount][kDims + 1];
+        float value[kFaceCount][kCoords];
     };
     // Maps rays (taken from their common ends where `ends` has any) to the 5D buffer; returns
     // how many were taken from an end.
