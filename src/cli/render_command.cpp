@@ -59,8 +59,9 @@ options:
   --batch-rays N          rays per kernel launch (default 1048576)
   --cl-options STRING     extra OpenCL build options (e.g. -cl-fast-relaxed-math)
   --eye-rays P            first hits of the eye rays: raster (OpenGL hull projection, headless
-                          EGL) or kernel (the OpenCL ray query); default raster when an OpenGL
-                          context can be made, else kernel with a notice
+                          EGL), kernel (the OpenCL ray query) or auto (default): raster on a
+                          hardware OpenGL renderer or when a raster option is given, kernel on
+                          a software one (llvmpipe: slower there) or without OpenGL (a notice)
   --hull H                raster hulls of spheres and quadrics: sphere, box, billboard or auto
                           (spheres by sphere, quadrics by box; default auto)
   --depth-bits B          raster depth buffer: 32 (float, default), 24 or 16 (fixed point)
@@ -80,7 +81,7 @@ struct RenderArgs {
     std::string statsFile;
     float exposure = 0.0f;
     std::string exrCompression;  // empty: the writer's default (zip)
-    std::string eyeRays;  // empty: raster when a GL context can be made
+    std::string eyeRays = "auto";  // auto: see EyeRaysChoice
     int depthBits = 32;
     double depthScale = 0;  // 0: automatic
     std::string rasterOption;  // the first option given that only the raster pass reads
@@ -188,8 +189,9 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
             r.options.buildOptions = value();
         } else if (a == "--eye-rays") {
             r.eyeRays = value();
-            if (r.eyeRays != "raster" && r.eyeRays != "kernel") {
-                throw UsageError("--eye-rays expects raster or kernel, not '" + r.eyeRays + "'");
+            if (r.eyeRays != "auto" && r.eyeRays != "raster" && r.eyeRays != "kernel") {
+                throw UsageError("--eye-rays expects auto, raster or kernel, not '" + r.eyeRays +
+                                 "'");
             }
         } else if (a == "--hull") {
             if (r.rasterOption.empty()) r.rasterOption = a;
@@ -312,10 +314,14 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
         clrt::Context ctx(r.options.device);
         render::RenderOptions options = r.options;
         std::unique_ptr<raster::RasterEyeHits> eyeHits;
-        if (r.eyeRays != "kernel") {
+        // A raster option asks for a raster experiment: auto must not answer it by kernel.
+        const bool rasterAsked = r.eyeRays == "raster" || !r.rasterOption.empty();
+        if (r.eyeRays == "kernel") {
+            stats.eyeRaysChoice = "--eye-rays kernel";
+        } else {
             std::string why;
             raster::GlContext* gl = raster::GlContext::Shared(&why);
-            if (gl) {
+            if (gl && (rasterAsked || !raster::IsSoftwareRenderer(gl->Renderer()))) {
                 raster::RasterOptions rasterOptions;
                 rasterOptions.hull = raster::ParseHull(options.hull);
                 rasterOptions.depthBits = r.depthBits;
@@ -326,11 +332,19 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
                 }
                 eyeHits = std::make_unique<raster::RasterEyeHits>(*gl, rasterOptions);
                 options.eyeRays = "raster";
-            } else if (r.eyeRays == "raster") {
+                stats.eyeRaysChoice =
+                    r.eyeRays == "raster" ? "--eye-rays raster"
+                    : rasterAsked         ? "auto: raster for " + r.rasterOption
+                                  : "auto: raster on hardware OpenGL (" + gl->Renderer() + ")";
+            } else if (gl) {
+                options.eyeRays = "kernel";
+                stats.eyeRaysChoice = "auto: kernel, software OpenGL (" + gl->Renderer() + ")";
+            } else if (rasterAsked) {
                 throw GlError(why);
             } else {
                 err << "rayclass: no OpenGL context, eye rays by kernel (" << why << ")\n";
                 options.eyeRays = "kernel";
+                stats.eyeRaysChoice = "auto: kernel, no OpenGL context";
             }
         }
         render::ClRenderer renderer(ctx, scene, options, eyeHits.get());

@@ -139,6 +139,13 @@ GlContext* GlContext::Shared(std::string* why) {
     return shared.get();
 }
 
+bool IsSoftwareRenderer(const std::string& renderer) {
+    for (const char* name : {"llvmpipe", "softpipe", "swrast"}) {
+        if (renderer.find(name) != std::string::npos) return true;
+    }
+    return false;
+}
+
 void CheckGl(const char* what) {
     const GLenum e = glGetError();
     if (e == GL_NO_ERROR) return;

@@ -15,6 +15,7 @@ nlohmann::json RenderStats::ToJson() const {
     j["device"] = device;
     j["accel"] = accel;
     j["eye_rays"] = eyeRays;
+    if (!eyeRaysChoice.empty()) j["eye_rays_choice"] = eyeRaysChoice;
     j["primitives"] = nPrimitives;
     j["rays_total"] = RaysTotal();
     j["rays_by_kind"] = raysByKind;

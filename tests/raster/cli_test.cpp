@@ -1,5 +1,6 @@
-// The command line: --eye-rays, --hull, --depth-bits and --depth-scale, and the fallback to the
-// kernel when no OpenGL context can be made (forced by pointing glvnd at no EGL vendor).
+// The command line: --eye-rays (auto's choice between raster and kernel), --hull, --depth-bits
+// and --depth-scale, and the fallback to the kernel when no OpenGL context can be made (forced
+// by pointing glvnd at no EGL vendor).
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -7,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "raster_support.h"
@@ -43,17 +45,55 @@ std::string Out(const char* name) {
         .string();
 }
 
-TEST(RasterCli, DefaultUsesRasterWhenGlWorks) {
-    RC_REQUIRE_GL();
-    const std::string stats = Out("stats.json");
-    const CliRun r = RunRayclass("", "render '" + Scene() + "' -o '" + Out("a.png") +
-                                         "' --width 40 --height 30 -q --stats '" + stats + "'");
-    ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_EQ(r.err, "");
-    std::ifstream in(stats);
+std::string ReadFile(const std::string& path) {
+    std::ifstream in(path);
     std::stringstream ss;
     ss << in.rdbuf();
-    EXPECT_NE(ss.str().find("\"eye_rays\": \"raster\""), std::string::npos) << ss.str();
+    return ss.str();
+}
+
+// The stats' eye_rays and eye_rays_choice after rendering the test scene with `options`.
+std::pair<std::string, std::string> EyeRaysOf(const std::string& options) {
+    const std::string stats = Out("stats.json");
+    const CliRun r =
+        RunRayclass("", "render '" + Scene() + "' -o '" + Out("a.png") +
+                            "' --width 40 --height 30 -q --stats '" + stats + "' " + options);
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err, "") << options;
+    const nlohmann::json j = nlohmann::json::parse(ReadFile(stats));
+    return {j.at("eye_rays").get<std::string>(), j.at("eye_rays_choice").get<std::string>()};
+}
+
+TEST(RasterCli, AutoTakesTheKernelOnSoftwareGlAndRasterOnHardware) {
+    RC_REQUIRE_GL();
+    const std::string renderer = gl->Renderer();
+    const auto expected =
+        IsSoftwareRenderer(renderer)
+            ? std::pair<std::string, std::string>{"kernel", "auto: kernel, software OpenGL (" +
+                                                                renderer + ")"}
+            : std::pair<std::string, std::string>{
+                  "raster", "auto: raster on hardware OpenGL (" + renderer + ")"};
+    EXPECT_EQ(EyeRaysOf(""), expected);
+    EXPECT_EQ(EyeRaysOf("--eye-rays auto"), expected);
+}
+
+TEST(RasterCli, ExplicitChoicesAndRasterOptionsWin) {
+    RC_REQUIRE_GL();
+    using Choice = std::pair<std::string, std::string>;
+    EXPECT_EQ(EyeRaysOf("--eye-rays raster"), (Choice{"raster", "--eye-rays raster"}));
+    EXPECT_EQ(EyeRaysOf("--eye-rays kernel"), (Choice{"kernel", "--eye-rays kernel"}));
+    // A raster experiment stays one on a software renderer.
+    EXPECT_EQ(EyeRaysOf("--hull box"), (Choice{"raster", "auto: raster for --hull"}));
+    EXPECT_EQ(EyeRaysOf("--depth-bits 32"), (Choice{"raster", "auto: raster for --depth-bits"}));
+}
+
+TEST(RasterCli, SoftwareRenderersAreRecognised) {
+    EXPECT_TRUE(IsSoftwareRenderer("llvmpipe (LLVM 15.0.6, 256 bits)"));
+    EXPECT_TRUE(IsSoftwareRenderer("softpipe"));
+    EXPECT_TRUE(IsSoftwareRenderer("Mesa X11 swrast"));
+    EXPECT_FALSE(IsSoftwareRenderer("NVIDIA GeForce RTX 4090/PCIe/SSE2"));
+    EXPECT_FALSE(IsSoftwareRenderer("AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 15.0.7)"));
+    EXPECT_FALSE(IsSoftwareRenderer("Mesa Intel(R) Arc(tm) A770 Graphics (DG2)"));
 }
 
 TEST(RasterCli, FallsBackToKernelWithOneNotice) {
@@ -63,6 +103,15 @@ TEST(RasterCli, FallsBackToKernelWithOneNotice) {
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.err.find("no OpenGL context, eye rays by kernel"), std::string::npos) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
+TEST(RasterCli, RasterOptionsWithoutGlFail) {
+    const CliRun r = RunRayclass(
+        "__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json",
+        "render '" + Scene() + "' -o '" + Out("c.png") + "' --width 40 --height 30 -q --hull box");
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("OpenGL context"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(Out("c.png")));
 }
 
 TEST(RasterCli, ExplicitRasterWithoutGlFails) {
@@ -77,9 +126,10 @@ TEST(RasterCli, BadOptionsAreUsageErrors) {
     EXPECT_EQ(
         RunRayclass("", "render '" + Scene() + "' -o '" + Out("d.png") + "' --hull cone").status,
         2);
-    EXPECT_EQ(
-        RunRayclass("", "render '" + Scene() + "' -o '" + Out("d.png") + "' --eye-rays gpu").status,
-        2);
+    const CliRun gpu =
+        RunRayclass("", "render '" + Scene() + "' -o '" + Out("d.png") + "' --eye-rays gpu");
+    EXPECT_EQ(gpu.status, 2);
+    EXPECT_EQ(gpu.err, "rayclass render: --eye-rays expects auto, raster or kernel, not 'gpu'\n");
 }
 
 TEST(RasterCli, UnsafeDepthSettingsGetOneWarningLine) {

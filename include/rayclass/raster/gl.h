@@ -37,6 +37,11 @@ private:
     std::string renderer_, version_;
 };
 
+// Whether a GL_RENDERER string names one of Mesa's CPU rasterizers (llvmpipe, softpipe,
+// swrast). On these the raster eye-ray pass was slower than the kernel eye rays in every full
+// render measured (README), so --eye-rays auto takes the kernel there.
+bool IsSoftwareRenderer(const std::string& renderer);
+
 // Throws GlError("<what>: <GL error name>") when glGetError reports an error.
 void CheckGl(const char* what);
 
