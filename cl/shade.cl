@@ -273,7 +273,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
 
 /* The rays ids[0, nIds) of the batch, or its rays [0, nIds) when ids is null (the fragment pass
  * answered them all, and a list 0, 1, 2, ... would cost a host pass and a copy); their lights
- * are rc_shade_lights', from the surfaces saved here (two float4 per ray of the batch). */
+ * are rc_shade_lights', from the surfaces saved here (two float4 per ray of the batch), or,
+ * when surfaces is null, shaded here. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade_ids(
     __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits,
     __global const uint* ids, uint nIds, __global float4* surfaces, RC_SHADE_SCENE_PARAMS,
