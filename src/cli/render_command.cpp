@@ -81,7 +81,7 @@ struct RenderArgs {
     std::string statsFile;
     float exposure = 0.0f;
     std::string exrCompression;  // empty: the writer's default (zip)
-    std::string eyeRays = "auto";  // auto: see EyeRaysChoice
+    std::string eyeRays = "auto";  // auto, raster or kernel (see --help)
     int depthBits = 32;
     double depthScale = 0;  // 0: automatic
     std::string rasterOption;  // the first option given that only the raster pass reads
@@ -332,10 +332,14 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
                 }
                 eyeHits = std::make_unique<raster::RasterEyeHits>(*gl, rasterOptions);
                 options.eyeRays = "raster";
-                stats.eyeRaysChoice =
-                    r.eyeRays == "raster" ? "--eye-rays raster"
-                    : rasterAsked         ? "auto: raster for " + r.rasterOption
-                                  : "auto: raster on hardware OpenGL (" + gl->Renderer() + ")";
+                if (r.eyeRays == "raster") {
+                    stats.eyeRaysChoice = "--eye-rays raster";
+                } else if (rasterAsked) {
+                    stats.eyeRaysChoice = "auto: raster for " + r.rasterOption;
+                } else {
+                    stats.eyeRaysChoice =
+                        "auto: raster on hardware OpenGL (" + gl->Renderer() + ")";
+                }
             } else if (gl) {
                 options.eyeRays = "kernel";
                 stats.eyeRaysChoice = "auto: kernel, software OpenGL (" + gl->Renderer() + ")";

@@ -337,20 +337,19 @@ class ClassifiedQuery final : public RayQuery {
             // (ray, light) pair (shadow rays).
             const uint32_t nIds = allRays ? cb.batch.nRays : uint32_t(unshaded_.size());
             const cl::Buffer ids = allRays ? cl::Buffer() : unshadedBuf_.Upload(ctx_, unshaded_);
-            // With one light, pass 2 has nothing to spread over lanes: rc_shade_ids shades the
-            // light itself and the saved surfaces' round trip through memory is saved.
-            const bool oneLight = scene_.hostParams.nLights == 1;
+            // Below two lights the per-pair pass has nothing to spread over lanes: rc_shade_ids
+            // shades the light itself, and the saved surfaces' round trip through memory is saved.
+            const bool split = scene_.hostParams.nLights > 1;
             const cl::Buffer surfaces =
-                oneLight
-                    ? cl::Buffer()
-                    : surfacesBuf_.Reserve(ctx_, size_t(cb.batch.nRays) * 2 * sizeof(rc_float4));
+                split ? surfacesBuf_.Reserve(ctx_, size_t(cb.batch.nRays) * 2 * sizeof(rc_float4))
+                      : cl::Buffer();
             SetArgs(shadeIds_, rays, shade->rayInfo, out, ids, nIds, surfaces, scene_.triangles,
                     scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
                     scene_.lights, scene_.params, shade->radiance, shade->normals,
                     shade->shadow.rays, shade->shadow.contribution, shade->secondary.rays,
                     shade->secondary.info, shade->spawned);
             Launch(ctx_, shadeIds_, nIds, timer);
-            if (!oneLight) {
+            if (split) {
                 SetArgs(shadeLights_, rays, shade->rayInfo, out, ids, nIds, surfaces,
                         shade->normals, scene_.triangles, scene_.triangleShading, scene_.spheres,
                         scene_.quadrics, scene_.materials, scene_.lights, scene_.params,

@@ -23,6 +23,13 @@ struct CliRun {
     std::string err;
 };
 
+std::string ReadFile(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
 CliRun RunRayclass(const std::string& env, const std::string& args) {
     const auto dir =
         std::filesystem::temp_directory_path() / ("rc_raster_cli_" + std::to_string(getpid()));
@@ -31,10 +38,7 @@ CliRun RunRayclass(const std::string& env, const std::string& args) {
     const std::string cmd = env + " '" + std::string(std::getenv("RAYCLASS_BINARY")) + "' " + args +
                             " 2>'" + errFile + "' >/dev/null";
     const int rc = std::system(cmd.c_str());
-    std::ifstream in(errFile);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, ss.str()};
+    return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, ReadFile(errFile)};
 }
 
 std::string Scene() { return (SceneDir() / "tests/spheres.json").string(); }
@@ -43,13 +47,6 @@ std::string Out(const char* name) {
     return (std::filesystem::temp_directory_path() / ("rc_raster_cli_" + std::to_string(getpid())) /
             name)
         .string();
-}
-
-std::string ReadFile(const std::string& path) {
-    std::ifstream in(path);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
 }
 
 // The stats' eye_rays and eye_rays_choice after rendering the test scene with `options`.
