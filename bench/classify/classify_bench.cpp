@@ -7,7 +7,8 @@
 //
 //   --width W --height H   eye-ray image size (1024 x 768)
 //   --repeat N             classifications timed per generation; the median counts (5)
-//   --gen LIST             generations to run, comma-separated: eye,mirror,shadow,shared (all)
+//   --gen LIST             generations to run, comma-separated: eye,pinhole,mirror,shadow,shared
+//                          (all; pinhole: the eye rays by Hierarchy::ClassifyPinhole)
 //   --bounces N            mirror generations: the mirror rays of the previous one's hits, each in
 //                          a fresh hierarchy, printed as "mirror 2", "mirror 3", ... (1). Later
 //                          bounces are less coherent: their lists filter ever longer.
@@ -54,16 +55,17 @@ bool Wants(const std::string& gens, const std::string& gen) {
 
 int Run(int argc, char** argv) {
     if (argc < 2) {
-        std::fprintf(stderr, "usage: %s SCENE [--width W] [--height H] [--repeat N] "
-                             "[--gen eye,mirror,shadow,shared] [--light-f F] "
-                             "[--param NAME=VALUE]... (names: %s)\n",
+        std::fprintf(stderr,
+                     "usage: %s SCENE [--width W] [--height H] [--repeat N] "
+                     "[--gen eye,pinhole,mirror,shadow,shared] [--light-f F] "
+                     "[--param NAME=VALUE]... (names: %s)\n",
                      argv[0], classify::ParamNames());
         return 2;
     }
     uint32_t width = 1024, height = 768;
     int repeat = 5;
     float lightF = 0.1f;
-    std::string gens = "eye,mirror,shadow,shared";
+    std::string gens = "eye,pinhole,mirror,shadow,shared";
     int bounces = 1;
     const scene::Scene scene = scene::LoadScene(argv[1]);
     classify::Params params = classify::Params::ForScene(scene);
@@ -99,6 +101,19 @@ int Run(int argc, char** argv) {
     if (Wants(gens, "eye")) {
         Print("eye", eyeStats);
         std::printf("%-14s setup (presorted face lists) %.1f ms\n", "", eyeStats.setupMs);
+    }
+
+    if (Wants(gens, "pinhole")) {
+        // The same eye rays classified by image rectangles; their host hits must match.
+        const RcCamera camera = classify::AnchorCamera(scene, width, height);
+        std::vector<geometry::Hit<float>> hits(eye.size());
+        Print("eye pinhole",
+              classify::ComputeStats(scene, eye, params, repeat, hits, false, &camera));
+        size_t differ = 0;
+        for (size_t i = 0; i < eye.size(); ++i) {
+            differ += hits[i].prim != eyeHits[i].prim || hits[i].t != eyeHits[i].t;
+        }
+        std::printf("%-14s hits differing from the eye rays' classification: %zu\n", "", differ);
     }
 
     const auto mirror = classify::MirrorRays(scene, eye, eyeHits);

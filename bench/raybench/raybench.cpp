@@ -21,8 +21,10 @@
 // kernel and cannot be excluded); setup_s: query construction (BVH build and upload, the
 // classification's presorted lists); mrays_s = rays / median_s; hits: rays that hit / are
 // blocked (equal across methods). The rays of the classified query are read back from the device
-// inside the timed stage, as the renderer does. --classify sets a cost-function parameter of the
-// classified methods as `rayclass render --classify` does (classify::SetParam), for sweeps.
+// inside the timed stage, as the renderer does, but for eye rays, which it classifies from their
+// camera (Hierarchy::ClassifyPinhole) as the renderer does too. --classify sets a cost-function
+// parameter of the classified methods as `rayclass render --classify` does (classify::SetParam),
+// for sweeps.
 //
 // --micro: peak intersection tests per second for spheres, quadrics and triangles, N random rays
 // against P primitives each (P a multiple of 16): the renderer's brute-force kernel (method
@@ -346,6 +348,7 @@ int main(int argc, char** argv) try {
     const scene::Camera cam = bench::NamedCamera(sc, camera, width, height);
     const glm::vec3 lightPos = bench::NamedLight(sc, light);
     const std::vector<bench::BenchRay> eye = bench::EyeRays(cam);
+    const RcCamera eyeCamera = render::CameraBasis(cam).ToDevice();
     std::vector<RcRay> eyeRc(eye.size());
     for (size_t i = 0; i < eye.size(); ++i) eyeRc[i] = ToRc(eye[i]);
     std::vector<bench::BenchHit> eyeHits(eye.size());
@@ -416,7 +419,11 @@ int main(int argc, char** argv) try {
                 if (shadow) {
                     tests = q->Occluded(raysBuf, rays, out, timer);
                 } else {
-                    std::unique_ptr<render::PreparedBatch> prepared = q->Prepare(raysBuf, n, queue);
+                    // Eye rays come with their camera, as in the renderer.
+                    render::RaySource source;
+                    if (k == 0) source.camera = &eyeCamera;
+                    std::unique_ptr<render::PreparedBatch> prepared =
+                        q->Prepare(raysBuf, n, queue, source);
                     tests = q->Intersect(raysBuf, n, prepared.get(), out, shade, timer).tests;
                     q->Recycle(std::move(prepared));
                 }

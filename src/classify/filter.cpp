@@ -123,6 +123,38 @@ size_t CountUpTo(const ListView& list, float endHi) {
                   list.x0);
 }
 
+namespace {
+
+constexpr size_t kSampledFilterMin = 4096;  // lists shorter than this are always filtered
+constexpr float kSkipKeep = 0.8f;           // skip the filter when it would keep more
+constexpr size_t kSamples = 64;             // boxes tested for the estimate
+
+// The fraction of kSamples evenly spaced boxes of the list (cut at the end) that the beam keeps.
+float SampledKeepFraction(const Bounds6& tight, const ListView& list) {
+    const ListView in = CutAtEnd(tight, list);
+    if (in.n < kSampledFilterMin) return 0.0f;
+    const BeamTest t = MakeBeamTest(*in.frame, tight.ToBox5(), tight.hi[kDims] - tight.lo[0]);
+    size_t kept = 0, tested = 0;
+    const size_t stride = in.n / kSamples;
+    for (size_t i = stride / 2; i < in.n; i += stride) {
+        kept += BeamMayReach(t, in.x0[i], in.x1[i], in.y0[i], in.y1[i], in.z0[i], in.z1[i]) ? 1 : 0;
+        ++tested;
+    }
+    return float(kept) / float(tested);
+}
+
+}  // namespace
+
+ListView CutAtEnd(const Bounds6& tight, const ListView& list) {
+    ListView in = list;
+    in.n = CountUpTo(list, tight.hi[kDims]);
+    return in;
+}
+
+bool KeepsMost(const Bounds6& tight, const ListView& list) {
+    return list.n >= kSampledFilterMin && SampledKeepFraction(tight, list) > kSkipKeep;
+}
+
 BeamTest MakeBeamTest(const ListFrame& frame, const Box5& box, float reach) {
     auto below = [&](int axis) { return float(ToSteps(frame, axis, box.lo[axis])) - kStepMargin; };
     auto above = [&](int axis) { return float(ToSteps(frame, axis, box.hi[axis])) + kStepMargin; };

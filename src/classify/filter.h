@@ -60,6 +60,12 @@ inline float WorldBelow(const ListFrame& frame, int axis, uint16_t steps) {
 // list is sorted by it): never fewer than hold a box that starts before endHi.
 size_t CountUpTo(const ListView& list, float endHi);
 
+// The list up to the end X of a node's rays (tight.hi[kDims]).
+ListView CutAtEnd(const Bounds6& tight, const ListView& list);
+// Whether the beam of `tight` would keep most of a long list (on a sample of it): such a list is
+// not worth copying.
+bool KeepsMost(const Bounds6& tight, const ListView& list);
+
 // A beam in `frame`'s steps (x0 .. z1 grown by a rounding margin, reach in steps).
 struct BeamTest {
     float x0, x1, y0, y1, z0, z1;

@@ -151,19 +151,6 @@ void Hierarchy::Insert(RayView rays, RayUse use) {
     nInserted_ += uint32_t(rays.size());
 }
 
-struct Hierarchy::Schedule {
-    std::mutex mutex;
-    std::condition_variable changed;
-    std::deque<Task> queue;
-    int threads = 1;
-    int busy = 0;  // threads inside a task
-    uint32_t cut;  // nodes with more rays hand their later children to the queue
-    // The output's lists: room for `listRoom` entries, of which [0, listsEnd) are claimed.
-    RcCandidate* lists = nullptr;
-    size_t listRoom = 0;
-    std::atomic<size_t> listsEnd{0};
-};
-
 void Hierarchy::Subdivide(LeafBatch& out) {
     counters_ = {};
     // rayIndex is resized, not cleared (and candidates regrown in Join): every slot is written
@@ -199,13 +186,24 @@ void Hierarchy::Subdivide(LeafBatch& out) {
                                   View(all, all.Size(), &listFrame_[f]), false, PlanAt(),
                                   &NewPart(begin[f])});
     }
+    const int threads = StartWorkers(schedule, n, out);
+    OnThreads(threads, [&](int t) { Work(workers_[size_t(t)], t); });
+    Join(out, schedule.listsEnd.load());
+    rayOut_ = nullptr;
+    // The ray buffers by the rays they hold (two ping-pong buffers and the routing
+    // destinations): their face slabs reserve kFaceCount times as much address space, of which
+    // only the pages rays are written to are touched.
+    FinishWorkers(size_t(n) * (2 * (kCoords + 1) + 1) * 4);
+}
+
+int Hierarchy::StartWorkers(Schedule& schedule, uint32_t nRays, LeafBatch& out) {
     // The leaves' lists are written straight into out.candidates (see ListRoom), not into the
     // workers' arrays and copied there, which cost a second copy of every list and its pages
     // (sibenik_mirror, 1024 x 768: 445k page faults in all).
     Regrow(out.candidates, std::min<size_t>(listRoom_, kOwnList - 1));
     schedule.lists = out.candidates.data();
     schedule.listRoom = out.candidates.size();
-    const int threads = Threads(n);
+    const int threads = Threads(nRays);
     schedule.threads = threads;
     if (workers_.size() < size_t(threads)) workers_.resize(size_t(threads));
     for (Worker& w : workers_) {
@@ -217,13 +215,10 @@ void Hierarchy::Subdivide(LeafBatch& out) {
         w.kept.chunk = w.kept.used = w.stack.chunk = w.stack.used = 0;
         w.plans.clear();
     }
-    OnThreads(threads, [&](int t) { Work(workers_[size_t(t)], t); });
-    Join(out, schedule.listsEnd.load());
-    rayOut_ = nullptr;
-    // The ray buffers by the rays they hold (two ping-pong buffers and the routing
-    // destinations): their face slabs reserve kFaceCount times as much address space, of which
-    // only the pages rays are written to are touched.
-    size_t scratch = size_t(n) * (2 * (kCoords + 1) + 1) * 4;
+    return threads;
+}
+
+void Hierarchy::FinishWorkers(size_t scratch) {
     for (Worker& w : workers_) {
         counters_.boxTests += w.counters.boxTests;
         counters_.rayMoves += w.counters.rayMoves;
@@ -431,40 +426,6 @@ void Hierarchy::SetConstants(int face, Bounds6& b) const {
 
 namespace {
 
-constexpr size_t kSampledFilterMin = 4096;  // lists shorter than this are always filtered
-constexpr float kSkipKeep = 0.8f;           // skip the filter when it would keep more
-constexpr size_t kSamples = 64;             // boxes tested for the estimate
-
-// The list up to the node's end (see Filter).
-ListView CutAtEnd(const Bounds6& tight, const ListView& list) {
-    ListView in = list;
-    in.n = CountUpTo(list, tight.hi[kDims]);
-    return in;
-}
-
-// The fraction of kSamples evenly spaced boxes of the list (cut at the end) that the beam keeps.
-float SampledKeepFraction(const Bounds6& tight, const ListView& list) {
-    const ListView in = CutAtEnd(tight, list);
-    if (in.n < kSampledFilterMin) return 0.0f;
-    const BeamTest t = MakeBeamTest(*in.frame, tight.ToBox5(), tight.hi[kDims] - tight.lo[0]);
-    size_t kept = 0, tested = 0;
-    const size_t stride = in.n / kSamples;
-    for (size_t i = stride / 2; i < in.n; i += stride) {
-        kept += BeamMayReach(t, in.x0[i], in.x1[i], in.y0[i], in.y1[i], in.z0[i], in.z1[i]) ? 1 : 0;
-        ++tested;
-    }
-    return float(kept) / float(tested);
-}
-
-// Whether the beam of `tight` would keep most of a long list (on a sample of it).
-bool KeepsMost(const Bounds6& tight, const ListView& list) {
-    return list.n >= kSampledFilterMin && SampledKeepFraction(tight, list) > kSkipKeep;
-}
-
-}  // namespace
-
-namespace {
-
 // Room for n entries at the end of `arena`: in its current chunk, else in the next one.
 ListOut Take(Hierarchy::ListArena& arena, size_t n) {
     if (arena.chunk < arena.chunks.size() && arena.used + n > arena.chunks[arena.chunk].Size()) {
@@ -583,14 +544,7 @@ void Hierarchy::Process(Worker& w, uint32_t node, uint32_t begin, uint32_t end, 
     const int face = At(w, node).face;
     const int other = buf ^ 1;
     // The lists this node filters onto the stack are released when its subtree is built.
-    struct Release {
-        ListArena& arena;
-        const size_t chunk, used;
-        ~Release() {
-            arena.chunk = chunk;
-            arena.used = used;
-        }
-    } release{w.stack, w.stack.chunk, w.stack.used};
+    const ArenaMark release(w.stack);
     // A node with many rays builds its first child and queues the others.
     const bool spawns = end - begin > w.schedule->cut;
     if (!At(w, node).IsLeaf()) {
@@ -859,6 +813,10 @@ void Hierarchy::EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end,
     leaf.rayBegin = begin + rayShift_[At(w, node).face];
     leaf.rayCount = end - begin;
     std::copy(id_[buf].begin() + begin, id_[buf].begin() + end, rayOut_ + leaf.rayBegin);
+    PushLeaf(w, leaf, node, list, endHi);
+}
+
+void Hierarchy::PushLeaf(Worker& w, RcLeaf leaf, uint32_t node, const ListView& list, float endHi) {
     // The current nearest-hit bound: no ray of the leaf gets past X = endHi, and the list is
     // sorted by near X, so everything after that is cut at once (Filter has already cut it when
     // the leaf filtered its own list).

@@ -1,14 +1,15 @@
 #include "rayclass/classify/stats.h"
 
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <string>
 
-#include <time.h>
-
 #include "rayclass/classify/query.h"
+#include "rayclass/core/error.h"
 
 namespace rayclass::classify {
 
@@ -39,21 +40,33 @@ size_t PeakRssBytes() {
     return 0;
 }
 
-std::vector<Ray> AnchorEyeRays(const scene::Scene& scene, uint32_t width, uint32_t height) {
+RcCamera AnchorCamera(const scene::Scene& scene, uint32_t width, uint32_t height) {
     const Bounds3f box = scene.Bounds();
     const glm::vec3 eye = box.Center() - glm::vec3(0.25f * box.Size().x, 0.0f, 0.0f);
-    const glm::vec3 forward(1, 0, 0), up(0, 1, 0), right(0, 0, 1);
-    const float tanY = std::tan(glm::radians(60.0f) * 0.5f);
-    const float tanX = tanY * float(width) / float(height);
+    RcCamera c{};
+    c.position = {eye.x, eye.y, eye.z, 0.0f};
+    c.forward = {1.0f, 0.0f, 0.0f, 0.0f};
+    c.right = {0.0f, 0.0f, 1.0f, 0.0f};
+    c.up = {0.0f, 1.0f, 0.0f, 0.0f};
+    c.tanHalfFovY = std::tan(glm::radians(60.0f) * 0.5f);
+    c.tanHalfFovX = c.tanHalfFovY * float(width) / float(height);
+    c.width = width;
+    c.height = height;
+    return c;
+}
+
+std::vector<Ray> AnchorEyeRays(const scene::Scene& scene, uint32_t width, uint32_t height) {
+    const RcCamera c = AnchorCamera(scene, width, height);
+    auto vec = [](const rc_float4& v) { return glm::vec3(v.x, v.y, v.z); };
     std::vector<Ray> rays;
     rays.reserve(size_t(width) * height);
     for (uint32_t y = 0; y < height; ++y) {
         for (uint32_t x = 0; x < width; ++x) {
-            const float sx = (2.0f * (float(x) + 0.5f) / float(width) - 1.0f) * tanX;
-            const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(height)) * tanY;
+            const float sx = (2.0f * (float(x) + 0.5f) / float(width) - 1.0f) * c.tanHalfFovX;
+            const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(height)) * c.tanHalfFovY;
             Ray r;
-            r.origin = eye;
-            r.direction = glm::normalize(forward + sx * right + sy * up);
+            r.origin = vec(c.position);
+            r.direction = glm::normalize(vec(c.forward) + sx * vec(c.right) + sy * vec(c.up));
             rays.push_back(r);
         }
     }
@@ -106,8 +119,8 @@ glm::vec3 AnchorLight(const scene::Scene& scene, float f) {
 }
 
 ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
-                           const Params& params, int repeats,
-                           std::span<geometry::Hit<float>> hits, bool anyHit) {
+                           const Params& params, int repeats, std::span<geometry::Hit<float>> hits,
+                           bool anyHit, const RcCamera* pinhole) {
     ClassifyStats s;
     s.nRays = uint32_t(rays.size());
     s.bruteForceTests = scene.PrimitiveCount();
@@ -122,7 +135,13 @@ ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
         h.Reset();
         const auto a = Clock::now();
         const double c = ThreadCpuSeconds();
-        h.Classify(rays, batch, anyHit ? RayUse::kAnyHit : RayUse::kNearestHit);
+        if (pinhole) {
+            if (!h.ClassifyPinhole(*pinhole, 0, uint32_t(rays.size()), batch)) {
+                throw Error("the pinhole classification refused the camera");
+            }
+        } else {
+            h.Classify(rays, batch, anyHit ? RayUse::kAnyHit : RayUse::kNearestHit);
+        }
         cpuTimes.push_back(ThreadCpuSeconds() - c);
         times.push_back(Seconds(a, Clock::now()));
     }

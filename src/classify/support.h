@@ -3,9 +3,13 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
+#include <condition_variable>
 #include <cstddef>
+#include <deque>
 #include <future>
 #include <limits>
+#include <mutex>
 #include <vector>
 
 #include "rayclass/classify/hierarchy.h"
@@ -39,6 +43,34 @@ void Regrow(V& v, size_t n) {
     }
     v.resize(n);
 }
+
+// The task queue of one Subdivide, and the output room its leaves claim for their lists.
+struct Hierarchy::Schedule {
+    std::mutex mutex;
+    std::condition_variable changed;
+    std::deque<Task> queue;
+    int threads = 1;
+    int busy = 0;  // threads inside a task
+    uint32_t cut;  // nodes with more rays hand their later children to the queue
+    // The output's lists: room for `listRoom` entries, of which [0, listsEnd) are claimed.
+    RcCandidate* lists = nullptr;
+    size_t listRoom = 0;
+    std::atomic<size_t> listsEnd{0};
+};
+
+// Releases, when it goes out of scope, the lists pushed onto `arena` since it was made: a node's
+// lists, once its subtree is built.
+struct ArenaMark {
+    Hierarchy::ListArena& arena;
+    const size_t chunk, used;
+    explicit ArenaMark(Hierarchy::ListArena& a) : arena(a), chunk(a.chunk), used(a.used) {}
+    ArenaMark(const ArenaMark&) = delete;
+    ArenaMark& operator=(const ArenaMark&) = delete;
+    ~ArenaMark() {
+        arena.chunk = chunk;
+        arena.used = used;
+    }
+};
 
 // b grows to contain `other`.
 inline void Merge(Bounds6& b, const Bounds6& other) {

@@ -52,6 +52,7 @@ class AutoQuery final : public RayQuery {
     std::string Name() const override { return "auto"; }
     double HostSeconds() const override { return classified_->HostSeconds(); }
     uint64_t ShadowRaysFromLight() const override { return classified_->ShadowRaysFromLight(); }
+    uint64_t EyeRaysFromCamera() const override { return classified_->EyeRaysFromCamera(); }
 
     void Reset() override {
         classified_->Reset();
@@ -80,9 +81,10 @@ class AutoQuery final : public RayQuery {
     // Runs on the worker thread, while the render thread may be in Intersect or Occluded; its
     // time counts where the render thread waits for it (see Intersect).
     std::unique_ptr<PreparedBatch> Prepare(const cl::Buffer& rays, uint32_t n,
-                                           const cl::CommandQueue& queue) override {
+                                           const cl::CommandQueue& queue,
+                                           const RaySource& source) override {
         if (nearest_.onBvh) return nullptr;  // set before this generation's first Prepare
-        return classified_->Prepare(rays, n, queue);
+        return classified_->Prepare(rays, n, queue, source);
     }
 
     void Recycle(std::unique_ptr<PreparedBatch> batch) override {

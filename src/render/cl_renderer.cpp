@@ -171,6 +171,7 @@ void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& q
     for (const auto& [name, s] : ks) stats.timeS["kernel_" + name] = s;
     stats.queryTimeS = query.HostSeconds();
     stats.shadowRaysFromLight = query.ShadowRaysFromLight();
+    stats.eyeRaysFromCamera = query.EyeRaysFromCamera();
     for (const auto& [name, seconds] : ks) {
         if (name.starts_with("rc_query") || name.starts_with("rc_occluded") ||
             name.starts_with("rc_intersect") || name == "rc_gather_blocks") {
@@ -363,8 +364,13 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         }
         auto prepare = [&](size_t page) -> std::unique_ptr<PreparedBatch> {
             if (generation == 0 && eyeHits_) return nullptr;
+            RaySource source;
+            if (generation == 0 && options_.rayEncoding != "polar16") {
+                source.camera = &cam;
+                source.firstPixel = uint32_t(page * batch);
+            }
             return query->Prepare(pages[page].rays, uint32_t(std::min(batch, nRays - page * batch)),
-                                  readQueue);
+                                  readQueue, source);
         };
         std::future<std::unique_ptr<PreparedBatch>> nextPrepared =
             std::async(std::launch::async, prepare, 0);

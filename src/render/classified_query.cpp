@@ -68,9 +68,14 @@ class ClassifiedQuery final : public RayQuery {
         return hostSeconds_;
     }
     uint64_t ShadowRaysFromLight() const override { return shadowFromLight_; }
+    uint64_t EyeRaysFromCamera() const override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return eyeFromCamera_;
+    }
 
     std::unique_ptr<PreparedBatch> Prepare(const cl::Buffer& rays, uint32_t n,
-                                           const cl::CommandQueue& queue) override {
+                                           const cl::CommandQueue& queue,
+                                           const RaySource& source) override {
         std::unique_ptr<ClassifiedBatch> out;
         {
             std::lock_guard<std::mutex> lock(mutex_);
@@ -80,6 +85,22 @@ class ClassifiedQuery final : public RayQuery {
             }
         }
         if (!out) out = std::make_unique<ClassifiedBatch>();
+        // A camera's eye rays are classified from the camera, unread (eye rays 2.5-3x faster to
+        // classify on Sibenik, the same leaves' lists), unless the camera lies outside the scene.
+        if (source.camera) {
+            const auto t0 = Clock::now();
+            const bool classified =
+                hierarchy_.ClassifyPinhole(*source.camera, source.firstPixel, n, out->batch);
+            AddHostSeconds(Seconds(t0));
+            if (classified) {
+                {
+                    std::lock_guard<std::mutex> lock(mutex_);
+                    eyeFromCamera_ += n;
+                }
+                SortLeaves(*out, style_);
+                return out;
+            }
+        }
         // Classified in place: an RcRay is a classify::Ray, and mapping costs no copy on a
         // device that shares host memory.
         static_assert(sizeof(classify::Ray) == sizeof(RcRay) &&
@@ -158,6 +179,13 @@ class ClassifiedQuery final : public RayQuery {
                   ClassifiedBatch& out, KernelStyle style) {
         const auto t0 = Clock::now();
         hierarchy.Classify(rays, out.batch, use);
+        AddHostSeconds(Seconds(t0));
+        SortLeaves(out, style);
+    }
+
+    // Sorts out's leaves by kernel style (`style`: see Classify).
+    void SortLeaves(ClassifiedBatch& out, KernelStyle style) {
+        const auto t0 = Clock::now();
         // Leaves lie in ray order and cover every slot, so when one per-ray kernel answers them
         // all, its slots are batch.rayIndex itself and only their leaves are needed.
         const bool perRay = style == KernelStyle::kScalar || style == KernelStyle::kVertex;
@@ -387,8 +415,9 @@ class ClassifiedQuery final : public RayQuery {
     GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,
         blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_, packetFirstBuf_,
         fragmentTestsBuf_, unshadedBuf_, surfacesBuf_;
-    mutable std::mutex mutex_;  // guards hostSeconds_ and pool_
+    mutable std::mutex mutex_;  // guards hostSeconds_, eyeFromCamera_ and pool_
     double hostSeconds_ = 0;
+    uint64_t eyeFromCamera_ = 0;    // Prepare's, which runs on a worker thread
     uint64_t shadowFromLight_ = 0;  // Occluded's, which runs on the render thread only
     std::vector<std::unique_ptr<ClassifiedBatch>> pool_;  // recycled batches
 };

@@ -32,7 +32,7 @@ inline uint64_t NearestHits(clrt::Context& ctx, RayQuery& q, const std::vector<R
     ShadeBuffers shade = MakeShadeBuffers(ctx, n, nLights);
     shade.rayInfo = UploadVector(ctx, info);
     KernelTimer timer;
-    std::unique_ptr<PreparedBatch> prepared = q.Prepare(rayBuf, n, ctx.queue());
+    std::unique_ptr<PreparedBatch> prepared = q.Prepare(rayBuf, n, ctx.queue(), {});
     const uint64_t tests = q.Intersect(rayBuf, n, prepared.get(), hits, shade, timer).tests;
     q.Recycle(std::move(prepared));
     if (hitsOut) {

@@ -270,6 +270,37 @@ TEST(ClRenderer, DepthLimitStopsMirrorsFacingEachOther) {
 namespace rayclass::render {
 namespace {
 
+TEST(ClRenderer, EyeRaysOfACameraInsideTheSceneAreClassifiedFromIt) {
+    // glass.json's camera lies inside the scene's box, cornell.json's in front of it.
+    scene::Scene glass = TestScene("tests/glass.json", 160, 120);
+    RenderOptions options = QuietOptions(/*aovs=*/true);
+    options.accel = "classify";
+    RenderStats whole, batched, polar, brute, outside;
+    const image::Image img = ClRenderer(SharedContext(), glass, options).Render(whole);
+    EXPECT_EQ(whole.eyeRaysFromCamera, 160u * 120u);
+    // Batches that start and end inside rows: each classified from its pixels, the same image.
+    options.batchRays = 5000;
+    const image::Image inBatches = ClRenderer(SharedContext(), glass, options).Render(batched);
+    EXPECT_EQ(batched.eyeRaysFromCamera, 160u * 120u);
+    const image::ImageComparison same = image::Compare(inBatches, img);
+    EXPECT_EQ(same.idMismatchPixels, 0u);
+    EXPECT_EQ(same.maxAbsError, 0.0);
+    options.batchRays = 1u << 20;
+    options.accel = "brute";
+    const image::Image truth = ClRenderer(SharedContext(), glass, options).Render(brute);
+    EXPECT_EQ(image::Compare(img, truth).idMismatchPixels, 0u);
+    EXPECT_EQ(image::Compare(img, truth).maxAbsError, 0.0);
+    EXPECT_EQ(brute.eyeRaysFromCamera, 0u);
+    // Rounded directions are not the camera's: read back and classified ray by ray.
+    options.accel = "classify";
+    options.rayEncoding = "polar16";
+    ClRenderer(SharedContext(), glass, options).Render(polar);
+    EXPECT_EQ(polar.eyeRaysFromCamera, 0u);
+    options.rayEncoding = "float";
+    ClRenderer(SharedContext(), TestScene("cornell.json", 80, 60), options).Render(outside);
+    EXPECT_EQ(outside.eyeRaysFromCamera, 0u);
+}
+
 TEST(ClRenderer, Polar16DirectionsCostBoundedAccuracy) {
     // Directions rounded through 16-bit polar angles (5.4e-5 rad, cl/encoding.cl) move hits on
     // far surfaces by about t * 5e-5: visible against the reference, but bounded. Measured at

@@ -153,6 +153,23 @@ class Hierarchy {
         return Subdivide();
     }
 
+    // Classifies, as one generation, the eye rays that cl/camera.cl writes for `camera` (float
+    // directions, not polar16): ray i is the ray of pixel first + i, for i < n. It splits
+    // rectangles of the image instead of moving rays, and reads none: a rectangle's rays share
+    // the camera's position, and in a face's frame their slopes u and v are ratios of functions
+    // linear in the pixel position, whose extremes over the rectangle lie at its corner pixels.
+    // The corners' slopes are taken in double and padded far beyond the kernel's float rounding.
+    // A rectangle takes the face of its centre ray once no corner's slope exceeds 1.5 there
+    // (slopes above 1 near a face's edge are correct: the beam test and the queries' distance
+    // order hold in any frame the rays move forward in). Splits follow the cost
+    // function, halving the longer side (at a multiple of 4 pixels, so that a fragment packet
+    // spans few rows); a leaf's rays are its rectangle's pixels row by row. Each leaf gets a
+    // node of its own that no other links to, so Route() does not find it. Returns false,
+    // doing nothing, when the camera lies outside the scene box (its rays would need clipping:
+    // classify them with Classify() then), when its basis is degenerate or not finite, when
+    // the pixels run past the image, or when the generation holds inserted rays.
+    bool ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t n, LeafBatch& out);
+
     // Forgets every split: back to the six face roots (the presorted face lists stay).
     void Reset();
 
@@ -279,6 +296,21 @@ class Hierarchy {
                uint32_t end, int buf, const Bounds6& tight, const ListView& list, bool reuseList,
                PlanAt plan);
     void Work(Worker& w, int index);
+    // The schedule's output room and the workers' state for a generation of nRays rays; returns
+    // the number of threads to run.
+    int StartWorkers(Schedule& schedule, uint32_t nRays, LeafBatch& out);
+    // Sums the workers' counters (scratch: the bytes of the generation's ray buffers) and ends
+    // the generation.
+    void FinishWorkers(size_t scratch);
+    // ClassifyPinhole's subdivision of image rectangle `rect` (pixels x0 <= x < x1, y0 <= y <
+    // y1) within the frame of `face` and `list`, or of no face yet (face < 0); its leaves' rays
+    // go to rayOut_ from `slot` on.
+    struct Pinhole;  // the camera in double (pinhole.cpp)
+    struct PixelRect {
+        uint32_t x0, y0, x1, y1;
+    };
+    void ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect, int face, int depth,
+                     const ListView* list, uint32_t& slot);
     // Moves the rays [begin, end) of buffer `buf` into the other one by the child of an earlier
     // split whose interval contains them: box0's, else box1's, else the remainder (groups 0, 1,
     // 2, each in ray order, one after the other); count[g] gets each group's size.
@@ -286,6 +318,8 @@ class Hierarchy {
                    uint32_t end, uint32_t count[3]);
     void EmitLeaf(Worker& w, uint32_t node, uint32_t begin, uint32_t end, int buf,
                   const ListView& list, float endHi);
+    // Adds `leaf` (its rays placed already) with the list of `node`, cut at endHi.
+    void PushLeaf(Worker& w, RcLeaf leaf, uint32_t node, const ListView& list, float endHi);
     // Room for a list of n entries: sets `begin` to where it lies (see Worker::leaves).
     RcCandidate* ListRoom(Worker& w, size_t n, uint32_t& begin);
     ListView Filter(Worker& w, const Bounds6& tight, const ListView& list, bool keep);

@@ -37,12 +37,17 @@ struct ClassifyStats {
 // Classifies `rays` `repeats` times in a fresh hierarchy (the median time counts), queries them
 // once on the host (any hit with `anyHit`) and fills every field. When `hits` is not empty it
 // receives the query's hits.
+// With `pinhole`, `rays` are that camera's eye rays and are classified by
+// Hierarchy::ClassifyPinhole (which must accept the camera) instead.
 ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
                            const Params& params, int repeats = 3,
-                           std::span<geometry::Hit<float>> hits = {}, bool anyHit = false);
+                           std::span<geometry::Hit<float>> hits = {}, bool anyHit = false,
+                           const RcCamera* pinhole = nullptr);
 
 // The anchor camera: eye = box centre - 0.25 size_x (1, 0, 0), looking along +x, up +y, right +z,
 // vertical field of view 60 degrees, pixel centres, row 0 at the top.
+RcCamera AnchorCamera(const scene::Scene& scene, uint32_t width, uint32_t height);
+// Its rays, by cl/camera.cl's formula in float.
 std::vector<Ray> AnchorEyeRays(const scene::Scene& scene, uint32_t width, uint32_t height);
 
 // One mirror bounce of every ray that hit: origin P + 1e-4 diagonal n (n the geometric normal

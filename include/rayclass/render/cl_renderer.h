@@ -74,6 +74,14 @@ struct PreparedBatch {
     virtual ~PreparedBatch() = default;
 };
 
+// Where a batch of rays came from, when a query can use that instead of reading them back: the
+// eye rays that rc_generate_eye_rays wrote for `camera` with float directions (not polar16),
+// pixels [firstPixel, firstPixel + n). Null camera: the rays alone say.
+struct RaySource {
+    const RcCamera* camera = nullptr;
+    uint32_t firstPixel = 0;
+};
+
 // How the rays of a batch find their nearest hit and their occluders. The rays are on the
 // device already.
 class RayQuery {
@@ -84,9 +92,11 @@ class RayQuery {
     // rays, which it reads back through `queue` (not the queue the kernels run on, so the read
     // does not wait for them). Called in batch order, from one thread at a time, possibly
     // concurrently with Intersect or Occluded of an earlier batch. nullptr: nothing to prepare.
+    // `source` may let the query skip reading the rays.
     virtual std::unique_ptr<PreparedBatch> Prepare(const cl::Buffer& rays, uint32_t n,
-                                                   const cl::CommandQueue& queue) {
-        (void)rays, (void)n, (void)queue;
+                                                   const cl::CommandQueue& queue,
+                                                   const RaySource& source) {
+        (void)rays, (void)n, (void)queue, (void)source;
         return nullptr;
     }
     // Takes a batch back once its Intersect has run, so the next Prepare reuses its memory
@@ -96,6 +106,8 @@ class RayQuery {
     virtual double HostSeconds() const { return 0.0; }
     // Shadow rays answered so far that the classification took from their light.
     virtual uint64_t ShadowRaysFromLight() const { return 0; }
+    // Eye rays classified so far from their camera (RaySource), not read back.
+    virtual uint64_t EyeRaysFromCamera() const { return 0; }
     // Called once all of generation `generation`'s rays are on the device, before its first
     // Prepare (not for generation 0 when another source supplies its hits); rays[0, n) (RcRay)
     // are its first batch and the device is idle. A query that picks its method per generation

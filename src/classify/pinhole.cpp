@@ -1,0 +1,265 @@
+// Eye rays of a pinhole camera classified by rectangles of the image (Hierarchy::ClassifyPinhole).
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <vector>
+
+#include "filter.h"
+#include "rayclass/classify/hierarchy.h"
+#include "support.h"
+
+namespace rayclass::classify {
+
+namespace {
+
+// A rectangle takes a face's frame once none of its corners' slopes exceeds this there.
+constexpr double kMaxSlope = 1.5;
+// Slope padding, relative to 1 + |slope|. The kernel's float direction (a sum of three products,
+// normalised) errs by a few 1e-7 of that, and so does rounding the padded bound to float: the
+// padding is 20x more. It widens a beam by 1e-5 of its length, a tenth of the boxes' padding
+// (2e-6 of the scene's diagonal, over a beam at most that long).
+constexpr double kSlopePad = 1e-5;
+// A rectangle's width is split at a multiple of this many columns where it can be, so that the
+// 16 rays of a fragment packet span few rows.
+constexpr uint32_t kColumnAlign = 4;
+// Batches of this many rays or more are cut into kBands bands of rows, which the threads take
+// in turn. Each band filters a face's whole list first, but with one band a thread the threads'
+// work differed by a third (Sibenik). The bands do not depend on the thread count, and neither
+// does the result.
+constexpr uint32_t kBandedRaysMin = 32768;
+constexpr uint32_t kBands = 8;
+
+bool Finite(const rc_float4& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+}  // namespace
+
+struct Hierarchy::Pinhole {
+    glm::dvec3 position, forward, right, up;
+    double tanX = 1.0, tanY = 1.0;
+    uint32_t width = 1, height = 1;
+    uint64_t first = 0, last = 0;  // the batch: pixels [first, last)
+    float eye[kFaceCount][3];      // the position in each face's frame, as Convert maps it
+    float end[kFaceCount];         // where each face's X leaves the scene box
+
+    // cl/camera.cl's direction of pixel (x, y) in double, before normalising.
+    glm::dvec3 Direction(uint32_t x, uint32_t y) const {
+        const double sx = (2.0 * (double(x) + 0.5) / double(width) - 1.0) * tanX;
+        const double sy = (1.0 - 2.0 * (double(y) + 0.5) / double(height)) * tanY;
+        return forward + sx * right + sy * up;
+    }
+
+    // The batch's pixels of row y in r: [lo, hi) (empty when hi <= lo).
+    void RowSpan(const PixelRect& r, uint32_t y, uint64_t& lo, uint64_t& hi) const {
+        const uint64_t row = uint64_t(y) * width;
+        lo = std::max(row + r.x0, first);
+        hi = std::min(row + r.x1, last);
+    }
+
+    // The batch's pixels in `r`: whole rows but for the batch's first and last.
+    uint32_t Count(const PixelRect& r) const {
+        const uint32_t yFirst = uint32_t(first / width), yLast = uint32_t((last - 1) / width);
+        const uint32_t y0 = std::max(r.y0, yFirst), y1 = std::min(r.y1, yLast + 1);
+        if (y0 >= y1) return 0;
+        uint64_t n = uint64_t(y1 - y0) * (r.x1 - r.x0);
+        auto clip = [&](uint32_t y) {
+            if (y < y0 || y >= y1) return;
+            uint64_t lo, hi;
+            RowSpan(r, y, lo, hi);
+            n -= r.x1 - r.x0;
+            if (hi > lo) n += hi - lo;
+        };
+        clip(yFirst);
+        if (yLast != yFirst) clip(yLast);
+        return uint32_t(n);
+    }
+
+    // The face of r's centre ray (ties to the lower axis, as FaceOf).
+    int CentreFace(const PixelRect& r) const {
+        const glm::dvec3 d = Direction(r.x0 + (r.x1 - r.x0 - 1) / 2, r.y0 + (r.y1 - r.y0 - 1) / 2);
+        const glm::dvec3 a = glm::abs(d);
+        const int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+        return 2 * axis + (d[axis] < 0.0 ? 1 : 0);
+    }
+
+    // The bounds of r's rays in the frame of `face`. False when a corner ray does not move
+    // forward there or, with `limit`, when a corner's slope exceeds kMaxSlope.
+    bool Bounds(const PixelRect& r, int face, bool limit, Bounds6& b) const {
+        const int a = FaceAxis(face), ab = (a + 1) % 3, ac = (a + 2) % 3;
+        const double sign = FaceSign(face);
+        double lo[2] = {HUGE_VAL, HUGE_VAL}, hi[2] = {-HUGE_VAL, -HUGE_VAL};
+        for (uint32_t y : {r.y0, r.y1 - 1}) {
+            for (uint32_t x : {r.x0, r.x1 - 1}) {
+                const glm::dvec3 d = Direction(x, y);
+                const double da = sign * d[a];
+                if (!(da > 0.0)) return false;
+                const double slope[2] = {d[ab] / da, d[ac] / da};
+                for (int k = 0; k < 2; ++k) {
+                    if (limit && !(std::abs(slope[k]) <= kMaxSlope)) return false;
+                    lo[k] = std::min(lo[k], slope[k]);
+                    hi[k] = std::max(hi[k], slope[k]);
+                }
+            }
+        }
+        for (int k = 0; k < 3; ++k) b.lo[k] = b.hi[k] = eye[face][k];
+        for (int k = 0; k < 2; ++k) {
+            b.lo[3 + k] = float(lo[k] - kSlopePad * (1.0 + std::abs(lo[k])));
+            b.hi[3 + k] = float(hi[k] + kSlopePad * (1.0 + std::abs(hi[k])));
+        }
+        b.lo[kDims] = b.hi[kDims] = end[face];
+        return true;
+    }
+
+    // The halves of r across its longer side.
+    static void Halve(const PixelRect& r, PixelRect half[2]) {
+        half[0] = half[1] = r;
+        const uint32_t w = r.x1 - r.x0, h = r.y1 - r.y0;
+        if (w >= h) {
+            uint32_t mid = (r.x0 + w / 2) / kColumnAlign * kColumnAlign;
+            if (mid <= r.x0) mid = r.x0 + w / 2;
+            half[0].x1 = half[1].x0 = mid;
+        } else {
+            half[0].y1 = half[1].y0 = r.y0 + h / 2;
+        }
+    }
+};
+
+bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t n,
+                                LeafBatch& out) {
+    const glm::vec3 eye(camera.position.x, camera.position.y, camera.position.z);
+    const glm::dvec3 f(camera.forward.x, camera.forward.y, camera.forward.z);
+    const glm::dvec3 r(camera.right.x, camera.right.y, camera.right.z);
+    const glm::dvec3 u(camera.up.x, camera.up.y, camera.up.z);
+    // No pixel's direction is zero while forward is off the plane of right and up.
+    const bool sane = Finite(camera.position) && Finite(camera.forward) && Finite(camera.right) &&
+                      Finite(camera.up) && std::isfinite(camera.tanHalfFovX) &&
+                      std::isfinite(camera.tanHalfFovY) && camera.width > 0 && camera.height > 0 &&
+                      glm::dot(f, glm::cross(r, u)) != 0.0 &&
+                      uint64_t(first) + n <= uint64_t(camera.width) * camera.height;
+    const bool inside = eye.x >= sceneBox_.lo.x && eye.x <= sceneBox_.hi.x &&
+                        eye.y >= sceneBox_.lo.y && eye.y <= sceneBox_.hi.y &&
+                        eye.z >= sceneBox_.lo.z && eye.z <= sceneBox_.hi.z;
+    if (!sane || sceneBox_.Empty() || !inside || !inserted_.empty()) return false;
+
+    Pinhole cam;
+    cam.position = glm::dvec3(eye);
+    cam.forward = f;
+    cam.right = r;
+    cam.up = u;
+    cam.tanX = camera.tanHalfFovX;
+    cam.tanY = camera.tanHalfFovY;
+    cam.width = camera.width;
+    cam.height = camera.height;
+    cam.first = first;
+    cam.last = uint64_t(first) + n;
+    for (int face = 0; face < kFaceCount; ++face) {
+        const int a = FaceAxis(face);
+        cam.eye[face][0] = FaceX(face, eye);
+        cam.eye[face][1] = eye[(a + 1) % 3];
+        cam.eye[face][2] = eye[(a + 2) % 3];
+        cam.end[face] = BoxInFace(face, sceneBox_).hi[0];
+    }
+
+    counters_ = {};
+    out.leaves.clear();
+    out.missed.clear();
+    out.nRays = n;
+    out.rayIndex.resize(n);
+    if (n == 0) return true;
+    rayOut_ = out.rayIndex.data();
+    nInserted_ = n;  // for Join's thread count
+    Schedule schedule;
+    schedule.cut = kNoNode;
+    nParts_ = 0;
+    const int threads = StartWorkers(schedule, n, out);
+    // Bands of whole rows, taken in turn by whichever thread is free; band b's rays follow band
+    // b - 1's.
+    const uint32_t yFirst = uint32_t(first / cam.width),
+                   rows = uint32_t((cam.last - 1) / cam.width) + 1 - yFirst;
+    const uint32_t nBands = n < kBandedRaysMin ? 1 : std::min(rows, kBands);
+    std::vector<PixelRect> bands;
+    std::vector<uint32_t> slots;
+    std::vector<Part*> parts;
+    uint32_t slot = 0;
+    for (uint32_t b = 0; b < nBands; ++b) {
+        const PixelRect band{0, yFirst + uint32_t(uint64_t(rows) * b / nBands), cam.width,
+                             yFirst + uint32_t(uint64_t(rows) * (b + 1) / nBands)};
+        bands.push_back(band);
+        slots.push_back(slot);
+        parts.push_back(&NewPart(slot));
+        slot += cam.Count(band);
+    }
+    std::atomic<uint32_t> next{0};
+    OnThreads(threads, [&](int t) {
+        Worker& w = workers_[size_t(t)];
+        for (uint32_t b; (b = next.fetch_add(1)) < nBands;) {
+            Part& part = *parts[b];
+            w.part = &part;
+            part.worker = t;
+            part.leafBegin = w.leaves.size();
+            part.nodeBegin = w.nodes.size();
+            uint32_t at = slots[b];
+            ProcessRect(w, cam, bands[b], -1, 0, nullptr, at);
+            part.leafEnd = w.leaves.size();
+            part.nodeEnd = w.nodes.size();
+        }
+    });
+    Join(out, schedule.listsEnd.load());
+    rayOut_ = nullptr;
+    FinishWorkers(0);
+    return true;
+}
+
+void Hierarchy::ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect, int face,
+                            int depth, const ListView* list, uint32_t& slot) {
+    const uint32_t nRays = cam.Count(rect);
+    if (nRays == 0) return;
+    const ArenaMark release(w.stack);
+    Bounds6 tight;
+    ListView faceList;
+    if (face < 0) {
+        const int centre = cam.CentreFace(rect);
+        if (!cam.Bounds(rect, centre, true, tight)) {
+            // Too wide for one frame: its halves look again. (A single pixel fits its own face.)
+            PixelRect half[2];
+            Pinhole::Halve(rect, half);
+            for (const PixelRect& h : half) ProcessRect(w, cam, h, -1, depth + 1, nullptr, slot);
+            return;
+        }
+        face = centre;
+        const FaceList& all = (*faceLists_)[face];
+        faceList = View(all, all.Size(), &listFrame_[face]);
+        list = &faceList;
+    } else {
+        // Within its parent's frame: its corners' slopes lie within the parent's.
+        cam.Bounds(rect, face, false, tight);
+    }
+    const bool filtered = !KeepsMost(tight, *list);
+    ListView own = filtered ? Filter(w, tight, *list, false) : CutAtEnd(tight, *list);
+    Node node;
+    node.box = tight.ToBox5();
+    node.face = uint8_t(face);
+    node.depth = uint8_t(depth);
+    int dim = 0;
+    if (ChooseSplit(node, tight, nRays, own, dim)) {
+        PixelRect half[2];
+        Pinhole::Halve(rect, half);
+        for (const PixelRect& h : half) ProcessRect(w, cam, h, face, depth + 1, &own, slot);
+        return;
+    }
+    if (!filtered) own = Filter(w, tight, *list, false);
+    RcLeaf leaf{};
+    leaf.rayBegin = slot;
+    rc_uint* out = rayOut_ + slot;
+    for (uint32_t y = rect.y0; y < rect.y1; ++y) {
+        uint64_t lo, hi;
+        cam.RowSpan(rect, y, lo, hi);
+        for (uint64_t p = lo; p < hi; ++p) *out++ = uint32_t(p - cam.first);
+    }
+    leaf.rayCount = uint32_t(out - (rayOut_ + slot));
+    slot += leaf.rayCount;
+    PushLeaf(w, leaf, NewNode(w, node.box, face, depth, false), own, tight.hi[kDims]);
+}
+
+}  // namespace rayclass::classify
