@@ -156,8 +156,14 @@ bool KeepsMost(const Bounds6& tight, const ListView& list) {
 }
 
 BeamTest MakeBeamTest(const ListFrame& frame, const Box5& box, float reach) {
-    auto below = [&](int axis) { return float(ToSteps(frame, axis, box.lo[axis])) - kStepMargin; };
-    auto above = [&](int axis) { return float(ToSteps(frame, axis, box.hi[axis])) + kStepMargin; };
+    // One division, not seven (a classification makes a test per node): the product errs by an
+    // ulp of a double, far inside the margin.
+    const double perStep = 1.0 / double(frame.step);
+    auto steps = [&](int axis, float c) {
+        return (double(c) - double(frame.base[axis])) * perStep;
+    };
+    auto below = [&](int axis) { return float(steps(axis, box.lo[axis])) - kStepMargin; };
+    auto above = [&](int axis) { return float(steps(axis, box.hi[axis])) + kStepMargin; };
     BeamTest t;
     t.x0 = below(0);
     t.x1 = above(0);
@@ -173,7 +179,7 @@ BeamTest MakeBeamTest(const ListFrame& frame, const Box5& box, float reach) {
     t.ru0 = 1.0f / u0;
     t.rv1 = 1.0f / v1;
     t.rv0 = 1.0f / v0;
-    t.reach = float(double(reach) / double(frame.step)) + kStepMargin;
+    t.reach = float(double(reach) * perStep) + kStepMargin;
     t.signs = (u1 > 0.0f ? 1 : 0) | (u0 > 0.0f ? 2 : 0) | (v1 > 0.0f ? 4 : 0) | (v0 > 0.0f ? 8 : 0);
     return t;
 }

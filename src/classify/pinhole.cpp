@@ -43,10 +43,13 @@ struct Hierarchy::Pinhole {
     float eye[kFaceCount][3];      // the position in each face's frame, as Convert maps it
     float end[kFaceCount];         // where each face's X leaves the scene box
 
-    // cl/camera.cl's direction of pixel (x, y) in double, before normalising.
+    double perWidth = 1.0, perHeight = 1.0;  // 2 / width, 2 / height
+
+    // cl/camera.cl's direction of pixel (x, y) in double, before normalising (reciprocals for
+    // its divisions: errors of an ulp of a double, far inside kSlopePad).
     glm::dvec3 Direction(uint32_t x, uint32_t y) const {
-        const double sx = (2.0 * (double(x) + 0.5) / double(width) - 1.0) * tanX;
-        const double sy = (1.0 - 2.0 * (double(y) + 0.5) / double(height)) * tanY;
+        const double sx = ((double(x) + 0.5) * perWidth - 1.0) * tanX;
+        const double sy = (1.0 - (double(y) + 0.5) * perHeight) * tanY;
         return forward + sx * right + sy * up;
     }
 
@@ -94,7 +97,8 @@ struct Hierarchy::Pinhole {
                 const glm::dvec3 d = Direction(x, y);
                 const double da = sign * d[a];
                 if (!(da > 0.0)) return false;
-                const double slope[2] = {d[ab] / da, d[ac] / da};
+                const double perDa = 1.0 / da;
+                const double slope[2] = {d[ab] * perDa, d[ac] * perDa};
                 for (int k = 0; k < 2; ++k) {
                     if (limit && !(std::abs(slope[k]) <= kMaxSlope)) return false;
                     lo[k] = std::min(lo[k], slope[k]);
@@ -151,6 +155,8 @@ bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t
     cam.tanY = camera.tanHalfFovY;
     cam.width = camera.width;
     cam.height = camera.height;
+    cam.perWidth = 2.0 / double(camera.width);
+    cam.perHeight = 2.0 / double(camera.height);
     cam.first = first;
     cam.last = uint64_t(first) + n;
     for (int face = 0; face < kFaceCount; ++face) {
@@ -255,7 +261,11 @@ void Hierarchy::ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect
     for (uint32_t y = rect.y0; y < rect.y1; ++y) {
         uint64_t lo, hi;
         cam.RowSpan(rect, y, lo, hi);
-        for (uint64_t p = lo; p < hi; ++p) *out++ = uint32_t(p - cam.first);
+        if (hi <= lo) continue;
+        // A row's rays are consecutive (a loop the compiler vectorises).
+        const uint32_t base = uint32_t(lo - cam.first), len = uint32_t(hi - lo);
+        for (uint32_t k = 0; k < len; ++k) out[k] = base + k;
+        out += len;
     }
     leaf.rayCount = uint32_t(out - (rayOut_ + slot));
     slot += leaf.rayCount;
