@@ -33,6 +33,14 @@ inline float rc_segment_end_x(float3 o, float3 d, float tmin, float tmax, uint f
     return rc_face_component(o, face) + (dx > 0.0f ? tmax : tmin) * dx;
 }
 
+/* The miss of every ray in ids[0, n): rays the classification found can reach no primitive. */
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_write_misses(
+    __global const uint* ids, uint n, __global RcHit* hits) {
+    const uint i = get_global_id(0);
+    if (i >= n) return;
+    hits[ids[i]] = rc_no_hit(INFINITY);
+}
+
 /* --- scalar ------------------------------------------------------------------------------- */
 
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_scalar(

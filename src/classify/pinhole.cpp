@@ -16,9 +16,20 @@ namespace {
 constexpr double kMaxSlope = 1.5;
 // Slope padding, relative to 1 + |slope|. The kernel's float direction (a sum of three products,
 // normalised) errs by a few 1e-7 of that, and so does rounding the padded bound to float: the
-// padding is 20x more. It widens a beam by 1e-5 of its length, a tenth of the boxes' padding
-// (2e-6 of the scene's diagonal, over a beam at most that long).
+// padding is 20x more. A leaf's beam is wider by far (8 pixels of a 60-degree, 1024-pixel image
+// span 8e-3 in slope), so the padding lengthens no list by much.
 constexpr double kSlopePad = 1e-5;
+// The camera may lie this many scene-box sizes outside the box. Its coordinates then stay below
+// 4 x 65534 < 2^18 of the lists' steps, where float rounding in the filter (half an ulp, 2^-6
+// steps) is half the filter's margin (filter.cpp). Cornell's camera is 1.4 sizes away.
+constexpr float kCameraReach = 3.0f;
+// Growth of the scene box, relative to its diagonal, beyond which a ray from an outside camera
+// cannot reach a primitive: float and double rays part by a few 1e-7 of their length, at most
+// 5 diagonals here (kCameraReach), so 1e-5 leaves a margin of four.
+constexpr double kMissMargin = 1e-5;
+// A leaf on the outline of the scene box, seen from outside, is halved down to this many
+// pixels before its rays are tested against the box one by one.
+constexpr uint64_t kClipPixels = 64;
 // A rectangle's width is split at a multiple of this many columns where it can be, so that the
 // 16 rays of a fragment packet span few rows.
 constexpr uint32_t kColumnAlign = 4;
@@ -44,6 +55,11 @@ struct Hierarchy::Pinhole {
     float end[kFaceCount];         // where each face's X leaves the scene box
 
     double perWidth = 1.0, perHeight = 1.0;  // 2 / width, 2 / height
+    // From a camera outside the scene box, rays that miss `reachable` (the box grown by
+    // kMissMargin of its diagonal, which float rays cannot cross while their double twins here
+    // miss) get no leaf.
+    bool outside = false;
+    glm::dvec3 reachableLo{0.0}, reachableHi{0.0};
 
     // cl/camera.cl's direction of pixel (x, y) in double, before normalising (reciprocals for
     // its divisions: errors of an ulp of a double, far inside kSlopePad).
@@ -115,6 +131,35 @@ struct Hierarchy::Pinhole {
         return true;
     }
 
+    // Whether pixel (x, y)'s ray (t >= 0) meets `reachable`: the slab test, in double.
+    bool Reaches(uint32_t x, uint32_t y) const {
+        const glm::dvec3 d = Direction(x, y);
+        double t0 = 0.0, t1 = HUGE_VAL;
+        for (int k = 0; k < 3; ++k) {
+            if (d[k] == 0.0) {
+                if (position[k] < reachableLo[k] || position[k] > reachableHi[k]) return false;
+                continue;
+            }
+            double a = (reachableLo[k] - position[k]) / d[k],
+                   b = (reachableHi[k] - position[k]) / d[k];
+            if (a > b) std::swap(a, b);
+            t0 = std::max(t0, a);
+            t1 = std::min(t1, b);
+        }
+        return t0 <= t1;
+    }
+
+    // Whether every ray of r meets `reachable`: the directions that meet a convex set form a
+    // convex cone, so its corners' rays decide.
+    bool AllReach(const PixelRect& r) const {
+        for (uint32_t y : {r.y0, r.y1 - 1}) {
+            for (uint32_t x : {r.x0, r.x1 - 1}) {
+                if (!Reaches(x, y)) return false;
+            }
+        }
+        return true;
+    }
+
     // The halves of r across its longer side.
     static void Halve(const PixelRect& r, PixelRect half[2]) {
         half[0] = half[1] = r;
@@ -141,10 +186,13 @@ bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t
                       std::isfinite(camera.tanHalfFovY) && camera.width > 0 && camera.height > 0 &&
                       glm::dot(f, glm::cross(r, u)) != 0.0 &&
                       uint64_t(first) + n <= uint64_t(camera.width) * camera.height;
-    const bool inside = eye.x >= sceneBox_.lo.x && eye.x <= sceneBox_.hi.x &&
-                        eye.y >= sceneBox_.lo.y && eye.y <= sceneBox_.hi.y &&
-                        eye.z >= sceneBox_.lo.z && eye.z <= sceneBox_.hi.z;
-    if (!sane || sceneBox_.Empty() || !inside || !inserted_.empty()) return false;
+    // The rays are not clipped to the scene box, as Convert clips rays: the beams start at the
+    // camera, which is exact for them too, and rays that miss the box get lists that reach
+    // nothing.
+    const glm::vec3 reach = sceneBox_.Size() * kCameraReach;
+    const bool near = glm::all(glm::greaterThanEqual(eye, sceneBox_.lo - reach)) &&
+                      glm::all(glm::lessThanEqual(eye, sceneBox_.hi + reach));
+    if (!sane || sceneBox_.Empty() || !near || !inserted_.empty()) return false;
 
     Pinhole cam;
     cam.position = glm::dvec3(eye);
@@ -166,6 +214,11 @@ bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t
         cam.eye[face][2] = eye[(a + 2) % 3];
         cam.end[face] = BoxInFace(face, sceneBox_).hi[0];
     }
+    cam.outside = !glm::all(glm::greaterThanEqual(eye, sceneBox_.lo)) ||
+                  !glm::all(glm::lessThanEqual(eye, sceneBox_.hi));
+    const double grow = kMissMargin * double(sceneBox_.Diagonal());
+    cam.reachableLo = glm::dvec3(sceneBox_.lo) - grow;
+    cam.reachableHi = glm::dvec3(sceneBox_.hi) + grow;
 
     counters_ = {};
     out.leaves.clear();
@@ -196,6 +249,9 @@ bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t
         parts.push_back(&NewPart(slot));
         slot += cam.Count(band);
     }
+    // Per band: where its slots end, and its rays that get no leaf.
+    std::vector<uint32_t> ends(nBands);
+    std::vector<std::vector<rc_uint>> missed(nBands);
     std::atomic<uint32_t> next{0};
     OnThreads(threads, [&](int t) {
         Worker& w = workers_[size_t(t)];
@@ -205,12 +261,27 @@ bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t
             part.worker = t;
             part.leafBegin = w.leaves.size();
             part.nodeBegin = w.nodes.size();
-            uint32_t at = slots[b];
-            ProcessRect(w, cam, bands[b], -1, 0, nullptr, at);
+            ends[b] = slots[b];
+            ProcessRect(w, cam, bands[b], -1, 0, nullptr, ends[b], missed[b]);
             part.leafEnd = w.leaves.size();
             part.nodeEnd = w.nodes.size();
         }
     });
+    // The bands' slots close up over the rays that got no leaf.
+    uint32_t used = 0;
+    for (uint32_t b = 0; b < nBands; ++b) {
+        const uint32_t shift = slots[b] - used;
+        if (shift > 0) {
+            std::copy(rayOut_ + slots[b], rayOut_ + ends[b], rayOut_ + used);
+            Part& part = *parts[b];
+            Worker& w = workers_[size_t(part.worker)];
+            for (size_t l = part.leafBegin; l < part.leafEnd; ++l) w.leaves[l].rayBegin -= shift;
+            part.begin -= shift;
+        }
+        used += ends[b] - slots[b];
+        out.missed.insert(out.missed.end(), missed[b].begin(), missed[b].end());
+    }
+    out.rayIndex.resize(used);
     Join(out, schedule.listsEnd.load());
     rayOut_ = nullptr;
     FinishWorkers(0);
@@ -218,7 +289,8 @@ bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t
 }
 
 void Hierarchy::ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect, int face,
-                            int depth, const ListView* list, uint32_t& slot) {
+                            int depth, const ListView* list, uint32_t& slot,
+                            std::vector<rc_uint>& missed) {
     const uint32_t nRays = cam.Count(rect);
     if (nRays == 0) return;
     const ArenaMark release(w.stack);
@@ -230,7 +302,9 @@ void Hierarchy::ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect
             // Too wide for one frame: its halves look again. (A single pixel fits its own face.)
             PixelRect half[2];
             Pinhole::Halve(rect, half);
-            for (const PixelRect& h : half) ProcessRect(w, cam, h, -1, depth + 1, nullptr, slot);
+            for (const PixelRect& h : half) {
+                ProcessRect(w, cam, h, -1, depth + 1, nullptr, slot, missed);
+            }
             return;
         }
         face = centre;
@@ -251,10 +325,26 @@ void Hierarchy::ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect
     if (ChooseSplit(node, tight, nRays, own, dim)) {
         PixelRect half[2];
         Pinhole::Halve(rect, half);
-        for (const PixelRect& h : half) ProcessRect(w, cam, h, face, depth + 1, &own, slot);
+        for (const PixelRect& h : half) {
+            ProcessRect(w, cam, h, face, depth + 1, &own, slot, missed);
+        }
         return;
     }
     if (!filtered) own = Filter(w, tight, *list, false);
+    // Rays that cannot reach a primitive get no leaf and are answered "no hit": all of a leaf
+    // whose list is empty and, from a camera outside the scene box, those of a leaf on the
+    // box's outline that miss it.
+    const bool reachNothing = CountUpTo(own, tight.hi[kDims]) == 0;
+    const bool clip = !reachNothing && cam.outside && !cam.AllReach(rect);
+    if (clip && uint64_t(rect.x1 - rect.x0) * (rect.y1 - rect.y0) > kClipPixels) {
+        // On the outline: halves, so that only pixels near it are tested one by one.
+        PixelRect half[2];
+        Pinhole::Halve(rect, half);
+        for (const PixelRect& h : half) {
+            ProcessRect(w, cam, h, face, depth + 1, &own, slot, missed);
+        }
+        return;
+    }
     RcLeaf leaf{};
     leaf.rayBegin = slot;
     rc_uint* out = rayOut_ + slot;
@@ -264,10 +354,24 @@ void Hierarchy::ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect
         if (hi <= lo) continue;
         // A row's rays are consecutive (a loop the compiler vectorises).
         const uint32_t base = uint32_t(lo - cam.first), len = uint32_t(hi - lo);
-        for (uint32_t k = 0; k < len; ++k) out[k] = base + k;
-        out += len;
+        if (reachNothing) {
+            for (uint32_t k = 0; k < len; ++k) missed.push_back(base + k);
+        } else if (clip) {
+            const uint32_t x0 = uint32_t(lo - uint64_t(y) * cam.width);
+            for (uint32_t k = 0; k < len; ++k) {
+                if (cam.Reaches(x0 + k, y)) {
+                    *out++ = base + k;
+                } else {
+                    missed.push_back(base + k);
+                }
+            }
+        } else {
+            for (uint32_t k = 0; k < len; ++k) out[k] = base + k;
+            out += len;
+        }
     }
     leaf.rayCount = uint32_t(out - (rayOut_ + slot));
+    if (leaf.rayCount == 0) return;
     slot += leaf.rayCount;
     PushLeaf(w, leaf, NewNode(w, node.box, face, depth, false), own, tight.hi[kDims]);
 }

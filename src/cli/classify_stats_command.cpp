@@ -15,7 +15,9 @@ namespace {
 constexpr const char* kUsage = R"(usage: rayclass classify-stats SCENE [options]
 
 Classifies one generation of eye rays and one generation of mirror rays (one bounce off every eye
-hit) and prints what the ray-classification hierarchy looks like and what it costs.
+hit) and prints what the ray-classification hierarchy looks like and what it costs; then the eye
+rays again as the renderer classifies them, from their camera (eye_from_camera; absent when the
+camera lies too far from the scene).
 
 options:
   --width W, --height H   eye-ray resolution (default 1024x768)
@@ -129,21 +131,33 @@ int ClassifyStatsCommand(const std::vector<std::string>& args, std::ostream& out
     const auto eyeStats = classify::ComputeStats(scene, eye, params, int(repeat), hits);
     const std::vector<classify::Ray> mirror = classify::MirrorRays(scene, eye, hits);
     const auto mirrorStats = classify::ComputeStats(scene, mirror, params, int(repeat));
+    // The same eye rays classified from their camera, as the renderer does when it can.
+    const RcCamera rc = camera == "anchor" ? classify::AnchorCamera(scene, width, height)
+                                           : render::CameraBasis(scene.camera).ToDevice();
+    classify::LeafBatch probe;
+    const bool fromCamera =
+        classify::Hierarchy(scene, params).ClassifyPinhole(rc, 0, uint32_t(eye.size()), probe);
 
-    const nlohmann::json j = {{"scene", file},
-                              {"primitives", scene.PrimitiveCount()},
-                              {"camera", camera},
-                              {"width", width},
-                              {"height", height},
-                              {"eye", ToJson(eyeStats)},
-                              {"mirror", ToJson(mirrorStats)}};
+    nlohmann::json j = {{"scene", file},
+                        {"primitives", scene.PrimitiveCount()},
+                        {"camera", camera},
+                        {"width", width},
+                        {"height", height},
+                        {"eye", ToJson(eyeStats)},
+                        {"mirror", ToJson(mirrorStats)}};
+    const char* gens[] = {"eye", "mirror", "eye_from_camera"};
+    if (fromCamera) {
+        j["eye_from_camera"] =
+            ToJson(classify::ComputeStats(scene, eye, params, int(repeat), {}, false, &rc));
+    }
     if (json) {
         out << j.dump(2) << "\n";
         return 0;
     }
     out << "scene: " << file << "\nprimitives: " << scene.PrimitiveCount() << "\ncamera: " << camera
         << " " << width << "x" << height << "\n";
-    for (const char* gen : {"eye", "mirror"}) {
+    for (const char* gen : gens) {
+        if (!j.contains(gen)) continue;
         for (const auto& [key, v] : j[gen].items()) out << gen << "." << key << ": " << v << "\n";
     }
     return 0;

@@ -161,13 +161,16 @@ class Hierarchy {
     // The corners' slopes are taken in double and padded far beyond the kernel's float rounding.
     // A rectangle takes the face of its centre ray once no corner's slope exceeds 1.5 there
     // (slopes above 1 near a face's edge are correct: the beam test and the queries' distance
-    // order hold in any frame the rays move forward in). Splits follow the cost
-    // function, halving the longer side (at a multiple of 4 pixels, so that a fragment packet
-    // spans few rows); a leaf's rays are its rectangle's pixels row by row. Each leaf gets a
-    // node of its own that no other links to, so Route() does not find it. Returns false,
-    // doing nothing, when the camera lies outside the scene box (its rays would need clipping:
-    // classify them with Classify() then), when its basis is degenerate or not finite, when
-    // the pixels run past the image, or when the generation holds inserted rays.
+    // order hold in any frame the rays move forward in). Beams start at the camera, also when
+    // it lies outside the scene box. Rays that can reach no primitive (a leaf's whose list is
+    // empty; rays from a camera outside the box that miss it) go to `missed`, with no leaf.
+    // Splits follow the cost function, halving the longer side (at a multiple of 4
+    // pixels, so that a fragment packet spans few rows); a leaf's rays are its rectangle's
+    // pixels row by row. Each leaf gets a node of its own that no other links to, so Route()
+    // does not find it. Returns false, doing nothing, when the camera lies more than three box
+    // sizes outside the scene box (classify its rays with Classify() then), when its basis is
+    // degenerate or not finite, when the pixels run past the image, or when the generation
+    // holds inserted rays.
     bool ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t n, LeafBatch& out);
 
     // Forgets every split: back to the six face roots (the presorted face lists stay).
@@ -304,13 +307,13 @@ class Hierarchy {
     void FinishWorkers(size_t scratch);
     // ClassifyPinhole's subdivision of image rectangle `rect` (pixels x0 <= x < x1, y0 <= y <
     // y1) within the frame of `face` and `list`, or of no face yet (face < 0); its leaves' rays
-    // go to rayOut_ from `slot` on.
+    // go to rayOut_ from `slot` on, the rays that reach no primitive to `missed`.
     struct Pinhole;  // the camera in double (pinhole.cpp)
     struct PixelRect {
         uint32_t x0, y0, x1, y1;
     };
     void ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect, int face, int depth,
-                     const ListView* list, uint32_t& slot);
+                     const ListView* list, uint32_t& slot, std::vector<rc_uint>& missed);
     // Moves the rays [begin, end) of buffer `buf` into the other one by the child of an earlier
     // split whose interval contains them: box0's, else box1's, else the remainder (groups 0, 1,
     // 2, each in ray order, one after the other); count[g] gets each group's size.
