@@ -187,8 +187,8 @@ bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t
                       glm::dot(f, glm::cross(r, u)) != 0.0 &&
                       uint64_t(first) + n <= uint64_t(camera.width) * camera.height;
     // The rays are not clipped to the scene box, as Convert clips rays: the beams start at the
-    // camera, which is exact for them too, and rays that miss the box get lists that reach
-    // nothing.
+    // camera, which is exact for them too, and ProcessRect answers the rays that cannot reach
+    // the box as misses.
     const glm::vec3 reach = sceneBox_.Size() * kCameraReach;
     const bool near = glm::all(glm::greaterThanEqual(eye, sceneBox_.lo - reach)) &&
                       glm::all(glm::lessThanEqual(eye, sceneBox_.hi + reach));

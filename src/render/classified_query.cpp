@@ -86,8 +86,8 @@ class ClassifiedQuery final : public RayQuery {
             }
         }
         if (!out) out = std::make_unique<ClassifiedBatch>();
-        // A camera's eye rays are classified from the camera, unread (eye rays 2.5-3x faster to
-        // classify on Sibenik, the same leaves' lists), unless the camera lies outside the scene.
+        // A camera's eye rays are classified from the camera, unread (Sibenik's 2.5-3x faster,
+        // for lists as long), unless it lies more than three box sizes from the scene.
         if (source.camera) {
             const auto t0 = Clock::now();
             const bool classified =
