@@ -498,6 +498,7 @@ TEST_F(Cli, RenderWritesTheImageAndConsistentStatsAndNothingElse) {
                             "rays_by_generation", "intersection_tests", "mrays_per_s", "time_s"}) {
         EXPECT_TRUE(stats.contains(key)) << key;
     }
+    EXPECT_EQ(stats["eye_rays_from_camera"], 64 * 48);
     EXPECT_EQ(stats.at("width"), 64);
     EXPECT_EQ(stats.at("height"), 48);
     EXPECT_TRUE(stats.at("device").is_string());
@@ -583,6 +584,26 @@ TEST_F(Cli, RenderWritesTheImageAndConsistentStatsAndNothingElse) {
                           0),
               0u)
         << r.err;
+}
+
+TEST_F(Cli, ClassifyStatsReportsTheEyeRaysBothWays) {
+    const Result r = Run({"classify-stats", Cornell(), "--width", "64", "--height", "48",
+                          "--repeat", "1", "--json"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto stats = nlohmann::json::parse(r.out);
+    for (const char* gen : {"eye", "mirror", "eye_from_camera"}) {
+        ASSERT_TRUE(stats.contains(gen)) << gen;
+        EXPECT_GT(stats[gen]["leaves"].get<int>(), 0) << gen;
+    }
+    EXPECT_EQ(stats["eye_from_camera"]["rays"], 64 * 48);
+    // Cornell's camera lies outside the box, and a ray that enters it meets a wall: here both
+    // ways answer exactly the rays that pass the box as misses without a leaf.
+    EXPECT_EQ(stats["eye_from_camera"]["rays_missing_scene_box"],
+              stats["eye"]["rays_missing_scene_box"]);
+    EXPECT_GT(stats["eye"]["rays_missing_scene_box"].get<int>(), 0);
+    const Result bad = Run({"classify-stats", Cornell(), "--camera", "far"});
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_EQ(bad.err, "rayclass classify-stats: --camera must be scene or anchor, not 'far'\n");
 }
 
 TEST_F(Cli, ExrCompressionsGiveTheSamePixels) {
