@@ -30,11 +30,23 @@ std::string ReadFile(const std::string& path) {
     return ss.str();
 }
 
+// This test process's scratch directory, removed when the process ends (each test runs in a
+// process of its own under CTest: the directories piled up in /tmp before).
+const std::filesystem::path& ScratchDir() {
+    static const struct Dir {
+        std::filesystem::path path =
+            std::filesystem::temp_directory_path() / ("rc_raster_cli_" + std::to_string(getpid()));
+        Dir() { std::filesystem::create_directories(path); }
+        ~Dir() {
+            std::error_code ignored;
+            std::filesystem::remove_all(path, ignored);
+        }
+    } dir;
+    return dir.path;
+}
+
 CliRun RunRayclass(const std::string& env, const std::string& args) {
-    const auto dir =
-        std::filesystem::temp_directory_path() / ("rc_raster_cli_" + std::to_string(getpid()));
-    std::filesystem::create_directories(dir);
-    const std::string errFile = (dir / "err.txt").string();
+    const std::string errFile = (ScratchDir() / "err.txt").string();
     const std::string cmd = env + " '" + std::string(std::getenv("RAYCLASS_BINARY")) + "' " + args +
                             " 2>'" + errFile + "' >/dev/null";
     const int rc = std::system(cmd.c_str());
@@ -43,11 +55,7 @@ CliRun RunRayclass(const std::string& env, const std::string& args) {
 
 std::string Scene() { return (SceneDir() / "tests/spheres.json").string(); }
 
-std::string Out(const char* name) {
-    return (std::filesystem::temp_directory_path() / ("rc_raster_cli_" + std::to_string(getpid())) /
-            name)
-        .string();
-}
+std::string Out(const char* name) { return (ScratchDir() / name).string(); }
 
 // The stats' eye_rays and eye_rays_choice after rendering the test scene with `options`.
 std::pair<std::string, std::string> EyeRaysOf(const std::string& options) {
