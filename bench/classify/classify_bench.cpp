@@ -107,8 +107,10 @@ int Run(int argc, char** argv) {
         // The same eye rays classified by image rectangles; their host hits must match.
         const RcCamera camera = classify::AnchorCamera(scene, width, height);
         std::vector<geometry::Hit<float>> hits(eye.size());
-        Print("eye pinhole",
-              classify::ComputeStats(scene, eye, params, repeat, hits, false, &camera));
+        const auto stats = classify::ComputeStats(scene, eye, params, repeat, hits, false, &camera);
+        if (!stats.classifiedFromCamera)
+            throw Error("the pinhole classification refused the camera");
+        Print("eye pinhole", stats);
         size_t differ = 0;
         for (size_t i = 0; i < eye.size(); ++i) {
             differ += hits[i].prim != eyeHits[i].prim || hits[i].t != eyeHits[i].t;

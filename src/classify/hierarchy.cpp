@@ -188,7 +188,7 @@ void Hierarchy::Subdivide(LeafBatch& out) {
     }
     const int threads = StartWorkers(schedule, n, out);
     OnThreads(threads, [&](int t) { Work(workers_[size_t(t)], t); });
-    Join(out, schedule.listsEnd.load());
+    Join(out, schedule.listsEnd.load(), threads);
     rayOut_ = nullptr;
     // The ray buffers by the rays they hold (two ping-pong buffers and the routing
     // destinations): their face slabs reserve kFaceCount times as much address space, of which
@@ -313,7 +313,7 @@ void Hierarchy::Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, u
     s.changed.notify_one();
 }
 
-void Hierarchy::Join(LeafBatch& out, size_t listsEnd) {
+void Hierarchy::Join(LeafBatch& out, size_t listsEnd, int threads) {
     // Parts in ray order, their nodes appended in that order.
     std::vector<Part*> parts(nParts_);
     for (size_t p = 0; p < nParts_; ++p) parts[p] = &parts_[p];
@@ -388,7 +388,7 @@ void Hierarchy::Join(LeafBatch& out, size_t listsEnd) {
     listRoom_ = 2 * out.candidates.size();
     if (nOwn == 0) return;
     // Their copy, split between the threads at a leaf near the middle of the entries.
-    const int threads = nOwn >= kParallelCopyMin ? Threads(nInserted_) : 1;
+    if (nOwn < kParallelCopyMin) threads = 1;
     std::vector<size_t> from(size_t(threads) + 1, ownLeaves.size());
     from[0] = 0;
     for (int t = 1; t < threads; ++t) {

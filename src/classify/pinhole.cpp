@@ -227,7 +227,6 @@ bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t
     out.rayIndex.resize(n);
     if (n == 0) return true;
     rayOut_ = out.rayIndex.data();
-    nInserted_ = n;  // for Join's thread count
     Schedule schedule;
     schedule.cut = kNoNode;
     nParts_ = 0;
@@ -282,7 +281,7 @@ bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t
         out.missed.insert(out.missed.end(), missed[b].begin(), missed[b].end());
     }
     out.rayIndex.resize(used);
-    Join(out, schedule.listsEnd.load());
+    Join(out, schedule.listsEnd.load(), threads);
     rayOut_ = nullptr;
     FinishWorkers(0);
     return true;
@@ -294,17 +293,20 @@ void Hierarchy::ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect
     const uint32_t nRays = cam.Count(rect);
     if (nRays == 0) return;
     const ArenaMark release(w.stack);
+    auto halves = [&](int childFace, const ListView* childList) {
+        PixelRect half[2];
+        Pinhole::Halve(rect, half);
+        for (const PixelRect& h : half) {
+            ProcessRect(w, cam, h, childFace, depth + 1, childList, slot, missed);
+        }
+    };
     Bounds6 tight;
     ListView faceList;
     if (face < 0) {
         const int centre = cam.CentreFace(rect);
         if (!cam.Bounds(rect, centre, true, tight)) {
             // Too wide for one frame: its halves look again. (A single pixel fits its own face.)
-            PixelRect half[2];
-            Pinhole::Halve(rect, half);
-            for (const PixelRect& h : half) {
-                ProcessRect(w, cam, h, -1, depth + 1, nullptr, slot, missed);
-            }
+            halves(-1, nullptr);
             return;
         }
         face = centre;
@@ -323,11 +325,7 @@ void Hierarchy::ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect
     node.depth = uint8_t(depth);
     int dim = 0;
     if (ChooseSplit(node, tight, nRays, own, dim)) {
-        PixelRect half[2];
-        Pinhole::Halve(rect, half);
-        for (const PixelRect& h : half) {
-            ProcessRect(w, cam, h, face, depth + 1, &own, slot, missed);
-        }
+        halves(face, &own);
         return;
     }
     if (!filtered) own = Filter(w, tight, *list, false);
@@ -338,11 +336,7 @@ void Hierarchy::ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect
     const bool clip = !reachNothing && cam.outside && !cam.AllReach(rect);
     if (clip && uint64_t(rect.x1 - rect.x0) * (rect.y1 - rect.y0) > kClipPixels) {
         // On the outline: halves, so that only pixels near it are tested one by one.
-        PixelRect half[2];
-        Pinhole::Halve(rect, half);
-        for (const PixelRect& h : half) {
-            ProcessRect(w, cam, h, face, depth + 1, &own, slot, missed);
-        }
+        halves(face, &own);
         return;
     }
     RcLeaf leaf{};

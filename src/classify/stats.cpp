@@ -9,7 +9,6 @@
 #include <string>
 
 #include "rayclass/classify/query.h"
-#include "rayclass/core/error.h"
 
 namespace rayclass::classify {
 
@@ -55,22 +54,24 @@ RcCamera AnchorCamera(const scene::Scene& scene, uint32_t width, uint32_t height
     return c;
 }
 
-std::vector<Ray> AnchorEyeRays(const scene::Scene& scene, uint32_t width, uint32_t height) {
-    const RcCamera c = AnchorCamera(scene, width, height);
+std::vector<Ray> CameraRays(const RcCamera& c, uint32_t first, uint32_t n) {
     auto vec = [](const rc_float4& v) { return glm::vec3(v.x, v.y, v.z); };
     std::vector<Ray> rays;
-    rays.reserve(size_t(width) * height);
-    for (uint32_t y = 0; y < height; ++y) {
-        for (uint32_t x = 0; x < width; ++x) {
-            const float sx = (2.0f * (float(x) + 0.5f) / float(width) - 1.0f) * c.tanHalfFovX;
-            const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(height)) * c.tanHalfFovY;
-            Ray r;
-            r.origin = vec(c.position);
-            r.direction = glm::normalize(vec(c.forward) + sx * vec(c.right) + sy * vec(c.up));
-            rays.push_back(r);
-        }
+    rays.reserve(n);
+    for (uint32_t p = first; p < first + n; ++p) {
+        const uint32_t x = p % c.width, y = p / c.width;
+        const float sx = (2.0f * (float(x) + 0.5f) / float(c.width) - 1.0f) * c.tanHalfFovX;
+        const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(c.height)) * c.tanHalfFovY;
+        Ray r;
+        r.origin = vec(c.position);
+        r.direction = glm::normalize(vec(c.forward) + sx * vec(c.right) + sy * vec(c.up));
+        rays.push_back(r);
     }
     return rays;
+}
+
+std::vector<Ray> AnchorEyeRays(const scene::Scene& scene, uint32_t width, uint32_t height) {
+    return CameraRays(AnchorCamera(scene, width, height), 0, width * height);
 }
 
 std::vector<Ray> MirrorRays(const scene::Scene& scene, std::span<const Ray> rays,
@@ -122,6 +123,7 @@ ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
                            const Params& params, int repeats, std::span<geometry::Hit<float>> hits,
                            bool anyHit, const RcCamera* pinhole) {
     ClassifyStats s;
+    s.classifiedFromCamera = pinhole != nullptr;
     s.nRays = uint32_t(rays.size());
     s.bruteForceTests = scene.PrimitiveCount();
     const auto t0 = Clock::now();
@@ -135,11 +137,11 @@ ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
         h.Reset();
         const auto a = Clock::now();
         const double c = ThreadCpuSeconds();
-        if (pinhole) {
-            if (!h.ClassifyPinhole(*pinhole, 0, uint32_t(rays.size()), batch)) {
-                throw Error("the pinhole classification refused the camera");
-            }
-        } else {
+        // A refusal does not depend on the repeat: the first one decides.
+        if (s.classifiedFromCamera) {
+            s.classifiedFromCamera = h.ClassifyPinhole(*pinhole, 0, uint32_t(rays.size()), batch);
+        }
+        if (!s.classifiedFromCamera) {
             h.Classify(rays, batch, anyHit ? RayUse::kAnyHit : RayUse::kNearestHit);
         }
         cpuTimes.push_back(ThreadCpuSeconds() - c);

@@ -134,9 +134,8 @@ int ClassifyStatsCommand(const std::vector<std::string>& args, std::ostream& out
     // The same eye rays classified from their camera, as the renderer does when it can.
     const RcCamera rc = camera == "anchor" ? classify::AnchorCamera(scene, width, height)
                                            : render::CameraBasis(scene.camera).ToDevice();
-    classify::LeafBatch probe;
-    const bool fromCamera =
-        classify::Hierarchy(scene, params).ClassifyPinhole(rc, 0, uint32_t(eye.size()), probe);
+    const auto cameraStats =
+        classify::ComputeStats(scene, eye, params, int(repeat), {}, false, &rc);
 
     nlohmann::json j = {{"scene", file},
                         {"primitives", scene.PrimitiveCount()},
@@ -146,10 +145,7 @@ int ClassifyStatsCommand(const std::vector<std::string>& args, std::ostream& out
                         {"eye", ToJson(eyeStats)},
                         {"mirror", ToJson(mirrorStats)}};
     const char* gens[] = {"eye", "mirror", "eye_from_camera"};
-    if (fromCamera) {
-        j["eye_from_camera"] =
-            ToJson(classify::ComputeStats(scene, eye, params, int(repeat), {}, false, &rc));
-    }
+    if (cameraStats.classifiedFromCamera) j["eye_from_camera"] = ToJson(cameraStats);
     if (json) {
         out << j.dump(2) << "\n";
         return 0;

@@ -5,12 +5,12 @@
 
 #include "classify_support.h"
 #include "rayclass/classify/hierarchy.h"
+#include "rayclass/classify/stats.h"
 
 namespace rayclass::classify {
 namespace {
 
 rc_float4 F4(const glm::vec3& v) { return {v.x, v.y, v.z, 0.0f}; }
-glm::vec3 V3(const rc_float4& v) { return {v.x, v.y, v.z}; }
 
 RcCamera MakeCamera(glm::vec3 eye, glm::vec3 forward, glm::vec3 upHint, float fovYDegrees,
                     uint32_t width, uint32_t height) {
@@ -26,21 +26,6 @@ RcCamera MakeCamera(glm::vec3 eye, glm::vec3 forward, glm::vec3 upHint, float fo
     c.width = width;
     c.height = height;
     return c;
-}
-
-// Pixels [first, first + n) of `c`, as cl/camera.cl shoots them.
-std::vector<Ray> EyeRays(const RcCamera& c, uint32_t first, uint32_t n) {
-    std::vector<Ray> rays;
-    for (uint32_t p = first; p < first + n; ++p) {
-        const uint32_t x = p % c.width, y = p / c.width;
-        const float sx = (2.0f * (float(x) + 0.5f) / float(c.width) - 1.0f) * c.tanHalfFovX;
-        const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(c.height)) * c.tanHalfFovY;
-        Ray r;
-        r.origin = V3(c.position);
-        r.direction = glm::normalize(V3(c.forward) + sx * V3(c.right) + sy * V3(c.up));
-        rays.push_back(r);
-    }
-    return rays;
 }
 
 // Every ray in one leaf, moving forward along the leaf's face, its 5D point in that face's frame
@@ -85,7 +70,7 @@ TEST(Pinhole, RaysLandOnceInsideTheirLeafAndHitAsBruteForce) {
         const uint32_t batches[][2] = {
             {0, pixels}, {3 * c.width + 5, 7 * c.width + 11}, {10 * c.width + 2, 5}};
         for (const auto& [first, n] : batches) {
-            const std::vector<Ray> rays = EyeRays(c, first, n);
+            const std::vector<Ray> rays = CameraRays(c, first, n);
             for (const Params& p : {DeepParams(s), Params::ForScene(s)}) {
                 Hierarchy h(s, p);
                 LeafBatch batch;
@@ -144,7 +129,7 @@ TEST(Pinhole, ListsAreAsShortAsRayByRay) {
     const scene::Scene s = RandomScene(63, 2000, 0, 0);
     const RcCamera c = MakeCamera({-0.95f, 0.0f, 0.0f}, {1, 0, 0}, {0, 1, 0}, 60.0f, 320, 240);
     const uint32_t n = c.width * c.height;
-    const std::vector<Ray> rays = EyeRays(c, 0, n);
+    const std::vector<Ray> rays = CameraRays(c, 0, n);
     auto perRay = [](const LeafBatch& b) {
         double sum = 0.0;
         for (const RcLeaf& leaf : b.leaves) sum += double(leaf.candCount) * leaf.rayCount;
@@ -171,7 +156,7 @@ TEST(Pinhole, RefusedFarFromTheSceneBoxOrWithRaysInserted) {
     EXPECT_EQ(batch.nRays, 7u);
     const RcCamera inside = MakeCamera({0.0f, 0.0f, 0.0f}, {1, 0, 0}, {0, 1, 0}, 60.0f, 16, 12);
     EXPECT_FALSE(h.ClassifyPinhole(inside, 0, 16 * 12 + 1, batch));  // beyond the image
-    const std::vector<Ray> rays = EyeRays(inside, 0, 10);
+    const std::vector<Ray> rays = CameraRays(inside, 0, 10);
     h.Insert(rays);
     EXPECT_FALSE(h.ClassifyPinhole(inside, 0, 16 * 12, batch));
     EXPECT_EQ(batch.nRays, 7u);

@@ -360,7 +360,9 @@ class Hierarchy {
     void ConvertAll(uint32_t* faceBegin, uint32_t* faceEnd, Bounds6* faceBounds, LeafBatch& out);
     // Joins the tasks' parts into `out` (whose rayIndex the leaves have filled, and whose lists
     // the first `listsEnd` entries of out.candidates hold, bar the workers' own).
-    void Join(LeafBatch& out, size_t listsEnd);
+    // `threads`: the generation's (StartWorkers'), which copy the lists that went to the
+    // workers' own arrays.
+    void Join(LeafBatch& out, size_t listsEnd, int threads);
     Part& NewPart(uint32_t begin);
     int Threads(uint32_t nRays) const;
 

@@ -32,13 +32,14 @@ struct ClassifyStats {
     size_t hierarchyBytes = 0;     // nodes + face lists + peak scratch
     size_t leafBytes = 0;          // the LeafBatch arrays
     size_t peakRssBytes = 0;       // process high-water mark (VmHWM) after the run; 0 if unknown
+    bool classifiedFromCamera = false;  // by Hierarchy::ClassifyPinhole (see ComputeStats)
 };
 
 // Classifies `rays` `repeats` times in a fresh hierarchy (the median time counts), queries them
 // once on the host (any hit with `anyHit`) and fills every field. When `hits` is not empty it
 // receives the query's hits.
 // With `pinhole`, `rays` are that camera's eye rays and are classified by
-// Hierarchy::ClassifyPinhole (which must accept the camera) instead.
+// Hierarchy::ClassifyPinhole instead, unless it refuses the camera (classifiedFromCamera says).
 ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
                            const Params& params, int repeats = 3,
                            std::span<geometry::Hit<float>> hits = {}, bool anyHit = false,
@@ -47,7 +48,9 @@ ClassifyStats ComputeStats(const scene::Scene& scene, std::span<const Ray> rays,
 // The anchor camera: eye = box centre - 0.25 size_x (1, 0, 0), looking along +x, up +y, right +z,
 // vertical field of view 60 degrees, pixel centres, row 0 at the top.
 RcCamera AnchorCamera(const scene::Scene& scene, uint32_t width, uint32_t height);
-// Its rays, by cl/camera.cl's formula in float.
+// The rays of pixels [first, first + n) of `camera` by cl/camera.cl's formula in float (ray i is
+// pixel first + i), and all of the anchor camera's.
+std::vector<Ray> CameraRays(const RcCamera& camera, uint32_t first, uint32_t n);
 std::vector<Ray> AnchorEyeRays(const scene::Scene& scene, uint32_t width, uint32_t height);
 
 // One mirror bounce of every ray that hit: origin P + 1e-4 diagonal n (n the geometric normal
