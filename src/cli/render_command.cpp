@@ -70,6 +70,9 @@ options:
                           float depth compares exactly); settings that can lose hits or swap
                           the ids of close surfaces get a warning
   -q, --quiet             no progress line
+
+Kernel binaries are cached in $RAYCLASS_CACHE_DIR (else $XDG_CACHE_HOME/rayclass, else
+~/.cache/rayclass); RAYCLASS_CACHE_DIR=off builds them from source every time.
 )";
 
 struct RenderArgs {

@@ -127,6 +127,7 @@ Context::Context(const std::string& spec) {
     }
     device_ = chosen->device;
     info_ = chosen->info;
+    programCache_ = ProgramCache(DefaultProgramCacheDir());
     Check("clCreateContext", [&] { context_ = cl::Context(device_); });
     Check("clCreateCommandQueue", [&] {
         queue_ = cl::CommandQueue(context_, device_, cl::QueueProperties::Profiling);
@@ -140,9 +141,63 @@ std::string AssembleProgramSource(const std::vector<std::string>& files) {
     return out.str();
 }
 
-cl::Program Context::BuildProgram(const std::vector<std::string>& files,
-                                  const std::string& options) const {
+namespace {
+
+// The key of ProgramKey for an assembled source.
+std::string KeyOf(const cl::Device& device, const std::string& options, const std::string& source) {
+    const cl::Platform platform(device.getInfo<CL_DEVICE_PLATFORM>());
+    std::string key;
+    for (const std::string& part :
+         {platform.getInfo<CL_PLATFORM_NAME>(), platform.getInfo<CL_PLATFORM_VERSION>(),
+          device.getInfo<CL_DEVICE_VENDOR>(), device.getInfo<CL_DEVICE_NAME>(),
+          device.getInfo<CL_DEVICE_VERSION>(), device.getInfo<CL_DRIVER_VERSION>(),
+          "options: " + options}) {
+        key += part;
+        key += '\n';
+    }
+    return key + source;
+}
+
+}  // namespace
+
+std::string Context::ProgramKey(const std::vector<std::string>& files,
+                                const std::string& options) const {
+    return Check("clGetDeviceInfo",
+                 [&] { return KeyOf(device_, options, AssembleProgramSource(files)); });
+}
+
+cl::Program Context::BuildProgram(const std::vector<std::string>& files, const std::string& options,
+                                  bool* fromCache) const {
     const std::string source = AssembleProgramSource(files);
+    if (fromCache) *fromCache = false;
+    if (!programCache_.Enabled()) return BuildFromSource(source, files, options);
+    const std::string key =
+        Check("clGetDeviceInfo", [&] { return KeyOf(device_, options, source); });
+    const std::vector<unsigned char> binary = programCache_.Load(key);
+    if (!binary.empty()) {
+        try {
+            cl::Program program(context_, std::vector<cl::Device>{device_},
+                                cl::Program::Binaries{binary});
+            program.build(std::vector<cl::Device>{device_}, options.c_str());
+            if (fromCache) *fromCache = true;
+            return program;
+        } catch (const cl::Error&) {
+            // A binary the driver no longer takes: built from source below, and replaced.
+        }
+    }
+    cl::Program program = BuildFromSource(source, files, options);
+    try {
+        const auto binaries = program.getInfo<CL_PROGRAM_BINARIES>();
+        if (binaries.size() == 1) programCache_.Store(key, binaries[0]);
+    } catch (const cl::Error&) {
+        // A device that gives no binary simply builds from source every time.
+    }
+    return program;
+}
+
+cl::Program Context::BuildFromSource(const std::string& source,
+                                     const std::vector<std::string>& files,
+                                     const std::string& options) const {
     cl::Program program = Check("clCreateProgramWithSource",
                                 [&] { return cl::Program(context_, source); });
     try {

@@ -85,12 +85,13 @@ std::unique_ptr<RayQuery> MakeBruteForceQuery(clrt::Context& ctx, const cl::Prog
     return std::make_unique<BruteForceQuery>(ctx, program, scene);
 }
 
-cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions) {
+cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions,
+                               bool* fromCache) {
     const std::string options = "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
                                 (extraOptions.empty() ? "" : " " + extraOptions);
     return ctx.BuildProgram({"camera.cl", "intersect.cl", "encoding.cl", "shade.cl",
                              "generation.cl", "brute.cl", "classified.cl", "bvh.cl"},
-                            options);
+                            options, fromCache);
 }
 
 namespace {
@@ -278,7 +279,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     stats.nPrimitives = scene_.PrimitiveCount();
 
     auto t0 = Clock::now();
-    const cl::Program program = BuildRenderProgram(ctx_, KernelBuildOptions(options_));
+    const cl::Program program =
+        BuildRenderProgram(ctx_, KernelBuildOptions(options_), &stats.programFromCache);
     stats.timeS["program_build"] = SecondsSince(t0);
 
     const RcRenderParams params = MakeRenderParams(scene_, options_);

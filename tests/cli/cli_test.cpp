@@ -156,7 +156,7 @@ TEST_F(Cli, RenderHelpDescribesEveryOption) {
     for (const char* option :
          {"-o, --output", "--width", "--height", "--aov", "--max-depth", "--min-weight", "--device",
           "--reference", "--stats", "--exposure", "--exr-compression", "--batch-rays",
-          "--cl-options", "--depth-bits", "--depth-scale", "-q, --quiet"}) {
+          "--cl-options", "--depth-bits", "--depth-scale", "-q, --quiet", "RAYCLASS_CACHE_DIR"}) {
         EXPECT_NE(r.out.find(option), std::string::npos) << option;
     }
     EXPECT_EQ(r.err, "");
@@ -625,6 +625,30 @@ TEST_F(Cli, ExrCompressionsGiveTheSamePixels) {
     // Uncompressed is what it says: larger than ZIP.
     EXPECT_GT(std::filesystem::file_size(Work("none.exr")),
               std::filesystem::file_size(Work("zip.exr")));
+}
+
+TEST_F(Cli, SecondRenderLoadsTheKernelsFromTheProgramCache) {
+    const std::string cache = (root_ / "cache").string();
+    std::vector<bool> fromCache;
+    std::vector<std::string> images;
+    for (const std::string& dir : {cache, cache, std::string("off")}) {
+        const std::string n = std::to_string(images.size());
+        const Result r = Run(
+            {"render", Cornell(), "--width", "16", "--height", "12", "-o", n + ".exr",
+             "--exr-compression", "none", "--aov", "depth,id,normal", "--stats", n + ".json", "-q"},
+            "RAYCLASS_CACHE_DIR=" + ShellQuoted(dir) + " ");
+        ASSERT_EQ(r.status, 0) << r.err;
+        fromCache.push_back(
+            nlohmann::json::parse(ReadText(Work(n + ".json"))).at("program_from_cache"));
+        images.push_back(ReadText(Work(n + ".exr")));
+    }
+    EXPECT_EQ(fromCache, (std::vector<bool>{false, true, false}));
+    // Kernels from the binary render the same bytes as kernels built from source.
+    EXPECT_EQ(images[1], images[0]);
+    EXPECT_EQ(images[2], images[0]);
+    size_t entries = 0;
+    for (const auto& e : fs::directory_iterator(cache)) entries += e.path().extension() == ".bin";
+    EXPECT_EQ(entries, 1u);
 }
 
 TEST_F(Cli, QuietPngRenderReplacesThePreviousOutput) {

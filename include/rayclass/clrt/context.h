@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "rayclass/clrt/opencl.h"
+#include "rayclass/clrt/program_cache.h"
 
 namespace rayclass::clrt {
 
@@ -41,15 +42,29 @@ public:
 
     // Builds a program from embedded kernel files (names relative to cl/, e.g. "brute.cl"), in
     // order. `#include "x.h"` lines are resolved against cl/shared/ and each file keeps its name
-    // in #line directives, so the build log points at the real file.
-    cl::Program BuildProgram(const std::vector<std::string>& files,
-                             const std::string& options = {}) const;
+    // in #line directives, so the build log points at the real file. The binary comes from the
+    // program cache when it holds this source, options and device (then *fromCache is set),
+    // else the build goes there.
+    cl::Program BuildProgram(const std::vector<std::string>& files, const std::string& options = {},
+                             bool* fromCache = nullptr) const;
 
-private:
+    // What BuildProgram files the binary of `files` and `options` under in the program cache:
+    // the platform, device and driver, the options and the assembled source.
+    std::string ProgramKey(const std::vector<std::string>& files, const std::string& options) const;
+
+    // The cache BuildProgram uses: DefaultProgramCacheDir() unless set here.
+    const ProgramCache& programCache() const { return programCache_; }
+    void SetProgramCache(ProgramCache cache) { programCache_ = std::move(cache); }
+
+  private:
+    cl::Program BuildFromSource(const std::string& source, const std::vector<std::string>& files,
+                                const std::string& options) const;
+
     cl::Device device_;
     cl::Context context_;
     cl::CommandQueue queue_;
     DeviceInfo info_;
+    ProgramCache programCache_;
 };
 
 // The source text BuildProgram compiles (exposed for tests and for debugging build logs).

@@ -139,8 +139,10 @@ class RayQuery {
 std::unique_ptr<RayQuery> MakeBruteForceQuery(clrt::Context& ctx, const cl::Program& program,
                                               const SceneBuffers& scene);
 
-// The program holding every kernel the renderer uses, with the options they need.
-cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions = {});
+// The program holding every kernel the renderer uses, with the options they need
+// (*fromCache: see clrt::Context::BuildProgram).
+cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions = {},
+                               bool* fromCache = nullptr);
 
 // Supplies the nearest hits of generation 0 (the eye rays) in place of the ray query, e.g. the
 // OpenGL raster pass. FindHits returns one RcHit per pixel, row-major, row 0 at the top, for the
