@@ -1,5 +1,6 @@
 /* Eye rays: one per pixel, the formula documented at RcCamera in rc_types.h. A launch writes the
- * rays of pixels [first, first + n) so big images go through in batches. */
+ * rays of pixels [first, first + n) so big images go through in batches; they get no RcRayInfo
+ * (see there). */
 #include "rc_types.h"
 #include "encoding.cl"
 
@@ -12,22 +13,13 @@ inline float3 rc_eye_direction(__constant const RcCamera* cam, uint x, uint y) {
 }
 
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_generate_eye_rays(
-    __constant const RcCamera* cam, uint first, uint n, __global RcRay* rays,
-    __global RcRayInfo* info) {
+    __constant const RcCamera* cam, uint first, uint n, __global RcRay* rays) {
     const uint i = get_global_id(0);
     if (i >= n) return;
     const uint pixel = first + i;
     const uint x = pixel % cam->width, y = pixel / cam->width;
     RcRay r;
     r.origin = (float4)(cam->position.xyz, 0.0f);
-    uint packed;
-    r.direction = (float4)(rc_encode_direction(rc_eye_direction(cam, x, y), &packed), INFINITY);
+    r.direction = (float4)(rc_encode_direction(rc_eye_direction(cam, x, y)), INFINITY);
     rays[i] = r;
-    RcRayInfo ri;
-    ri.weight = (float4)(1.0f, 1.0f, 1.0f, 1.0f);
-    ri.pixel = pixel;
-    ri.depth = 0;
-    ri.kind = RC_RAY_EYE;
-    ri.polar16 = packed;
-    info[i] = ri;
 }

@@ -247,7 +247,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
                                         triangles, spheres, quadrics, params, &tested);
     hits[id] = hit;
     tests[slot] = tested;
-    const RcRayInfo info = infos[id];
+    const RcRayInfo info = rc_ray_info(infos, id);
     rc_shade_ray(id, &ray, &info, hit, 0, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
 }
 

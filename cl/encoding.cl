@@ -7,8 +7,7 @@
  * arbitrary but sin(theta) vanishes).
  *
  * With -DRC_POLAR16 the kernels that write rays (eye rays, reflection, refraction) round their
- * directions through this encoding and keep the packed word in RcRayInfo.polar16, so a render
- * shows what the encoding costs in accuracy. */
+ * directions through this encoding, so a render shows what the encoding costs in accuracy. */
 #include "rc_types.h"
 
 #define RC_PI_F 3.14159265358979323846f
@@ -28,13 +27,11 @@ inline float3 rc_polar16_decode(uint packed) {
     return (float3)(s * cos(phi), s * sin(phi), cos(theta));
 }
 
-/* The direction a ray actually carries, and the word to keep in RcRayInfo.polar16. */
-inline float3 rc_encode_direction(float3 d, uint* packed) {
+/* The direction a ray actually carries. */
+inline float3 rc_encode_direction(float3 d) {
 #ifdef RC_POLAR16
-    *packed = rc_polar16_encode(d);
-    return rc_polar16_decode(*packed);
+    return rc_polar16_decode(rc_polar16_encode(d));
 #else
-    *packed = 0;
     return d;
 #endif
 }

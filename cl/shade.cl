@@ -104,6 +104,18 @@ inline int rc_worth_spawning(float3 w, uint depth, __constant const RcRenderPara
 #define RC_SHADE_OUT_ARGS \
     radiance, normals, shadowRays, shadowContribution, secondary, secondaryInfo, spawned
 
+/* Ray i's info, or an eye ray's when the batch has no info buffer (eye rays get none: see
+ * RcRayInfo). */
+RC_SHADE_INLINE RcRayInfo rc_ray_info(__global const RcRayInfo* infos, uint i) {
+    if (infos) return infos[i];
+    RcRayInfo eye;
+    eye.weight = (float4)(1.0f);
+    eye.depth = 0;
+    eye.kind = RC_RAY_EYE;
+    eye.pad0 = eye.pad1 = 0;
+    return eye;
+}
+
 /* An empty shadow slot: no contribution and no direction, so a host classifying every slot
  * finds it missing the scene at once. */
 RC_SHADE_INLINE void rc_no_shadow(__global RcRay* shadowRays, __global float4* shadowContribution,
@@ -156,21 +168,19 @@ RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcRa
     shadowContribution[slot] = (float4)(c, 1.0f);
 }
 
-/* Writes a secondary ray of `parent` into slot `slot` (direction dir, not yet unit) and flags it. */
+/* Writes a secondary ray into slot `slot` (direction dir, not yet unit) and flags it. */
 RC_SHADE_INLINE void rc_spawn(__global RcRay* secondary, __global RcRayInfo* secondaryInfo,
-                              __global uchar* spawned, uint slot, const RcRayInfo* parent,
-                              float3 origin, float3 dir, float3 weight, uint depth, uint kind) {
+                              __global uchar* spawned, uint slot, float3 origin, float3 dir,
+                              float3 weight, uint depth, uint kind) {
     RcRay out;
     out.origin = (float4)(origin, 0.0f);
-    uint packed;
-    out.direction = (float4)(rc_encode_direction(normalize(dir), &packed), INFINITY);
+    out.direction = (float4)(rc_encode_direction(normalize(dir)), INFINITY);
     secondary[slot] = out;
     RcRayInfo outInfo;
     outInfo.weight = (float4)(weight, 1.0f);
-    outInfo.pixel = parent->pixel;
     outInfo.depth = depth;
     outInfo.kind = kind;
-    outInfo.polar16 = packed;
+    outInfo.pad0 = outInfo.pad1 = 0;
     secondaryInfo[slot] = outInfo;
     spawned[slot] = 1;
 }
@@ -247,15 +257,15 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* inf
         float3 rdir = d + 2.0f * cosi * s.ns;
         /* A shading normal can tilt the mirror direction below the surface: fall back to ng. */
         if (dot(rdir, s.ng) <= 0.0f) rdir = d - 2.0f * dot(d, s.ng) * s.ng;
-        rc_spawn(secondary, secondaryInfo, spawned, 2 * i, info, rc_offset_ray_origin(s.p, s.ng),
-                 rdir, wr, depth, RC_RAY_REFLECTION);
+        rc_spawn(secondary, secondaryInfo, spawned, 2 * i, rc_offset_ray_origin(s.p, s.ng), rdir,
+                 wr, depth, RC_RAY_REFLECTION);
     }
     const float3 wt = weight * ktEff;
     if (!tir && rc_worth_spawning(wt, depth, params)) {
         const float3 tdir = eta * d + (eta * cosi - sqrt(1.0f - sin2t)) * s.ns;
         if (dot(tdir, s.ng) < 0.0f) {
-            rc_spawn(secondary, secondaryInfo, spawned, 2 * i + 1, info,
-                     rc_offset_ray_origin(s.p, -s.ng), tdir, wt, depth, RC_RAY_REFRACTION);
+            rc_spawn(secondary, secondaryInfo, spawned, 2 * i + 1, rc_offset_ray_origin(s.p, -s.ng),
+                     tdir, wt, depth, RC_RAY_REFRACTION);
         }
     }
 }
@@ -267,7 +277,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
     const uint i = get_global_id(0);
     if (i >= n) return;
     const RcRay ray = rays[i];
-    const RcRayInfo info = infos[i];
+    const RcRayInfo info = rc_ray_info(infos, i);
     rc_shade_ray(i, &ray, &info, hits[i], 0, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
 }
 
@@ -283,7 +293,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
     if (j >= nIds) return;
     const uint i = ids ? ids[j] : j;
     const RcRay ray = rays[i];
-    const RcRayInfo info = infos[i];
+    const RcRayInfo info = rc_ray_info(infos, i);
     rc_shade_ray(i, &ray, &info, hits[i], surfaces, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
 }
 
@@ -304,7 +314,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
         return;
     }
     const RcRay ray = rays[i];
-    const RcRayInfo info = infos[i];
+    const RcRayInfo info = rc_ray_info(infos, i);
     const RcSurface s = rc_saved_surface(surfaces, normals, i);
     rc_shade_light(i, l, &ray, &info, &s, materials + s.material, lights, params, shadowRays,
                    shadowContribution);

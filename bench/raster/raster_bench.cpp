@@ -70,14 +70,12 @@ std::vector<RcHit> KernelHits(clrt::Context& ctx, const cl::Program& program,
     cl::Buffer camBuffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof cam,
                          const_cast<RcCamera*>(&cam));
     cl::Buffer rays(ctx.context(), CL_MEM_READ_WRITE, n * sizeof(RcRay));
-    cl::Buffer info(ctx.context(), CL_MEM_READ_WRITE, n * sizeof(RcRayInfo));
     cl::Buffer hits(ctx.context(), CL_MEM_READ_WRITE, n * sizeof(RcHit));
     cl::Kernel eye(program, "rc_generate_eye_rays");
     eye.setArg(0, camBuffer);
     eye.setArg(1, 0u);
     eye.setArg(2, n);
     eye.setArg(3, rays);
-    eye.setArg(4, info);
     ctx.queue().enqueueNDRangeKernel(eye, cl::NullRange, cl::NDRange(clrt::RoundUp(n, 64)),
                                      cl::NDRange(64));
     render::KernelTimer timer;

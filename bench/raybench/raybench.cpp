@@ -134,10 +134,9 @@ RcRay ToRc(const bench::BenchRay& r) {
     return o;
 }
 
-RcRayInfo InfoOf(uint32_t i, uint32_t kind) {
+RcRayInfo InfoOf(uint32_t kind) {
     RcRayInfo o{};
     o.weight = {1.0f, 1.0f, 1.0f, 0.0f};
-    o.pixel = i;
     o.depth = kind == RC_RAY_EYE ? 0 : 1;
     o.kind = kind;
     return o;
@@ -392,10 +391,11 @@ int main(int argc, char** argv) try {
             const uint32_t kind = k == 0 ? RC_RAY_EYE : (k == 3 ? RC_RAY_REFRACTION : RC_RAY_REFLECTION);
             for (uint32_t i = 0; i < n; ++i) {
                 rays.push_back(ToRc(set[i]));
-                info.push_back(InfoOf(i, kind));
+                if (kind != RC_RAY_EYE) info.push_back(InfoOf(kind));
             }
             raysBuf = Upload(ctx, rays);
-            shade.rayInfo = Upload(ctx, info);
+            // Eye rays have no infos, as in the renderer (rc_types.h).
+            if (kind != RC_RAY_EYE) shade.rayInfo = Upload(ctx, info);
         }
         const cl::Buffer out = Device(ctx, size_t(n) * (shadow ? 1 : sizeof(RcHit)));
 

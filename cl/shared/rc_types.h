@@ -106,15 +106,15 @@ typedef struct RcRay {
     rc_float4 direction;
 } RcRay;
 
-/* The rest of a ray: weight = rgb throughput from the eye (w unused), its pixel, depth = 0 for
- * eye rays, kind (RC_RAY_*). 32 bytes. */
+/* The rest of a ray: weight = rgb throughput from the eye (w unused), depth = 0 for eye rays,
+ * kind (RC_RAY_*). Eye rays have none: a shading kernel given no info buffer takes its rays for
+ * eye rays (rc_ray_info), which saves generation 0 writing 32 bytes a pixel. The host keeps each
+ * ray's pixel. 32 bytes. */
 typedef struct RcRayInfo {
     rc_float4 weight;
-    rc_uint pixel;
     rc_uint depth;
     rc_uint kind;
-    rc_uint polar16; /* the direction as packed polar angles (cl/encoding.cl), 0 unless the
-                        kernels are built with RC_POLAR16 */
+    rc_uint pad0, pad1;
 } RcRayInfo;
 
 /* Nearest hit of a ray: distance t along the unit direction, primitive id (RC_NO_HIT on a miss),

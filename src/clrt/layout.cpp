@@ -36,5 +36,5 @@ static_assert(offsetof(RcSphere, material) == 16);
 static_assert(offsetof(RcQuadric, material) == 80);
 static_assert(offsetof(RcMaterial, shininess) == 80);
 static_assert(offsetof(RcCamera, tanHalfFovX) == 64);
-static_assert(offsetof(RcRayInfo, pixel) == 16);
+static_assert(offsetof(RcRayInfo, depth) == 16);
 static_assert(offsetof(RcRenderParams, ambient) == 32);

@@ -95,10 +95,10 @@ std::vector<Entry> HostLayout() {
 
     RC_STRUCT(RcRayInfo);
     RC_FIELD(RcRayInfo, weight);
-    RC_FIELD(RcRayInfo, pixel);
     RC_FIELD(RcRayInfo, depth);
     RC_FIELD(RcRayInfo, kind);
-    RC_FIELD(RcRayInfo, polar16);
+    RC_FIELD(RcRayInfo, pad0);
+    RC_FIELD(RcRayInfo, pad1);
 
     RC_STRUCT(RcHit);
     RC_FIELD(RcHit, t);

@@ -53,14 +53,12 @@ inline std::vector<RcHit> KernelHits(const scene::Scene& scene) {
     cl::Buffer camBuffer(Cl().context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof cam,
                          const_cast<RcCamera*>(&cam));
     cl::Buffer rays(Cl().context(), CL_MEM_READ_WRITE, n * sizeof(RcRay));
-    cl::Buffer info(Cl().context(), CL_MEM_READ_WRITE, n * sizeof(RcRayInfo));
     cl::Buffer hits(Cl().context(), CL_MEM_READ_WRITE, n * sizeof(RcHit));
     cl::Kernel eye(program, "rc_generate_eye_rays");
     eye.setArg(0, camBuffer);
     eye.setArg(1, 0u);
     eye.setArg(2, n);
     eye.setArg(3, rays);
-    eye.setArg(4, info);
     Cl().queue().enqueueNDRangeKernel(eye, cl::NullRange, cl::NDRange(clrt::RoundUp(n, 64)),
                                       cl::NDRange(64));
     render::KernelTimer timer;

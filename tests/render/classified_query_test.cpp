@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "query_io.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/auto_query.h"
+#include "rayclass/render/bvh_query.h"
 #include "rayclass/render/device_scene.h"
 
 namespace rayclass::render {
@@ -159,6 +161,134 @@ TEST(ClassifiedQuery, EachGenerationIsClassifiedAsByANewQuery) {
     BeginGeneration(*a, 1, second);
     EXPECT_EQ(f.Nearest(*a, second), fresh);
     EXPECT_EQ(f.Occluded(*a, secondShadow), freshShadow);
+}
+
+// Everything shading writes for a batch of eye rays: the hits, radiance and normals, the shadow
+// slots and the secondary rays with their infos and flags.
+struct ShadeOutputs {
+    std::vector<RcHit> hits;
+    std::vector<rc_float4> radiance, normals, contribution;
+    std::vector<RcRay> shadow, secondary;
+    std::vector<RcRayInfo> secondaryInfo;
+    std::vector<uint8_t> spawned;
+};
+
+template <typename T>
+std::vector<T> ReadAll(const cl::Buffer& b, size_t n) {
+    std::vector<T> v(n);
+    Ctx().queue().enqueueReadBuffer(b, CL_TRUE, 0, n * sizeof(T), v.data());
+    return v;
+}
+
+template <typename T>
+bool SameBytes(const std::vector<T>& a, const std::vector<T>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+// `rays` as eye rays through q, shaded by the query's own kernels or, when it shades nothing
+// itself, by rc_shade as the renderer does; with explicit eye infos or with none (the
+// renderer's generation 0).
+ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
+                          const RcRenderParams& params, RayQuery& q, const std::vector<RcRay>& rays,
+                          bool withInfos) {
+    const uint32_t n = uint32_t(rays.size()), nLights = params.nLights;
+    std::vector<RcRayInfo> info(n);
+    for (RcRayInfo& i : info) {
+        i.weight = {1.0f, 1.0f, 1.0f, 1.0f};
+        i.kind = RC_RAY_EYE;
+    }
+    const cl::Buffer rayBuf = UploadVector(Ctx(), rays);
+    const cl::Buffer hits(Ctx().context(), CL_MEM_READ_WRITE, n * sizeof(RcHit));
+    ShadeBuffers shade = MakeShadeBuffers(Ctx(), n, nLights);
+    if (withInfos) shade.rayInfo = UploadVector(Ctx(), info);
+    // Zeroed, so that slots no kernel writes compare equal.
+    for (const cl::Buffer* b :
+         {&shade.radiance, &shade.normals, &shade.shadow.rays, &shade.shadow.contribution,
+          &shade.secondary.rays, &shade.secondary.info, &shade.spawned}) {
+        Ctx().queue().enqueueFillBuffer(*b, uint8_t(0), 0, b->getInfo<CL_MEM_SIZE>());
+    }
+    KernelTimer timer;
+    std::unique_ptr<PreparedBatch> prepared = q.Prepare(rayBuf, n, Ctx().queue(), {});
+    const bool shaded = q.Intersect(rayBuf, n, prepared.get(), hits, shade, timer).shaded;
+    q.Recycle(std::move(prepared));
+    if (!shaded) {
+        cl::Kernel k(program, "rc_shade");
+        cl_uint a = 0;
+        auto arg = [&](const auto& v) { k.setArg(a++, v); };
+        arg(rayBuf), arg(shade.rayInfo), arg(hits), arg(n), arg(scene.triangles);
+        arg(scene.triangleShading), arg(scene.spheres), arg(scene.quadrics), arg(scene.materials);
+        arg(scene.lights), arg(scene.params), arg(shade.radiance), arg(shade.normals);
+        arg(shade.shadow.rays), arg(shade.shadow.contribution), arg(shade.secondary.rays);
+        arg(shade.secondary.info), arg(shade.spawned);
+        Ctx().queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(clrt::RoundUp(n, 64)),
+                                           cl::NDRange(64));
+    }
+    ShadeOutputs out;
+    out.hits = ReadAll<RcHit>(hits, n);
+    out.radiance = ReadAll<rc_float4>(shade.radiance, n);
+    out.normals = ReadAll<rc_float4>(shade.normals, n);
+    out.shadow = ReadAll<RcRay>(shade.shadow.rays, size_t(n) * nLights);
+    out.contribution = ReadAll<rc_float4>(shade.shadow.contribution, size_t(n) * nLights);
+    out.secondary = ReadAll<RcRay>(shade.secondary.rays, 2 * size_t(n));
+    out.secondaryInfo = ReadAll<RcRayInfo>(shade.secondary.info, 2 * size_t(n));
+    out.spawned = ReadAll<uint8_t>(shade.spawned, 2 * size_t(n));
+    return out;
+}
+
+// Generation 0 writes no ray infos: every shading kernel, given none, shades as if each ray
+// had an eye ray's (weight 1, depth 0), byte for byte, with one light (rays shaded whole) and
+// with two (the per-(ray, light) pass), in every kernel style and by rc_shade after a BVH query.
+TEST(ClassifiedQuery, EyeRaysWithoutInfosShadeAsWithEyeInfos) {
+    for (int nLights : {1, 2}) {
+        scene::Scene s = NestedTiledBoxes();
+        // Mirror walls, so that secondary rays are spawned.
+        scene::Material mirror;
+        mirror.kd = glm::vec3(0.3f);
+        mirror.kr = glm::vec3(0.5f);
+        s.materials.push_back(mirror);
+        for (size_t t = 0; t < s.triangles.size(); t += 3) {
+            s.triangles[t].material = uint32_t(s.materials.size() - 1);
+        }
+        if (nLights == 2) {
+            scene::PointLight second;
+            second.position = {2.5f, 3.0f, -1.5f};
+            s.lights.push_back(second);
+        }
+        RcRenderParams params{};
+        params.nTriangles = uint32_t(s.triangles.size());
+        params.nLights = uint32_t(s.lights.size());
+        params.maxDepth = 6;
+        params.minWeight = 0.001f;
+        const cl::Program program = BuildRenderProgram(Ctx());
+        const SceneBuffers buffers(Ctx(), DeviceScene(s), params);
+        const std::vector<RcRay> rays = RaysNearOneCorner(3, 3000);
+        std::vector<std::unique_ptr<RayQuery>> queries;
+        for (KernelStyle style : {KernelStyle::kScalar, KernelStyle::kVertex,
+                                  KernelStyle::kFragment, KernelStyle::kAuto}) {
+            queries.push_back(MakeClassifiedQuery(Ctx(), program, buffers, s,
+                                                  classify::Params::ForScene(s), style));
+        }
+        queries.push_back(MakeBvhQuery(Ctx(), program, buffers, s));
+        for (const auto& q : queries) {
+            SCOPED_TRACE(q->Name() + ", " + std::to_string(nLights) + " lights");
+            const ShadeOutputs with = ShadeEyeRays(program, buffers, params, *q, rays, true);
+            q->Reset();
+            const ShadeOutputs without = ShadeEyeRays(program, buffers, params, *q, rays, false);
+            size_t spawned = 0, lit = 0;
+            for (uint8_t x : with.spawned) spawned += x;
+            for (const rc_float4& c : with.contribution) lit += c.w > 0.0f;
+            EXPECT_GT(spawned, rays.size() / 4);
+            EXPECT_GT(lit, rays.size() / 4);
+            EXPECT_TRUE(SameBytes(with.hits, without.hits));
+            EXPECT_TRUE(SameBytes(with.radiance, without.radiance));
+            EXPECT_TRUE(SameBytes(with.normals, without.normals));
+            EXPECT_TRUE(SameBytes(with.shadow, without.shadow));
+            EXPECT_TRUE(SameBytes(with.contribution, without.contribution));
+            EXPECT_TRUE(SameBytes(with.secondary, without.secondary));
+            EXPECT_TRUE(SameBytes(with.secondaryInfo, without.secondaryInfo));
+            EXPECT_TRUE(SameBytes(with.spawned, without.spawned));
+        }
+    }
 }
 
 }  // namespace

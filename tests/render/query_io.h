@@ -24,7 +24,6 @@ inline uint64_t NearestHits(clrt::Context& ctx, RayQuery& q, const std::vector<R
     std::vector<RcRayInfo> info(n);
     for (uint32_t i = 0; i < n; ++i) {
         info[i].weight = {1.0f, 1.0f, 1.0f, 0.0f};
-        info[i].pixel = i;
         info[i].kind = RC_RAY_EYE;
     }
     const cl::Buffer rayBuf = UploadVector(ctx, rays);

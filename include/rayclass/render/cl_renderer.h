@@ -52,7 +52,7 @@ struct ShadowBuffers {
 // writes radiance and normal per ray, nLights shadow slots per ray, two secondary slots per ray
 // and their spawned flags.
 struct ShadeBuffers {
-    cl::Buffer rayInfo;  // the batch's, set for each batch
+    cl::Buffer rayInfo;  // the batch's, set for each batch (null for eye rays: rc_types.h)
     cl::Buffer radiance, normals;
     ShadowBuffers shadow;
     RayBuffers secondary;
