@@ -204,7 +204,8 @@ RC_SHADE_INLINE RcSurface rc_saved_surface(__global const float4* saved,
     return s;
 }
 
-/* Shades the hit of ray i: radiance, normal, the reflection and refraction rays and, when
+/* Shades the hit of ray i: radiance, normal (unless `normals` is null), the reflection and
+ * refraction rays and, when
  * `saved` is null, every light's shadow slot; else its surface goes to `saved` for the
  * per-(ray, light) pass, which then needs no second look at the primitive. */
 RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* info, RcHit hit,
@@ -216,7 +217,7 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* inf
     spawned[2 * i + 1] = 0;
     if (hit.prim == RC_NO_HIT) {
         radiance[i] = (float4)(weight * params->background.xyz, 0.0f);
-        normals[i] = (float4)(0.0f);
+        if (normals) normals[i] = (float4)(0.0f);
         if (!saved) {
             for (uint l = 0; l < nLights; ++l)
                 rc_no_shadow(shadowRays, shadowContribution, i * nLights + l);
@@ -228,7 +229,7 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* inf
                                    params->nTriangles, params->nSpheres);
     __global const RcMaterial* m = materials + s.material;
     radiance[i] = (float4)(weight * (m->emission.xyz + m->kd.xyz * params->ambient.xyz), 0.0f);
-    normals[i] = (float4)(s.ns, 0.0f);
+    if (normals) normals[i] = (float4)(s.ns, 0.0f);
     if (saved) {
         rc_save_surface(saved, i, &s);
     } else {

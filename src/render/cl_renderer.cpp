@@ -382,6 +382,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
             // Eye rays have no infos (rc_types.h): the shading kernels take a null buffer for
             // theirs.
             shade.rayInfo = generation == 0 ? cl::Buffer() : rays.info;
+            shade.writeNormals = generation == 0 && options_.aovs;
             QueryResult found;
             if (generation == 0 && eyeHits_) {
                 clrt::Check("clEnqueueWriteBuffer", [&] {
@@ -397,8 +398,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                 SetArgs(shadeKernel, rays.rays, shade.rayInfo, hits, n, sceneBuffers.triangles,
                         sceneBuffers.triangleShading, sceneBuffers.spheres, sceneBuffers.quadrics,
                         sceneBuffers.materials, sceneBuffers.lights, sceneBuffers.params, radiance,
-                        normals, shadow.rays, shadow.contribution, secondary.rays, secondary.info,
-                        spawned);
+                        shade.writeNormals ? normals : cl::Buffer(), shadow.rays,
+                        shadow.contribution, secondary.rays, secondary.info, spawned);
                 Launch(ctx_, shadeKernel, n, timer);
             }
             // The rays are read in place by the shadow query's classification, the contributions

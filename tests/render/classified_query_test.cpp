@@ -187,10 +187,10 @@ bool SameBytes(const std::vector<T>& a, const std::vector<T>& b) {
 
 // `rays` as eye rays through q, shaded by the query's own kernels or, when it shades nothing
 // itself, by rc_shade as the renderer does; with explicit eye infos or with none (the
-// renderer's generation 0).
+// renderer's generation 0), with the shading normals wanted or not.
 ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
                           const RcRenderParams& params, RayQuery& q, const std::vector<RcRay>& rays,
-                          bool withInfos) {
+                          bool withInfos, bool writeNormals = true) {
     const uint32_t n = uint32_t(rays.size()), nLights = params.nLights;
     std::vector<RcRayInfo> info(n);
     for (RcRayInfo& i : info) {
@@ -201,6 +201,7 @@ ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
     const cl::Buffer hits(Ctx().context(), CL_MEM_READ_WRITE, n * sizeof(RcHit));
     ShadeBuffers shade = MakeShadeBuffers(Ctx(), n, nLights);
     if (withInfos) shade.rayInfo = UploadVector(Ctx(), info);
+    shade.writeNormals = writeNormals;
     // Zeroed, so that slots no kernel writes compare equal.
     for (const cl::Buffer* b :
          {&shade.radiance, &shade.normals, &shade.shadow.rays, &shade.shadow.contribution,
@@ -217,7 +218,8 @@ ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
         auto arg = [&](const auto& v) { k.setArg(a++, v); };
         arg(rayBuf), arg(shade.rayInfo), arg(hits), arg(n), arg(scene.triangles);
         arg(scene.triangleShading), arg(scene.spheres), arg(scene.quadrics), arg(scene.materials);
-        arg(scene.lights), arg(scene.params), arg(shade.radiance), arg(shade.normals);
+        arg(scene.lights), arg(scene.params), arg(shade.radiance);
+        arg(writeNormals ? shade.normals : cl::Buffer());
         arg(shade.shadow.rays), arg(shade.shadow.contribution), arg(shade.secondary.rays);
         arg(shade.secondary.info), arg(shade.spawned);
         Ctx().queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(clrt::RoundUp(n, 64)),
@@ -238,6 +240,8 @@ ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
 // Generation 0 writes no ray infos: every shading kernel, given none, shades as if each ray
 // had an eye ray's (weight 1, depth 0), byte for byte, with one light (rays shaded whole) and
 // with two (the per-(ray, light) pass), in every kernel style and by rc_shade after a BVH query.
+// Without the normals wanted, the same is shaded, and the normals are written only where the
+// per-(ray, light) pass reads them.
 TEST(ClassifiedQuery, EyeRaysWithoutInfosShadeAsWithEyeInfos) {
     for (int nLights : {1, 2}) {
         scene::Scene s = NestedTiledBoxes();
@@ -287,6 +291,23 @@ TEST(ClassifiedQuery, EyeRaysWithoutInfosShadeAsWithEyeInfos) {
             EXPECT_TRUE(SameBytes(with.secondary, without.secondary));
             EXPECT_TRUE(SameBytes(with.secondaryInfo, without.secondaryInfo));
             EXPECT_TRUE(SameBytes(with.spawned, without.spawned));
+
+            q->Reset();
+            const ShadeOutputs noNormals =
+                ShadeEyeRays(program, buffers, params, *q, rays, false, false);
+            EXPECT_TRUE(SameBytes(with.radiance, noNormals.radiance));
+            EXPECT_TRUE(SameBytes(with.shadow, noNormals.shadow));
+            EXPECT_TRUE(SameBytes(with.contribution, noNormals.contribution));
+            EXPECT_TRUE(SameBytes(with.secondary, noNormals.secondary));
+            EXPECT_TRUE(SameBytes(with.secondaryInfo, noNormals.secondaryInfo));
+            EXPECT_TRUE(SameBytes(with.spawned, noNormals.spawned));
+            const std::vector<rc_float4> zero(rays.size(), rc_float4{0, 0, 0, 0});
+            if (nLights == 1) {
+                EXPECT_TRUE(SameBytes(noNormals.normals, zero));
+            } else {
+                EXPECT_TRUE(SameBytes(noNormals.normals, zero) ||
+                            SameBytes(noNormals.normals, with.normals));
+            }
         }
     }
 }

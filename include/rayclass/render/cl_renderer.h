@@ -54,6 +54,10 @@ struct ShadowBuffers {
 struct ShadeBuffers {
     cl::Buffer rayInfo;  // the batch's, set for each batch (null for eye rays: rc_types.h)
     cl::Buffer radiance, normals;
+    // Whether the batch's shading normals are wanted (the renderer: for the normal AOV). Without
+    // them a kernel gets no normals buffer and writes none (12.5 MB at 1024 x 768), unless a
+    // later pass of its own reads them.
+    bool writeNormals = true;
     ShadowBuffers shadow;
     RayBuffers secondary;
     cl::Buffer spawned;
