@@ -236,6 +236,15 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
         throw UsageError(r.rasterOption + " sets up the raster eye-ray pass, which " +
                          (r.reference ? "--reference" : "--eye-rays kernel") + " does not run");
     }
+    // The raster pass finds the hits of exact eye directions: under polar16 they would not be the
+    // hits of the rounded rays the kernels shade (71 of the default scene's pixels differ).
+    if (r.options.rayEncoding == "polar16" && !r.reference &&
+        (r.eyeRays == "raster" || !r.rasterOption.empty())) {
+        throw UsageError(
+            "--ray-encoding polar16 needs kernel eye rays: the raster pass (" +
+            (r.eyeRays == "raster" ? std::string("--eye-rays raster") : r.rasterOption) +
+            ") traces exact eye directions");
+    }
     if (!r.statsFile.empty() && Extension(r.statsFile) != ".json") {
         throw UsageError("--stats expects a .json file, not '" + r.statsFile + "'");
     }
@@ -321,6 +330,9 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
         const bool rasterAsked = r.eyeRays == "raster" || !r.rasterOption.empty();
         if (r.eyeRays == "kernel") {
             stats.eyeRaysChoice = "--eye-rays kernel";
+        } else if (options.rayEncoding == "polar16") {
+            options.eyeRays = "kernel";
+            stats.eyeRaysChoice = "auto: kernel for --ray-encoding polar16";
         } else {
             std::string why;
             raster::GlContext* gl = raster::GlContext::Shared(&why);

@@ -195,6 +195,32 @@ TEST(RasterCli, RasterOptionsWithoutTheRasterPassAreUsageErrors) {
     }
 }
 
+// The raster pass traces exact eye directions, so it cannot answer polar16 eye rays: asking for
+// it is a usage error, and auto takes the kernel (before looking for OpenGL at all).
+TEST(RasterCli, Polar16DirectionsTakeKernelEyeRays) {
+    const std::string base = "render '" + Scene() + "' -o '" + Out("p.png") + "' ";
+    const std::pair<const char*, const char*> cases[] = {
+        {"--ray-encoding polar16 --eye-rays raster",
+         "rayclass render: --ray-encoding polar16 needs kernel eye rays: the raster pass "
+         "(--eye-rays raster) traces exact eye directions\n"},
+        {"--hull box --ray-encoding polar16",
+         "rayclass render: --ray-encoding polar16 needs kernel eye rays: the raster pass "
+         "(--hull) traces exact eye directions\n"},
+    };
+    for (const auto& [args, message] : cases) {
+        const CliRun r = RunRayclass("", base + args);
+        EXPECT_EQ(r.status, 2) << args;
+        EXPECT_EQ(r.err, message) << args;
+        EXPECT_FALSE(std::filesystem::exists(Out("p.png"))) << args;
+    }
+    using Choice = std::pair<std::string, std::string>;
+    const Choice kernel{"kernel", "auto: kernel for --ray-encoding polar16"};
+    EXPECT_EQ(EyeRaysOf("--ray-encoding polar16"), kernel);
+    EXPECT_EQ(EyeRaysOf("--ray-encoding polar16 --eye-rays auto"), kernel);
+    EXPECT_EQ(EyeRaysOf("--ray-encoding polar16 --eye-rays kernel"),
+              (Choice{"kernel", "--eye-rays kernel"}));
+}
+
 TEST(RasterCli, EveryHullRenders) {
     RC_REQUIRE_GL();
     for (const char* hull : {"sphere", "box", "billboard", "auto"}) {
