@@ -83,11 +83,6 @@ size_t Dispatch(const BeamTest& t, const ListView& in, const ListOut& out) {
 
 #endif
 
-// World coordinate c on `axis` in steps, unrounded (double: exact enough for either rounding).
-double ToSteps(const ListFrame& f, int axis, float c) {
-    return (double(c) - double(f.base[axis])) / double(f.step);
-}
-
 }  // namespace
 
 ListFrame MakeListFrame(const float lo[3], const float hi[3]) {
@@ -106,14 +101,6 @@ ListFrame MakeListFrame(const float lo[3], const float hi[3]) {
                      : std::nextafter(step, std::numeric_limits<float>::infinity());
     if (!(frame.step > 0.0f)) frame.step = 1.0f;  // every box a point: any step holds it
     return frame;
-}
-
-uint16_t StepsBelow(const ListFrame& frame, int axis, float lo) {
-    return uint16_t(std::clamp(std::floor(ToSteps(frame, axis, lo)), 0.0, 65535.0));
-}
-
-uint16_t StepsAbove(const ListFrame& frame, int axis, float hi) {
-    return uint16_t(std::clamp(std::ceil(ToSteps(frame, axis, hi)), 0.0, 65535.0));
 }
 
 size_t CountUpTo(const ListView& list, float endHi) {

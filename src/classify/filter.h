@@ -13,6 +13,7 @@
 // Zero slope bounds are widened to +-1e-30, which keeps the test conservative and finite.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -46,10 +47,20 @@ inline ListOut Out(Hierarchy::FaceList& l, size_t at) {
 // The frame of boxes within [lo, hi] (X, Y, Z of a face; the default frame when lo > hi).
 ListFrame MakeListFrame(const float lo[3], const float hi[3]);
 
+// World coordinate c on `axis` in steps, unrounded (double: exact enough for either rounding).
+inline double ToSteps(const ListFrame& f, int axis, float c) {
+    return (double(c) - double(f.base[axis])) / double(f.step);
+}
+
 // The stored bounds of box [lo, hi] on `axis` of `frame`: steps rounded outwards (double
-// arithmetic, so that lo >= base and hi <= base + 65534 step map into 16 bits).
-uint16_t StepsBelow(const ListFrame& frame, int axis, float lo);
-uint16_t StepsAbove(const ListFrame& frame, int axis, float hi);
+// arithmetic, so that lo >= base and hi <= base + 65534 step map into 16 bits). Inline, so that
+// the loops building a face's list over all primitives vectorise.
+inline uint16_t StepsBelow(const ListFrame& frame, int axis, float lo) {
+    return uint16_t(std::clamp(std::floor(ToSteps(frame, axis, lo)), 0.0, 65535.0));
+}
+inline uint16_t StepsAbove(const ListFrame& frame, int axis, float hi) {
+    return uint16_t(std::clamp(std::ceil(ToSteps(frame, axis, hi)), 0.0, 65535.0));
+}
 // The world coordinate of `steps` on `axis` (the near X of a leaf's candidate), never above a
 // float bound that StepsBelow took there: that rounded down, so the exact value lies at or below
 // the bound, and the fused multiply-add rounds the exact value once, to the nearest float.

@@ -66,12 +66,27 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
         sceneBox_.hi += glm::vec3(params_.padding);
     }
     const uint32_t nPrims = scene.PrimitiveCount();
-    std::vector<Bounds3f> boxes(nPrims);
-    for (uint32_t id = 0; id < nPrims; ++id) {
-        boxes[id] = scene.PrimitiveBounds(id);
-        boxes[id].lo -= glm::vec3(params_.padding);
-        boxes[id].hi += glm::vec3(params_.padding);
+    const int threads = nPrims < kParallelSortMin
+                            ? 1
+                            : int(std::clamp(std::thread::hardware_concurrency(), 1u, 6u));
+    // The padded world boxes as structure of arrays, so that each face's pass over them
+    // vectorises.
+    std::array<std::vector<float>, 3> boxLo, boxHi;
+    for (int k = 0; k < 3; ++k) {
+        boxLo[k].resize(nPrims);
+        boxHi[k].resize(nPrims);
     }
+    OnThreads(threads, [&](int t) {
+        const uint32_t step = (nPrims + uint32_t(threads) - 1) / uint32_t(threads);
+        const uint32_t end = std::min(nPrims, uint32_t(t) * step + step);
+        for (uint32_t id = uint32_t(t) * step; id < end; ++id) {
+            const Bounds3f b = scene.PrimitiveBounds(id);
+            for (int k = 0; k < 3; ++k) {
+                boxLo[k][id] = b.lo[k] - params_.padding;
+                boxHi[k][id] = b.hi[k] + params_.padding;
+            }
+        }
+    });
     auto lists = std::make_shared<std::array<FaceList, kFaceCount>>();
     for (int face = 0; face < kFaceCount; ++face) {
         const Box5 root = BoxInFace(face, sceneBox_);
@@ -82,39 +97,65 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
         for (int k = 0; k < kDims; ++k)
             rootExtent_[face][k] = std::max(root.hi[k] - root.lo[k], 0.0f);
     }
-    // The faces' lists are independent: built on every core.
-    auto buildFace = [&](int face) {
-        std::vector<float> nearX(nPrims);
-        float lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+    // The faces' lists are independent: built on every core, each thread reusing its arrays
+    // from face to face (fresh ones cost Conference's setup 25k page faults).
+    struct Scratch {
+        std::vector<float> xLo, xHi;
+        std::vector<uint16_t> steps[6];
+        std::vector<uint32_t> order;
+        RadixScratch sort;
+    };
+    auto buildFace = [&](int face, Scratch& scratch) {
+        // The boxes in the face's frame (BoxInFace's X, Y, Z): X = +p_a, or -p_a on a negative
+        // face, where lo and hi swap.
+        const int a = FaceAxis(face), b = (a + 1) % 3, c = (a + 2) % 3;
+        const bool negative = face & 1;
+        std::vector<float>&xLo = scratch.xLo, &xHi = scratch.xHi;
+        xLo.resize(nPrims);
+        xHi.resize(nPrims);
+        const float *aLo = boxLo[a].data(), *aHi = boxHi[a].data();
         for (uint32_t id = 0; id < nPrims; ++id) {
-            const Box5 b = BoxInFace(face, boxes[id]);
-            nearX[id] = b.lo[0];
-            for (int k = 0; k < 3; ++k) {
-                lo[k] = std::min(lo[k], b.lo[k]);
-                hi[k] = std::max(hi[k], b.hi[k]);
+            xLo[id] = negative ? -aHi[id] : aLo[id];
+            xHi[id] = negative ? -aLo[id] : aHi[id];
+        }
+        const float* lo[3] = {xLo.data(), boxLo[b].data(), boxLo[c].data()};
+        const float* hi[3] = {xHi.data(), boxHi[b].data(), boxHi[c].data()};
+        float frameLo[3], frameHi[3];
+        for (int k = 0; k < 3; ++k) {
+            float l = kInf, h = -kInf;
+            for (uint32_t id = 0; id < nPrims; ++id) {
+                l = std::min(l, lo[k][id]);
+                h = std::max(h, hi[k][id]);
+            }
+            frameLo[k] = l;
+            frameHi[k] = h;
+        }
+        const ListFrame& frame = listFrame_[face] = MakeListFrame(frameLo, frameHi);
+        // Each box's steps in id order, then the list in distance order: near side along the
+        // face's main axis, ties by id for determinism.
+        std::vector<uint16_t>* steps = scratch.steps;
+        for (int k = 0; k < 3; ++k) {
+            steps[2 * k].resize(nPrims);
+            steps[2 * k + 1].resize(nPrims);
+            for (uint32_t id = 0; id < nPrims; ++id) {
+                steps[2 * k][id] = StepsBelow(frame, k, lo[k][id]);
+                steps[2 * k + 1][id] = StepsAbove(frame, k, hi[k][id]);
             }
         }
-        const ListFrame& frame = listFrame_[face] = MakeListFrame(lo, hi);
-        // The distance order: near side along the face's main axis, ties by id for determinism.
-        const std::vector<uint32_t> order = SortedOrder(nearX);
+        std::vector<uint32_t>& order = scratch.order;
+        SortedOrder(xLo, order, scratch.sort);
         FaceList& l = (*lists)[face];
         l.Resize(nPrims);
-        for (uint32_t i = 0; i < nPrims; ++i) {
-            const Box5 b = BoxInFace(face, boxes[order[i]]);
-            l.x0[i] = StepsBelow(frame, 0, b.lo[0]);
-            l.x1[i] = StepsAbove(frame, 0, b.hi[0]);
-            l.y0[i] = StepsBelow(frame, 1, b.lo[1]);
-            l.y1[i] = StepsAbove(frame, 1, b.hi[1]);
-            l.z0[i] = StepsBelow(frame, 2, b.lo[2]);
-            l.z1[i] = StepsAbove(frame, 2, b.hi[2]);
-            l.prim[i] = order[i];
+        uint16_t* out[6] = {l.x0.data(), l.x1.data(), l.y0.data(),
+                            l.y1.data(), l.z0.data(), l.z1.data()};
+        for (int k = 0; k < 6; ++k) {
+            for (uint32_t i = 0; i < nPrims; ++i) out[k][i] = steps[k][order[i]];
         }
+        std::copy(order.begin(), order.end(), l.prim.begin());
     };
-    const int threads = nPrims < kParallelSortMin
-                            ? 1
-                            : int(std::clamp(std::thread::hardware_concurrency(), 1u, 6u));
     OnThreads(threads, [&](int t) {
-        for (int face = t; face < kFaceCount; face += threads) buildFace(face);
+        Scratch scratch;
+        for (int face = t; face < kFaceCount; face += threads) buildFace(face, scratch);
     });
     faceLists_ = std::move(lists);
 }

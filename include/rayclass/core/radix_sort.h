@@ -12,11 +12,23 @@
 
 namespace rayclass {
 
+// Arrays SortedOrder works in, kept between calls by a caller that sorts many times: fresh ones
+// cost their page faults every time.
+struct RadixScratch {
+    std::vector<uint32_t> bits, nextBits, nextOrder;
+};
+
 // The ids 0 .. n-1 ordered by keys[id], equal keys by id (so -0 and +0, which compare equal,
-// keep id order too). No key may be NaN.
-inline std::vector<uint32_t> SortedOrder(std::span<const float> keys) {
+// keep id order too), into `order`. No key may be NaN.
+inline void SortedOrder(std::span<const float> keys, std::vector<uint32_t>& order,
+                        RadixScratch& scratch) {
     const size_t n = keys.size();
-    std::vector<uint32_t> bits(n), order(n), nextBits(n), nextOrder(n);
+    std::vector<uint32_t>&bits = scratch.bits, &nextBits = scratch.nextBits,
+    &nextOrder = scratch.nextOrder;
+    bits.resize(n);
+    order.resize(n);
+    nextBits.resize(n);
+    nextOrder.resize(n);
     for (size_t i = 0; i < n; ++i) {
         // Adding +0 turns -0 into +0. Negative floats order by the complement of their bits,
         // positive ones after them with the sign bit set.
@@ -45,6 +57,12 @@ inline std::vector<uint32_t> SortedOrder(std::span<const float> keys) {
         bits.swap(nextBits);
         order.swap(nextOrder);
     }
+}
+
+inline std::vector<uint32_t> SortedOrder(std::span<const float> keys) {
+    RadixScratch scratch;
+    std::vector<uint32_t> order;
+    SortedOrder(keys, order, scratch);
     return order;
 }
 
