@@ -245,6 +245,13 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
             (r.eyeRays == "raster" ? std::string("--eye-rays raster") : r.rasterOption) +
             ") traces exact eye directions");
     }
+    // The reference traces exact directions in double: ignoring polar16 would pass off an exact
+    // image as a polar16 one.
+    if (r.options.rayEncoding == "polar16" && r.reference) {
+        throw UsageError(
+            "--ray-encoding polar16 rounds the kernels' ray directions, which "
+            "--reference does not run");
+    }
     if (!r.statsFile.empty() && Extension(r.statsFile) != ".json") {
         throw UsageError("--stats expects a .json file, not '" + r.statsFile + "'");
     }

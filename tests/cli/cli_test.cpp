@@ -289,6 +289,11 @@ TEST_F(CliFailure, UsageErrorsExitWith2AndNameTheProblem) {
          2,
          "rayclass render: --exr-compression needs an .exr output\n",
          "x.png"},
+        {{"SCENE", "-o", "x.exr", "--reference", "--ray-encoding", "polar16"},
+         2,
+         "rayclass render: --ray-encoding polar16 rounds the kernels' ray directions, which "
+         "--reference does not run\n",
+         "x.exr"},
         {{"SCENE", "-o", "x.exr", "--stats", "s.txt"},
          2,
          "rayclass render: --stats expects a .json file, not 's.txt'\n",
