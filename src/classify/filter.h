@@ -53,8 +53,8 @@ inline double ToSteps(const ListFrame& f, int axis, float c) {
 }
 
 // The stored bounds of box [lo, hi] on `axis` of `frame`: steps rounded outwards (double
-// arithmetic, so that lo >= base and hi <= base + 65534 step map into 16 bits). Inline, so that
-// the loops building a face's list over all primitives vectorise.
+// arithmetic, so that lo >= base and hi <= base + 65534 step map into 16 bits). Inline: the
+// hierarchy's set-up calls them six times for every primitive and face.
 inline uint16_t StepsBelow(const ListFrame& frame, int axis, float lo) {
     return uint16_t(std::clamp(std::floor(ToSteps(frame, axis, lo)), 0.0, 65535.0));
 }

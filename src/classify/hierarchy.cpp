@@ -69,22 +69,14 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
     const int threads = nPrims < kParallelSortMin
                             ? 1
                             : int(std::clamp(std::thread::hardware_concurrency(), 1u, 6u));
-    // The padded world boxes as structure of arrays, so that each face's pass over them
-    // vectorises.
-    std::array<std::vector<float>, 3> boxLo, boxHi;
-    for (int k = 0; k < 3; ++k) {
-        boxLo[k].resize(nPrims);
-        boxHi[k].resize(nPrims);
-    }
+    std::vector<Bounds3f> boxes(nPrims);
     OnThreads(threads, [&](int t) {
         const uint32_t step = (nPrims + uint32_t(threads) - 1) / uint32_t(threads);
         const uint32_t end = std::min(nPrims, uint32_t(t) * step + step);
         for (uint32_t id = uint32_t(t) * step; id < end; ++id) {
-            const Bounds3f b = scene.PrimitiveBounds(id);
-            for (int k = 0; k < 3; ++k) {
-                boxLo[k][id] = b.lo[k] - params_.padding;
-                boxHi[k][id] = b.hi[k] + params_.padding;
-            }
+            boxes[id] = scene.PrimitiveBounds(id);
+            boxes[id].lo -= glm::vec3(params_.padding);
+            boxes[id].hi += glm::vec3(params_.padding);
         }
     });
     auto lists = std::make_shared<std::array<FaceList, kFaceCount>>();
@@ -100,26 +92,24 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
     // The faces' lists are independent: built on every core, each thread reusing its arrays
     // from face to face (fresh ones cost Conference's setup 25k page faults).
     struct Scratch {
-        std::vector<float> xLo, xHi;
+        std::vector<float> lo[3], hi[3];  // the boxes in the face's frame (BoxInFace)
         std::vector<uint16_t> steps[6];
         std::vector<uint32_t> order;
         RadixScratch sort;
     };
     auto buildFace = [&](int face, Scratch& scratch) {
-        // The boxes in the face's frame (BoxInFace's X, Y, Z): X = +p_a, or -p_a on a negative
-        // face, where lo and hi swap.
-        const int a = FaceAxis(face), b = (a + 1) % 3, c = (a + 2) % 3;
-        const bool negative = face & 1;
-        std::vector<float>&xLo = scratch.xLo, &xHi = scratch.xHi;
-        xLo.resize(nPrims);
-        xHi.resize(nPrims);
-        const float *aLo = boxLo[a].data(), *aHi = boxHi[a].data();
-        for (uint32_t id = 0; id < nPrims; ++id) {
-            xLo[id] = negative ? -aHi[id] : aLo[id];
-            xHi[id] = negative ? -aLo[id] : aHi[id];
+        std::vector<float>*lo = scratch.lo, *hi = scratch.hi;
+        for (int k = 0; k < 3; ++k) {
+            lo[k].resize(nPrims);
+            hi[k].resize(nPrims);
         }
-        const float* lo[3] = {xLo.data(), boxLo[b].data(), boxLo[c].data()};
-        const float* hi[3] = {xHi.data(), boxHi[b].data(), boxHi[c].data()};
+        for (uint32_t id = 0; id < nPrims; ++id) {
+            const Box5 b = BoxInFace(face, boxes[id]);
+            for (int k = 0; k < 3; ++k) {
+                lo[k][id] = b.lo[k];
+                hi[k][id] = b.hi[k];
+            }
+        }
         float frameLo[3], frameHi[3];
         for (int k = 0; k < 3; ++k) {
             float l = kInf, h = -kInf;
@@ -143,7 +133,7 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
             }
         }
         std::vector<uint32_t>& order = scratch.order;
-        SortedOrder(xLo, order, scratch.sort);
+        SortedOrder(lo[0], order, scratch.sort);
         FaceList& l = (*lists)[face];
         l.Resize(nPrims);
         uint16_t* out[6] = {l.x0.data(), l.x1.data(), l.y0.data(),

@@ -398,8 +398,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
                 SetArgs(shadeKernel, rays.rays, shade.rayInfo, hits, n, sceneBuffers.triangles,
                         sceneBuffers.triangleShading, sceneBuffers.spheres, sceneBuffers.quadrics,
                         sceneBuffers.materials, sceneBuffers.lights, sceneBuffers.params, radiance,
-                        shade.writeNormals ? normals : cl::Buffer(), shadow.rays,
-                        shadow.contribution, secondary.rays, secondary.info, spawned);
+                        shade.NormalsOut(), shadow.rays, shadow.contribution, secondary.rays,
+                        secondary.info, spawned);
                 Launch(ctx_, shadeKernel, n, timer);
             }
             // The rays are read in place by the shadow query's classification, the contributions

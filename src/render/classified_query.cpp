@@ -171,12 +171,6 @@ class ClassifiedQuery final : public RayQuery {
     }
 
   private:
-    // The normals buffer a shading kernel writes: none unless they are wanted or `passReadsThem`
-    // (rc_shade_lights reads the normals rc_shade_ids saved).
-    static cl::Buffer NormalsFor(const ShadeBuffers& shade, bool passReadsThem) {
-        return shade.writeNormals || passReadsThem ? shade.normals : cl::Buffer();
-    }
-
     // Shadow rays' leaves all take one style; auto takes packets. Any-hit queries let each
     // vertex-style ray stop at its first blocker, yet on PoCL lockstep packets were as fast or
     // faster (raybench, query kernels for 786,432 anchor shadow rays: Sibenik 15.3 ms as packets
@@ -319,9 +313,9 @@ class ClassifiedQuery final : public RayQuery {
                 SetArgs(k, rays, shade->rayInfo, *slots, *slotLeaf, nSlots, leaves, leafFirstBlock,
                         blocks, out, testsBuf, scene_.triangles, scene_.triangleShading,
                         scene_.spheres, scene_.quadrics, scene_.materials, scene_.lights,
-                        scene_.params, shade->radiance, NormalsFor(*shade, false),
-                        shade->shadow.rays, shade->shadow.contribution, shade->secondary.rays,
-                        shade->secondary.info, shade->spawned);
+                        scene_.params, shade->radiance, shade->NormalsOut(), shade->shadow.rays,
+                        shade->shadow.contribution, shade->secondary.rays, shade->secondary.info,
+                        shade->spawned);
             }
             AddHostSeconds(Seconds(t1));
             Launch(ctx_, gather_, nBlocks, timer);
@@ -385,7 +379,7 @@ class ClassifiedQuery final : public RayQuery {
                       : cl::Buffer();
             SetArgs(shadeIds_, rays, shade->rayInfo, out, ids, nIds, surfaces, scene_.triangles,
                     scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
-                    scene_.lights, scene_.params, shade->radiance, NormalsFor(*shade, split),
+                    scene_.lights, scene_.params, shade->radiance, shade->NormalsOut(split),
                     shade->shadow.rays, shade->shadow.contribution, shade->secondary.rays,
                     shade->secondary.info, shade->spawned);
             Launch(ctx_, shadeIds_, nIds, timer);

@@ -219,7 +219,7 @@ ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
         arg(rayBuf), arg(shade.rayInfo), arg(hits), arg(n), arg(scene.triangles);
         arg(scene.triangleShading), arg(scene.spheres), arg(scene.quadrics), arg(scene.materials);
         arg(scene.lights), arg(scene.params), arg(shade.radiance);
-        arg(writeNormals ? shade.normals : cl::Buffer());
+        arg(shade.NormalsOut());
         arg(shade.shadow.rays), arg(shade.shadow.contribution), arg(shade.secondary.rays);
         arg(shade.secondary.info), arg(shade.spawned);
         Ctx().queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(clrt::RoundUp(n, 64)),

@@ -58,6 +58,12 @@ struct ShadeBuffers {
     // them a kernel gets no normals buffer and writes none (12.5 MB at 1024 x 768), unless a
     // later pass of its own reads them.
     bool writeNormals = true;
+
+    // The normals buffer a shading kernel gets: none unless the normals are wanted or a later
+    // pass reads them (`passReadsThem`: rc_shade_lights reads what rc_shade_ids saved).
+    cl::Buffer NormalsOut(bool passReadsThem = false) const {
+        return writeNormals || passReadsThem ? normals : cl::Buffer();
+    }
     ShadowBuffers shadow;
     RayBuffers secondary;
     cl::Buffer spawned;
