@@ -336,19 +336,24 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
             const __mmask16 dst = __mmask16((1u << cnt) - 1u);
             const uint32_t w = next[f];
             const bool first = see(f);
+            const int firstLane = std::countr_zero(unsigned(m));
             for (int k = 0; k < kCoords; ++k) {
-                const __m512 packed = _mm512_maskz_compress_ps(m, p[k]);
-                if (first) held.value[f][k] = _mm512_cvtss_f32(packed);
+                if (first) {
+                    alignas(64) float lanes[16];
+                    _mm512_store_ps(lanes, p[k]);
+                    held.value[f][k] = lanes[firstLane];
+                }
                 if ((held.mask[f] >> k) & 1u) {
-                    // (Held values join the bounds at the end.)
+                    // Compared in place, not compressed: a held coordinate (a light's position
+                    // for its shadow rays) usually stays held and is never stored. (Held values
+                    // join the bounds at the end.)
                     const __m512i value =
                         _mm512_set1_epi32(std::bit_cast<int32_t>(held.value[f][k]));
-                    if (_mm512_mask_cmpeq_epi32_mask(dst, _mm512_castps_si512(packed), value) ==
-                        dst)
+                    if (!_mm512_mask_cmpneq_epi32_mask(m, _mm512_castps_si512(p[k]), value))
                         continue;
                     release(f, k, w);
                 }
-                _mm512_mask_storeu_ps(c[k] + w, dst, packed);
+                _mm512_mask_storeu_ps(c[k] + w, dst, _mm512_maskz_compress_ps(m, p[k]));
                 accLo[f][k] = _mm512_mask_min_ps(accLo[f][k], m, accLo[f][k], p[k]);
                 accHi[f][k] = _mm512_mask_max_ps(accHi[f][k], m, accHi[f][k], p[k]);
             }
