@@ -103,6 +103,70 @@ ListFrame MakeListFrame(const float lo[3], const float hi[3]) {
     return frame;
 }
 
+namespace {
+#if defined(__AVX512F__)
+// StepsBelow (kFloor) or StepsAbove (kCeil) of 16 world coordinates, in double as they are.
+template <int kRound>
+__m256i Steps16(__m512 c, __m512d base, __m512d step) {
+    // (maskz forms throughout: GCC 12 warns of the plain forms' undefined pass-through)
+    const __mmask8 all8 = 0xFF;
+    const __m512d zero = _mm512_setzero_pd(), top = _mm512_set1_pd(65535.0);
+    auto half = [&](__m256 x) {
+        const __m512d s = _mm512_maskz_div_pd(
+            all8, _mm512_maskz_sub_pd(all8, _mm512_maskz_cvtps_pd(all8, x), base), step);
+        const __m512d r = _mm512_maskz_roundscale_pd(all8, s, kRound | _MM_FROUND_NO_EXC);
+        return _mm512_maskz_cvttpd_epi32(
+            all8, _mm512_maskz_min_pd(all8, _mm512_maskz_max_pd(all8, r, zero), top));
+    };
+    const __m512i both = _mm512_maskz_inserti64x4(
+        all8, _mm512_castsi256_si512(half(_mm512_maskz_extractf32x8_ps(all8, c, 0))),
+        half(_mm512_maskz_extractf32x8_ps(all8, c, 1)), 1);
+    return _mm512_maskz_cvtepi32_epi16(__mmask16(0xFFFF), both);
+}
+#endif
+}  // namespace
+
+void FillFaceList(int face, const ListFrame& frame, const Bounds3f* boxes, const uint32_t* order,
+                  size_t n, const ListOut& out) {
+    static_assert(sizeof(Bounds3f) == 6 * sizeof(float));
+    uint16_t* const dst[6] = {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1};
+    size_t i = 0;
+#if defined(__AVX512F__)
+    // BoxInFace's choice of world bound for each of the frame's six (lo X, hi X, lo Y, ...), as
+    // offsets into a box's floats (lo x, y, z, hi x, y, z), and which ones it negates.
+    const int a = FaceAxis(face), b = (a + 1) % 3, c = (a + 2) % 3;
+    const bool neg = face & 1;
+    const int from[6] = {neg ? 3 + a : a, neg ? a : 3 + a, b, 3 + b, c, 3 + c};
+    const float* const base = reinterpret_cast<const float*>(boxes);
+    __m512d frameBase[3];
+    for (int k = 0; k < 3; ++k) frameBase[k] = _mm512_set1_pd(double(frame.base[k]));
+    const __m512d step = _mm512_set1_pd(double(frame.step));
+    const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
+    for (; i + 16 <= n; i += 16) {
+        const __m512i id = _mm512_loadu_si512(order + i);
+        _mm512_storeu_si512(out.prim + i, id);
+        const __m512i at = _mm512_mullo_epi32(id, _mm512_set1_epi32(6));
+        for (int j = 0; j < 6; ++j) {
+            __m512 v =
+                _mm512_mask_i32gather_ps(_mm512_setzero_ps(), __mmask16(0xFFFF),
+                                         _mm512_add_epi32(at, _mm512_set1_epi32(from[j])), base, 4);
+            if (j < 2 && neg) v = _mm512_xor_ps(v, signMask);
+            const __m256i s = j & 1 ? Steps16<_MM_FROUND_TO_POS_INF>(v, frameBase[j / 2], step)
+                                    : Steps16<_MM_FROUND_TO_NEG_INF>(v, frameBase[j / 2], step);
+            _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst[j] + i), s);
+        }
+    }
+#endif
+    for (; i < n; ++i) {
+        const Box5 box = BoxInFace(face, boxes[order[i]]);
+        for (int k = 0; k < 3; ++k) {
+            dst[2 * k][i] = StepsBelow(frame, k, box.lo[k]);
+            dst[2 * k + 1][i] = StepsAbove(frame, k, box.hi[k]);
+        }
+        out.prim[i] = order[i];
+    }
+}
+
 size_t CountUpTo(const ListView& list, float endHi) {
     const float limit = float(ToSteps(*list.frame, 0, endHi)) + kStepMargin;
     return size_t(std::upper_bound(list.x0, list.x0 + list.n, limit,

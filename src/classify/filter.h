@@ -61,6 +61,10 @@ inline uint16_t StepsBelow(const ListFrame& frame, int axis, float lo) {
 inline uint16_t StepsAbove(const ListFrame& frame, int axis, float hi) {
     return uint16_t(std::clamp(std::ceil(ToSteps(frame, axis, hi)), 0.0, 65535.0));
 }
+// Writes the boxes boxes[order[i]] of `face` (world boxes, padded) for i < n into `out`, in
+// `frame`'s steps (StepsBelow and StepsAbove, bit for bit), with order[i] as the primitive.
+void FillFaceList(int face, const ListFrame& frame, const Bounds3f* boxes, const uint32_t* order,
+                  size_t n, const ListOut& out);
 // The world coordinate of `steps` on `axis` (the near X of a leaf's candidate), never above a
 // float bound that StepsBelow took there: that rounded down, so the exact value lies at or below
 // the bound, and the fused multiply-add rounds the exact value once, to the nearest float.

@@ -79,6 +79,10 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
             boxes[id].hi += glm::vec3(params_.padding);
         }
     });
+    // A face's frame permutes and negates the world axes, so the union of its boxes is the
+    // union of the world boxes in its frame, and its sort key (the near X) is a world bound.
+    Bounds3f all;
+    for (const Bounds3f& b : boxes) all.Grow(b);
     auto lists = std::make_shared<std::array<FaceList, kFaceCount>>();
     for (int face = 0; face < kFaceCount; ++face) {
         const Box5 root = BoxInFace(face, sceneBox_);
@@ -92,56 +96,27 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
     // The faces' lists are independent: built on every core, each thread reusing its arrays
     // from face to face (fresh ones cost Conference's setup 25k page faults).
     struct Scratch {
-        std::vector<float> lo[3], hi[3];  // the boxes in the face's frame (BoxInFace)
-        std::vector<uint16_t> steps[6];
+        std::vector<float> key;
         std::vector<uint32_t> order;
         RadixScratch sort;
     };
     auto buildFace = [&](int face, Scratch& scratch) {
-        std::vector<float>*lo = scratch.lo, *hi = scratch.hi;
-        for (int k = 0; k < 3; ++k) {
-            lo[k].resize(nPrims);
-            hi[k].resize(nPrims);
-        }
-        for (uint32_t id = 0; id < nPrims; ++id) {
-            const Box5 b = BoxInFace(face, boxes[id]);
-            for (int k = 0; k < 3; ++k) {
-                lo[k][id] = b.lo[k];
-                hi[k][id] = b.hi[k];
-            }
-        }
-        float frameLo[3], frameHi[3];
-        for (int k = 0; k < 3; ++k) {
-            float l = kInf, h = -kInf;
-            for (uint32_t id = 0; id < nPrims; ++id) {
-                l = std::min(l, lo[k][id]);
-                h = std::max(h, hi[k][id]);
-            }
-            frameLo[k] = l;
-            frameHi[k] = h;
-        }
-        const ListFrame& frame = listFrame_[face] = MakeListFrame(frameLo, frameHi);
-        // Each box's steps in id order, then the list in distance order: near side along the
-        // face's main axis, ties by id for determinism.
-        std::vector<uint16_t>* steps = scratch.steps;
-        for (int k = 0; k < 3; ++k) {
-            steps[2 * k].resize(nPrims);
-            steps[2 * k + 1].resize(nPrims);
-            for (uint32_t id = 0; id < nPrims; ++id) {
-                steps[2 * k][id] = StepsBelow(frame, k, lo[k][id]);
-                steps[2 * k + 1][id] = StepsAbove(frame, k, hi[k][id]);
-            }
-        }
+        const Box5 frameBox = BoxInFace(face, all);
+        const ListFrame& frame = listFrame_[face] =
+            MakeListFrame(frameBox.lo.data(), frameBox.hi.data());
+        // The list in distance order: near side along the face's main axis, ties by id for
+        // determinism.
+        std::vector<float>& key = scratch.key;
+        key.resize(nPrims);
+        const int axis = FaceAxis(face);
+        for (uint32_t id = 0; id < nPrims; ++id)
+            key[id] = face & 1 ? -boxes[id].hi[axis] : boxes[id].lo[axis];
         std::vector<uint32_t>& order = scratch.order;
-        SortedOrder(lo[0], order, scratch.sort);
+        SortedOrder(key, order, scratch.sort);
+        // Each box read once, in list order: one box a step instead of one of six arrays.
         FaceList& l = (*lists)[face];
         l.Resize(nPrims);
-        uint16_t* out[6] = {l.x0.data(), l.x1.data(), l.y0.data(),
-                            l.y1.data(), l.z0.data(), l.z1.data()};
-        for (int k = 0; k < 6; ++k) {
-            for (uint32_t i = 0; i < nPrims; ++i) out[k][i] = steps[k][order[i]];
-        }
-        std::copy(order.begin(), order.end(), l.prim.begin());
+        FillFaceList(face, frame, boxes.data(), order.data(), nPrims, Out(l, 0));
     };
     OnThreads(threads, [&](int t) {
         Scratch scratch;

@@ -5,27 +5,6 @@
 
 namespace rayclass::classify {
 
-Box5 BoxInFace(int face, const Bounds3f& box) {
-    const int a = FaceAxis(face);
-    const int b = (a + 1) % 3;
-    const int c = (a + 2) % 3;
-    Box5 r;
-    if (face & 1) {
-        r.lo[0] = -box.hi[a];
-        r.hi[0] = -box.lo[a];
-    } else {
-        r.lo[0] = box.lo[a];
-        r.hi[0] = box.hi[a];
-    }
-    r.lo[1] = box.lo[b];
-    r.hi[1] = box.hi[b];
-    r.lo[2] = box.lo[c];
-    r.hi[2] = box.hi[c];
-    r.lo[3] = r.lo[4] = -1.0f;
-    r.hi[3] = r.hi[4] = 1.0f;
-    return r;
-}
-
 bool ToRay5Clipped(const Ray& ray, const Bounds3f& sceneBox, Ray5& out) {
     const glm::vec3& o = ray.origin;
     const glm::vec3& d = ray.direction;

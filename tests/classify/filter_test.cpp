@@ -223,6 +223,45 @@ TEST(Filter, CutAtTheEndKeepsEveryBoxStartingBeforeIt) {
     }
 }
 
+// The set-up's list fill (16 boxes at a time where the vector path exists) against BoxInFace and
+// the scalar StepsBelow/StepsAbove, bit for bit, on every face: boxes in a shuffled order, a
+// count that leaves a tail, and a frame narrower than some boxes so that both clamps bite.
+TEST(Filter, FaceListFillEqualsTheScalarStepsOnEveryFace) {
+    std::mt19937 rng(14);
+    std::uniform_real_distribution<float> pos(-3.0f, 5.0f), size(0.0f, 0.7f);
+    const size_t n = 1000 + 9;
+    std::vector<Bounds3f> boxes(n);
+    for (Bounds3f& b : boxes) {
+        b.lo = glm::vec3(pos(rng), pos(rng), pos(rng));
+        b.hi = b.lo + glm::vec3(size(rng), size(rng), size(rng));
+    }
+    std::vector<uint32_t> order(n);
+    for (uint32_t i = 0; i < n; ++i) order[i] = i;
+    std::shuffle(order.begin(), order.end(), rng);
+    for (int face = 0; face < kFaceCount; ++face) {
+        const float lo[3] = {-2.0f, -2.5f, -1.0f}, hi[3] = {4.0f, 3.0f, 4.5f};
+        const ListFrame frame = MakeListFrame(lo, hi);
+        Hierarchy::FaceList l;
+        l.Resize(n);
+        FillFaceList(face, frame, boxes.data(), order.data(), n, Out(l, 0));
+        const uint16_t* const got[6] = {l.x0.data(), l.x1.data(), l.y0.data(),
+                                        l.y1.data(), l.z0.data(), l.z1.data()};
+        size_t clamped = 0;
+        for (size_t i = 0; i < n; ++i) {
+            ASSERT_EQ(l.prim[i], order[i]);
+            const Box5 b = BoxInFace(face, boxes[order[i]]);
+            for (int k = 0; k < 3; ++k) {
+                const uint16_t below = StepsBelow(frame, k, b.lo[k]);
+                const uint16_t above = StepsAbove(frame, k, b.hi[k]);
+                ASSERT_EQ(got[2 * k][i], below) << "face " << face << " entry " << i;
+                ASSERT_EQ(got[2 * k + 1][i], above) << "face " << face << " entry " << i;
+                clamped += (below == 0) + (above == 65535);
+            }
+        }
+        EXPECT_GT(clamped, 10u) << "face " << face;
+    }
+}
+
 TEST(Filter, FramesOfPointsAndEmptySetsAreUsable) {
     const float p[3] = {2.0f, -3.0f, 0.5f};
     const ListFrame point = MakeListFrame(p, p);

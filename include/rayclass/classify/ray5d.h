@@ -140,8 +140,28 @@ inline float FaceSign(int face) { return (face & 1) ? -1.0f : 1.0f; }
 // Coordinate of world point `p` along face `face`'s main axis (the frame's X).
 inline float FaceX(int face, const glm::vec3& p) { return FaceSign(face) * p[FaceAxis(face)]; }
 
-// `box` in the frame of `face`: X, Y, Z intervals (the last two of the array pair are unused).
-Box5 BoxInFace(int face, const Bounds3f& box);
+// `box` in the frame of `face`: X, Y, Z intervals (u and v span [-1, 1]). Inline: the hierarchy's
+// set-up maps every primitive's box into every face.
+inline Box5 BoxInFace(int face, const Bounds3f& box) {
+    const int a = FaceAxis(face);
+    const int b = (a + 1) % 3;
+    const int c = (a + 2) % 3;
+    Box5 r;
+    if (face & 1) {
+        r.lo[0] = -box.hi[a];
+        r.hi[0] = -box.lo[a];
+    } else {
+        r.lo[0] = box.lo[a];
+        r.hi[0] = box.hi[a];
+    }
+    r.lo[1] = box.lo[b];
+    r.hi[1] = box.hi[b];
+    r.lo[2] = box.lo[c];
+    r.hi[2] = box.hi[c];
+    r.lo[3] = r.lo[4] = -1.0f;
+    r.hi[3] = r.hi[4] = 1.0f;
+    return r;
+}
 
 // Maps a ray whose start o + tMin d lies outside `sceneBox`: see ToRay5.
 bool ToRay5Clipped(const Ray& ray, const Bounds3f& sceneBox, Ray5& out);
