@@ -105,7 +105,8 @@ ListFrame MakeListFrame(const float lo[3], const float hi[3]) {
 
 namespace {
 #if defined(__AVX512F__)
-// StepsBelow (kFloor) or StepsAbove (kCeil) of 16 world coordinates, in double as they are.
+// StepsBelow (kRound _MM_FROUND_TO_NEG_INF) or StepsAbove (_MM_FROUND_TO_POS_INF) of 16 world
+// coordinates, in double as they compute it.
 template <int kRound>
 __m256i Steps16(__m512 c, __m512d base, __m512d step) {
     // (maskz forms throughout: GCC 12 warns of the plain forms' undefined pass-through)

@@ -113,7 +113,8 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
             key[id] = face & 1 ? -boxes[id].hi[axis] : boxes[id].lo[axis];
         std::vector<uint32_t>& order = scratch.order;
         SortedOrder(key, order, scratch.sort);
-        // Each box read once, in list order: one box a step instead of one of six arrays.
+        // The boxes in list order, each read once: gathering six step arrays by the order cost
+        // six random reads an entry.
         FaceList& l = (*lists)[face];
         l.Resize(nPrims);
         FillFaceList(face, frame, boxes.data(), order.data(), nPrims, Out(l, 0));
