@@ -61,8 +61,7 @@ std::vector<RcHit> KernelHits(clrt::Context& ctx, const cl::Program& program,
     params.nTriangles = uint32_t(scene.triangles.size());
     params.nSpheres = uint32_t(scene.spheres.size());
     params.nQuadrics = uint32_t(scene.quadrics.size());
-    const render::DeviceScene device(scene);
-    const render::SceneBuffers buffers(ctx, device, params);
+    const render::SceneBuffers buffers(ctx, scene, params);
     auto query = bvh ? render::MakeBvhQuery(ctx, program, buffers, scene)
                      : render::MakeBruteForceQuery(ctx, program, buffers);
     const RcCamera cam = render::CameraBasis(scene.camera).ToDevice();

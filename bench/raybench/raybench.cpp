@@ -113,7 +113,7 @@ struct Bench {
         : ctx(c),
           scene(s),
           program(render::BuildRenderProgram(c, clOptions)),
-          buffers(c, render::DeviceScene(s), ParamsFor(s)),
+          buffers(c, s, ParamsFor(s)),
           params(classify::Params::ForScene(s)) {}
 
     std::unique_ptr<render::RayQuery> Make(const std::string& method) {

@@ -8,6 +8,17 @@ namespace {
 
 rc_float4 F4(const glm::vec3& v, float w = 0.0f) { return {v.x, v.y, v.z, w}; }
 
+// ToDevice for any element type, as one callable.
+constexpr auto kToDevice = [](const auto& x) { return ToDevice(x); };
+
+template <typename Items, typename F>
+auto Converted(const Items& items, F&& convert) {
+    std::vector<decltype(convert(items[0]))> out;
+    out.reserve(items.size());
+    for (const auto& item : items) out.push_back(convert(item));
+    return out;
+}
+
 }  // namespace
 
 CameraBasis::CameraBasis(const scene::Camera& camera)
@@ -45,53 +56,62 @@ RcCamera CameraBasis::ToDevice() const {
     return c;
 }
 
-DeviceScene::DeviceScene(const scene::Scene& scene) {
-    triangles.reserve(scene.triangles.size());
-    triangleShading.reserve(scene.triangles.size());
-    for (const auto& t : scene.triangles) {
-        triangles.push_back({F4(t.p[0]), F4(t.p[1]), F4(t.p[2])});
-        RcTriangleShading s{};
-        if (t.hasNormals) {
-            s.n0 = F4(t.n[0]);
-            s.n1 = F4(t.n[1]);
-            s.n2 = F4(t.n[2]);
-        }
-        s.material = t.material;
-        s.object = t.object;
-        s.hasNormals = t.hasNormals ? 1u : 0u;
-        triangleShading.push_back(s);
+RcTriangle ToDevice(const scene::Triangle& t) { return {F4(t.p[0]), F4(t.p[1]), F4(t.p[2])}; }
+
+RcTriangleShading ShadingOf(const scene::Triangle& t) {
+    RcTriangleShading s{};
+    if (t.hasNormals) {
+        s.n0 = F4(t.n[0]);
+        s.n1 = F4(t.n[1]);
+        s.n2 = F4(t.n[2]);
     }
-    for (const auto& s : scene.spheres) {
-        RcSphere d{};
-        d.centerRadius = F4(s.center, s.radius);
-        d.material = s.material;
-        d.object = s.object;
-        spheres.push_back(d);
-    }
-    for (const auto& q : scene.quadrics) {
-        RcQuadric d{};
-        d.c0 = {q.c[0], q.c[1], q.c[2], q.c[3]};
-        d.c1 = {q.c[4], q.c[5], q.c[6], q.c[7]};
-        d.c2 = {q.c[8], q.c[9], 0.0f, 0.0f};
-        d.boxMin = F4(q.boxMin);
-        d.boxMax = F4(q.boxMax);
-        d.material = q.material;
-        d.object = q.object;
-        quadrics.push_back(d);
-    }
-    for (const auto& m : scene.materials) {
-        RcMaterial d{};
-        d.kd = F4(m.kd);
-        d.ks = F4(m.ks);
-        d.kr = F4(m.kr);
-        d.kt = F4(m.kt);
-        d.emission = F4(m.emission);
-        d.shininess = m.shininess;
-        d.ior = m.ior;
-        d.fresnel = m.fresnel ? 1u : 0u;
-        materials.push_back(d);
-    }
-    for (const auto& l : scene.lights) lights.push_back({F4(l.position), F4(l.intensity)});
+    s.material = t.material;
+    s.object = t.object;
+    s.hasNormals = t.hasNormals ? 1u : 0u;
+    return s;
 }
+
+RcSphere ToDevice(const scene::Sphere& s) {
+    RcSphere d{};
+    d.centerRadius = F4(s.center, s.radius);
+    d.material = s.material;
+    d.object = s.object;
+    return d;
+}
+
+RcQuadric ToDevice(const scene::Quadric& q) {
+    RcQuadric d{};
+    d.c0 = {q.c[0], q.c[1], q.c[2], q.c[3]};
+    d.c1 = {q.c[4], q.c[5], q.c[6], q.c[7]};
+    d.c2 = {q.c[8], q.c[9], 0.0f, 0.0f};
+    d.boxMin = F4(q.boxMin);
+    d.boxMax = F4(q.boxMax);
+    d.material = q.material;
+    d.object = q.object;
+    return d;
+}
+
+RcMaterial ToDevice(const scene::Material& m) {
+    RcMaterial d{};
+    d.kd = F4(m.kd);
+    d.ks = F4(m.ks);
+    d.kr = F4(m.kr);
+    d.kt = F4(m.kt);
+    d.emission = F4(m.emission);
+    d.shininess = m.shininess;
+    d.ior = m.ior;
+    d.fresnel = m.fresnel ? 1u : 0u;
+    return d;
+}
+
+RcLight ToDevice(const scene::PointLight& l) { return {F4(l.position), F4(l.intensity)}; }
+
+DeviceScene::DeviceScene(const scene::Scene& scene)
+    : triangles(Converted(scene.triangles, kToDevice)),
+      triangleShading(Converted(scene.triangles, ShadingOf)),
+      spheres(Converted(scene.spheres, kToDevice)),
+      quadrics(Converted(scene.quadrics, kToDevice)),
+      materials(Converted(scene.materials, kToDevice)),
+      lights(Converted(scene.lights, kToDevice)) {}
 
 }  // namespace rayclass::render

@@ -45,8 +45,7 @@ inline std::vector<RcHit> KernelHits(const scene::Scene& scene) {
     params.nTriangles = uint32_t(scene.triangles.size());
     params.nSpheres = uint32_t(scene.spheres.size());
     params.nQuadrics = uint32_t(scene.quadrics.size());
-    const render::DeviceScene device(scene);
-    const render::SceneBuffers buffers(Cl(), device, params);
+    const render::SceneBuffers buffers(Cl(), scene, params);
     auto query = render::MakeBruteForceQuery(Cl(), program, buffers);
     const RcCamera cam = render::CameraBasis(scene.camera).ToDevice();
     const uint32_t n = cam.width * cam.height;

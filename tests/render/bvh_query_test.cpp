@@ -102,7 +102,7 @@ std::vector<RcRay> FragileRays(const scene::Scene& scene, float tmax) {
 struct Queries {
     scene::Scene scene = GridOfSquares();
     cl::Program program = BuildRenderProgram(Ctx());
-    SceneBuffers buffers{Ctx(), DeviceScene(scene), Params()};
+    SceneBuffers buffers{Ctx(), scene, Params()};
     std::unique_ptr<RayQuery> bvh = MakeBvhQuery(Ctx(), program, buffers, scene);
     std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(Ctx(), program, buffers);
 

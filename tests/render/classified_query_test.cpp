@@ -84,7 +84,7 @@ std::vector<RcRay> Segments(std::vector<RcRay> rays) {
 struct Fixture {
     scene::Scene scene = NestedTiledBoxes();
     cl::Program program = BuildRenderProgram(Ctx());
-    SceneBuffers buffers{Ctx(), DeviceScene(scene), Params()};
+    SceneBuffers buffers{Ctx(), scene, Params()};
 
     RcRenderParams Params() const {
         RcRenderParams p{};
@@ -264,7 +264,7 @@ TEST(ClassifiedQuery, EyeRaysWithoutInfosShadeAsWithEyeInfos) {
         params.maxDepth = 6;
         params.minWeight = 0.001f;
         const cl::Program program = BuildRenderProgram(Ctx());
-        const SceneBuffers buffers(Ctx(), DeviceScene(s), params);
+        const SceneBuffers buffers(Ctx(), s, params);
         const std::vector<RcRay> rays = RaysNearOneCorner(3, 3000);
         std::vector<std::unique_ptr<RayQuery>> queries;
         for (KernelStyle style : {KernelStyle::kScalar, KernelStyle::kVertex,

@@ -74,7 +74,7 @@ std::vector<RcRay> Rays(float tmax) {
 struct Queries {
     scene::Scene scene = SpheresAndQuadrics();
     cl::Program program = BuildRenderProgram(Ctx());
-    SceneBuffers buffers{Ctx(), DeviceScene(scene), Params()};
+    SceneBuffers buffers{Ctx(), scene, Params()};
     std::unique_ptr<RayQuery> fragment = MakeClassifiedQuery(
         Ctx(), program, buffers, scene, classify::Params::ForScene(scene), KernelStyle::kFragment);
     std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(Ctx(), program, buffers);

@@ -33,7 +33,7 @@ struct SceneBuffers {
     cl::Buffer triangles, triangleShading, spheres, quadrics, materials, lights, params;
     RcRenderParams hostParams{};
 
-    SceneBuffers(clrt::Context& ctx, const DeviceScene& scene, const RcRenderParams& renderParams);
+    SceneBuffers(clrt::Context& ctx, const scene::Scene& scene, const RcRenderParams& renderParams);
 };
 
 // A device array of rays as its two parallel arrays (rc_types.h): RcRay, all a query reads, and

@@ -1,4 +1,4 @@
-// The scene in the flat layouts of cl/shared/rc_types.h, ready to copy into device buffers.
+// The scene in the flat layouts of cl/shared/rc_types.h, as the device reads it.
 #pragma once
 
 #include <vector>
@@ -23,6 +23,16 @@ struct CameraBasis {
     RcCamera ToDevice() const;
 };
 
+// One primitive, material or light as the kernels read it.
+RcTriangle ToDevice(const scene::Triangle& t);
+RcTriangleShading ShadingOf(const scene::Triangle& t);
+RcSphere ToDevice(const scene::Sphere& s);
+RcQuadric ToDevice(const scene::Quadric& q);
+RcMaterial ToDevice(const scene::Material& m);
+RcLight ToDevice(const scene::PointLight& l);
+
+// The whole scene in host arrays (the raster pass's vertex data; SceneBuffers writes the device
+// buffers in place instead).
 struct DeviceScene {
     std::vector<RcTriangle> triangles;
     std::vector<RcTriangleShading> triangleShading;
