@@ -403,6 +403,17 @@ TEST_F(CliFailure, FailuresAfterLoadingLeaveNoOutput) {
          "rayclass render: error: --device must be cpu, gpu, auto or a device index, not "
          "'banana'\n",
          "x.exr"},
+        // The device starts while the scene loads: its error comes after the scene's, and a bad
+        // scene is reported whatever the device.
+        {{"SCENE", "-o", "x.exr", "--width", "8", "--height", "8", "--device", "999"},
+         1,
+         "rayclass render: error: device index 999 out of range (",
+         "x.exr",
+         true},
+        {{"missing.json", "-o", "x.exr", "--device", "999"},
+         1,
+         "rayclass render: error: missing.json: missing file\n",
+         "x.exr"},
         {{"SCENE", "-o", "x.exr", "--width", "8", "--height", "8", "--cl-options",
           "-cl-no-such-option"},
          1,
