@@ -133,11 +133,17 @@ void FillFaceList(int face, const ListFrame& frame, const Bounds3f* boxes, const
     uint16_t* const dst[6] = {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1};
     size_t i = 0;
 #if defined(__AVX512F__)
-    // BoxInFace's choice of world bound for each of the frame's six (lo X, hi X, lo Y, ...), as
-    // offsets into a box's floats (lo x, y, z, hi x, y, z), and which ones it negates.
-    const int a = FaceAxis(face), b = (a + 1) % 3, c = (a + 2) % 3;
-    const bool neg = face & 1;
-    const int from[6] = {neg ? 3 + a : a, neg ? a : 3 + a, b, 3 + b, c, 3 + c};
+    // Which of a box's six floats (lo x, y, z, hi x, y, z) BoxInFace puts at each bound of the
+    // frame (lo X, hi X, lo Y, ...), and whether it negates it: read off a box whose floats
+    // are 1 .. 6, so the mapping stays BoxInFace's own.
+    const Box5 probe = BoxInFace(face, Bounds3f{{1.0f, 2.0f, 3.0f}, {4.0f, 5.0f, 6.0f}});
+    int from[6];
+    bool negate[6];
+    for (int j = 0; j < 6; ++j) {
+        const float v = j & 1 ? probe.hi[j / 2] : probe.lo[j / 2];
+        from[j] = int(std::abs(v)) - 1;
+        negate[j] = v < 0.0f;
+    }
     const float* const base = reinterpret_cast<const float*>(boxes);
     __m512d frameBase[3];
     for (int k = 0; k < 3; ++k) frameBase[k] = _mm512_set1_pd(double(frame.base[k]));
@@ -151,7 +157,7 @@ void FillFaceList(int face, const ListFrame& frame, const Bounds3f* boxes, const
             __m512 v =
                 _mm512_mask_i32gather_ps(_mm512_setzero_ps(), __mmask16(0xFFFF),
                                          _mm512_add_epi32(at, _mm512_set1_epi32(from[j])), base, 4);
-            if (j < 2 && neg) v = _mm512_xor_ps(v, signMask);
+            if (negate[j]) v = _mm512_xor_ps(v, signMask);
             const __m256i s = j & 1 ? Steps16<_MM_FROUND_TO_POS_INF>(v, frameBase[j / 2], step)
                                     : Steps16<_MM_FROUND_TO_NEG_INF>(v, frameBase[j / 2], step);
             _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst[j] + i), s);

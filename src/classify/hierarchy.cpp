@@ -108,9 +108,7 @@ Hierarchy::Hierarchy(const scene::Scene& scene, const Params& params)
         // determinism.
         std::vector<float>& key = scratch.key;
         key.resize(nPrims);
-        const int axis = FaceAxis(face);
-        for (uint32_t id = 0; id < nPrims; ++id)
-            key[id] = face & 1 ? -boxes[id].hi[axis] : boxes[id].lo[axis];
+        for (uint32_t id = 0; id < nPrims; ++id) key[id] = BoxInFace(face, boxes[id]).lo[0];
         std::vector<uint32_t>& order = scratch.order;
         SortedOrder(key, order, scratch.sort);
         // The boxes in list order, each read once: gathering six step arrays by the order cost

@@ -149,17 +149,16 @@ RasterPass::RasterPass(GlContext& gl, const scene::Scene& scene, const RasterOpt
     }
     options_.slabs = std::max<uint32_t>(1, options_.slabs);
     gl_.MakeCurrent();
-    const render::DeviceScene device(scene);
-    count_[kTriangles] = uint32_t(device.triangles.size());
-    count_[kSpheres] = uint32_t(device.spheres.size());
-    count_[kQuadrics] = uint32_t(device.quadrics.size());
+    count_[kTriangles] = uint32_t(scene.triangles.size());
+    count_[kSpheres] = uint32_t(scene.spheres.size());
+    count_[kQuadrics] = uint32_t(scene.quadrics.size());
     base_[kTriangles] = 0;
     base_[kSpheres] = scene.SphereBase();
     base_[kQuadrics] = scene.QuadricBase();
     bounds_ = scene.Bounds();
-    primitives_[kTriangles] = UploadStorage(device.triangles);
-    primitives_[kSpheres] = UploadStorage(device.spheres);
-    primitives_[kQuadrics] = UploadStorage(device.quadrics);
+    primitives_[kTriangles] = UploadStorage(render::DeviceArray(scene.triangles));
+    primitives_[kSpheres] = UploadStorage(render::DeviceArray(scene.spheres));
+    primitives_[kQuadrics] = UploadStorage(render::DeviceArray(scene.quadrics));
     if (options_.slabs > 1) {
         // Bounding spheres for sorting primitives front to back.
         for (const auto& t : scene.triangles) {

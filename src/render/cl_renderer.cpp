@@ -92,8 +92,6 @@ cl::Buffer ConvertedBuffer(clrt::Context& ctx, const Items& items, F&& convert) 
     return buffer;
 }
 
-constexpr auto kToDevice = [](const auto& x) { return ToDevice(x); };
-
 }  // namespace
 
 SceneBuffers::SceneBuffers(clrt::Context& ctx, const scene::Scene& scene,

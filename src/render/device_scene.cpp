@@ -8,17 +8,6 @@ namespace {
 
 rc_float4 F4(const glm::vec3& v, float w = 0.0f) { return {v.x, v.y, v.z, w}; }
 
-// ToDevice for any element type, as one callable.
-constexpr auto kToDevice = [](const auto& x) { return ToDevice(x); };
-
-template <typename Items, typename F>
-auto Converted(const Items& items, F&& convert) {
-    std::vector<decltype(convert(items[0]))> out;
-    out.reserve(items.size());
-    for (const auto& item : items) out.push_back(convert(item));
-    return out;
-}
-
 }  // namespace
 
 CameraBasis::CameraBasis(const scene::Camera& camera)
@@ -105,13 +94,5 @@ RcMaterial ToDevice(const scene::Material& m) {
 }
 
 RcLight ToDevice(const scene::PointLight& l) { return {F4(l.position), F4(l.intensity)}; }
-
-DeviceScene::DeviceScene(const scene::Scene& scene)
-    : triangles(Converted(scene.triangles, kToDevice)),
-      triangleShading(Converted(scene.triangles, ShadingOf)),
-      spheres(Converted(scene.spheres, kToDevice)),
-      quadrics(Converted(scene.quadrics, kToDevice)),
-      materials(Converted(scene.materials, kToDevice)),
-      lights(Converted(scene.lights, kToDevice)) {}
 
 }  // namespace rayclass::render

@@ -31,17 +31,17 @@ RcQuadric ToDevice(const scene::Quadric& q);
 RcMaterial ToDevice(const scene::Material& m);
 RcLight ToDevice(const scene::PointLight& l);
 
-// The whole scene in host arrays (the raster pass's vertex data; SceneBuffers writes the device
-// buffers in place instead).
-struct DeviceScene {
-    std::vector<RcTriangle> triangles;
-    std::vector<RcTriangleShading> triangleShading;
-    std::vector<RcSphere> spheres;
-    std::vector<RcQuadric> quadrics;
-    std::vector<RcMaterial> materials;
-    std::vector<RcLight> lights;
+// ToDevice as one callable, for any element type.
+inline constexpr auto kToDevice = [](const auto& x) { return ToDevice(x); };
 
-    explicit DeviceScene(const scene::Scene& scene);
-};
+// convert(item) for each of `items`, in a host array (the raster pass's storage buffers;
+// SceneBuffers writes the device buffers in place instead).
+template <typename Items, typename F = decltype(kToDevice)>
+auto DeviceArray(const Items& items, F convert = kToDevice) {
+    std::vector<decltype(convert(items[0]))> out;
+    out.reserve(items.size());
+    for (const auto& item : items) out.push_back(convert(item));
+    return out;
+}
 
 }  // namespace rayclass::render
