@@ -79,9 +79,7 @@ template <typename Items, typename F>
 cl::Buffer ConvertedBuffer(clrt::Context& ctx, const Items& items, F&& convert) {
     using T = decltype(convert(items[0]));
     const size_t n = std::max<size_t>(items.size(), 1);
-    cl::Buffer buffer = clrt::Check("clCreateBuffer", [&] {
-        return cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_ALLOC_HOST_PTR, n * sizeof(T));
-    });
+    cl::Buffer buffer = DeviceBuffer(ctx, n * sizeof(T), CL_MEM_READ_ONLY | CL_MEM_ALLOC_HOST_PTR);
     T* out = static_cast<T*>(clrt::Check("clEnqueueMapBuffer", [&] {
         return ctx.queue().enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0,
                                             n * sizeof(T));

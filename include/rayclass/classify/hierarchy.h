@@ -96,12 +96,12 @@ struct Node {
 // The leaves of one generation in flat arrays, ready to copy into OpenCL buffers.
 struct LeafBatch {
     std::vector<RcLeaf> leaves;
-    std::vector<rc_uint> rayIndex;        // leaves' rays, contiguous per leaf
+    DenseScratchVector<rc_uint> rayIndex;  // leaves' rays, contiguous per leaf
     // Leaves' lists, contiguous per leaf, sorted by nearX, in the order the threads wrote them
     // (with gaps between the chunks they claimed). Scratch: a deep generation's lists (180 MB on
     // sibenik_mirror) are written once, by every thread, and never zeroed first; its capacity
     // is room reserved for the next generation, of which only the pages written are touched.
-    ScratchVector<RcCandidate> candidates;
+    DenseScratchVector<RcCandidate> candidates;
     std::vector<rc_uint> missed;          // rays that miss the scene box: answered "no hit"
     uint32_t nRays = 0;                   // rays of the generation (leaf rays + missed)
 };

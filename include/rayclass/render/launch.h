@@ -26,8 +26,10 @@ cl::Buffer UploadVector(clrt::Context& ctx, const std::vector<T>& v) {
     });
 }
 
-// A read-write buffer of at least one byte.
-cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes);
+// A buffer of at least one byte (read-write unless `flags` say otherwise). On a CPU device a
+// large one lies in host memory on huge pages (core/large_pages.h), which the device uses in
+// place.
+cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE);
 
 // Rays per batch: `requested`, at most the image's rays, and few enough that the largest buffer
 // a batch needs per ray (its shadow rays, one per light, or its two secondary rays and their

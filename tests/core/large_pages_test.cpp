@@ -1,0 +1,106 @@
+// Large host arrays: aligned, zeroed, writable to the last byte, advised for huge pages, and
+// returned to the system when freed; DenseScratchVector takes that path from
+// kLargeAllocationBytes on, ScratchVector never.
+#include "rayclass/core/large_pages.h"
+
+#include <gtest/gtest.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdint>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "rayclass/core/scratch_vector.h"
+
+namespace rayclass {
+namespace {
+
+bool Aligned(const void* p) { return reinterpret_cast<uintptr_t>(p) % kHugePageBytes == 0; }
+
+// Whether the page at p is mapped (mincore fails with ENOMEM on an unmapped range).
+bool Mapped(const void* p) {
+    unsigned char resident;
+    const uintptr_t page =
+        reinterpret_cast<uintptr_t>(p) / sysconf(_SC_PAGESIZE) * sysconf(_SC_PAGESIZE);
+    return mincore(reinterpret_cast<void*>(page), 1, &resident) == 0 || errno != ENOMEM;
+}
+
+// The "THPeligible:" field of /proc/self/smaps for the mapping that starts at p ("" if none).
+std::string ThpEligible(const void* p) {
+    std::ifstream smaps("/proc/self/smaps");
+    std::string line;
+    bool inside = false;
+    while (std::getline(smaps, line)) {
+        uintptr_t lo = 0, hi = 0;
+        char dash = 0;
+        std::istringstream head(line);
+        if (head >> std::hex >> lo >> dash >> hi && dash == '-') {
+            inside = lo <= reinterpret_cast<uintptr_t>(p) && reinterpret_cast<uintptr_t>(p) < hi;
+        } else if (inside && line.rfind("THPeligible:", 0) == 0) {
+            return line.substr(line.find_first_not_of(" \t", 12));
+        }
+    }
+    return "";
+}
+
+// Whether this kernel gives huge pages to advised memory ("always" or "madvise" mode).
+bool ThpAdvisable() {
+    std::ifstream mode("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string text((std::istreambuf_iterator<char>(mode)), std::istreambuf_iterator<char>());
+    return text.find("[always]") != std::string::npos ||
+           text.find("[madvise]") != std::string::npos;
+}
+
+TEST(LargePages, AlignedZeroedAndWritableToTheLastByte) {
+    for (size_t bytes : {size_t(1), kHugePageBytes - 1, kHugePageBytes, 3 * kHugePageBytes + 5}) {
+        auto* p = static_cast<unsigned char*>(AllocateLarge(bytes));
+        ASSERT_TRUE(Aligned(p)) << bytes;
+        EXPECT_EQ(p[0], 0);
+        EXPECT_EQ(p[bytes - 1], 0);
+        p[0] = 1;
+        p[bytes - 1] = 2;
+        EXPECT_EQ(p[bytes - 1], 2);
+        if (bytes > 1) {
+            EXPECT_EQ(p[0], 1);
+        }
+        FreeLarge(p, bytes);
+        EXPECT_FALSE(Mapped(p)) << bytes;
+    }
+}
+
+TEST(LargePages, AdvisedForHugePages) {
+    if (!ThpAdvisable()) GTEST_SKIP() << "transparent huge pages are off on this kernel";
+    const size_t bytes = 4 * kHugePageBytes;
+    void* p = AllocateLarge(bytes);
+    EXPECT_EQ(ThpEligible(p), "1");
+    FreeLarge(p, bytes);
+}
+
+TEST(LargePages, RefusesWhatCannotBeMapped) {
+    EXPECT_THROW(AllocateLarge(0), std::bad_alloc);
+    EXPECT_THROW(AllocateLarge(SIZE_MAX - 100), std::bad_alloc);
+}
+
+TEST(LargePages, DenseScratchVectorTakesTheLargePathFromTheThreshold) {
+    DenseScratchVector<uint32_t> small(kLargeAllocationBytes / 4 - 1);
+    DenseScratchVector<uint32_t> large(kLargeAllocationBytes / 4);
+    EXPECT_TRUE(Aligned(large.data()));
+    // A small one comes from malloc, whose chunks start 16 bytes into a mapping.
+    EXPECT_FALSE(Aligned(small.data()));
+    large.back() = 7;
+    const uint32_t* before = large.data();
+    large.resize(3 * large.size());  // reallocates: the old pages go back
+    EXPECT_EQ(large[kLargeAllocationBytes / 4 - 1], 7u);
+    EXPECT_FALSE(Mapped(before));
+}
+
+TEST(LargePages, ScratchVectorStaysOnMallocsPages) {
+    ScratchVector<uint32_t> v(4 * kLargeAllocationBytes / 4);
+    EXPECT_FALSE(Aligned(v.data()));
+}
+
+}  // namespace
+}  // namespace rayclass
