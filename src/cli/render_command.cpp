@@ -350,6 +350,9 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
         } else if (options.rayEncoding == "polar16") {
             options.eyeRays = "kernel";
             stats.eyeRaysChoice = "auto: kernel for --ray-encoding polar16";
+        } else if (!rasterAsked && raster::OnlySoftwareEglDevices()) {
+            options.eyeRays = "kernel";
+            stats.eyeRaysChoice = "auto: kernel, software OpenGL only (EGL_MESA_device_software)";
         } else {
             std::string why;
             raster::GlContext* gl = raster::GlContext::Shared(&why);

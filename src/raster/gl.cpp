@@ -139,6 +139,30 @@ GlContext* GlContext::Shared(std::string* why) {
     return shared.get();
 }
 
+bool OnlySoftwareEglDevices() {
+    const char* clientExtensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+    if (!clientExtensions ||
+        std::string(clientExtensions).find("EGL_EXT_device_enumeration") == std::string::npos) {
+        return false;
+    }
+    auto queryDevices =
+        reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+    auto queryString = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(
+        eglGetProcAddress("eglQueryDeviceStringEXT"));
+    if (!queryDevices || !queryString) return false;
+    EGLint n = 0;
+    if (!queryDevices(0, nullptr, &n) || n <= 0) return false;
+    std::vector<EGLDeviceEXT> devices(static_cast<size_t>(n));
+    if (!queryDevices(n, devices.data(), &n)) return false;
+    for (EGLint i = 0; i < n; ++i) {
+        const char* ext = queryString(devices[size_t(i)], EGL_EXTENSIONS);
+        if (!ext || std::string(ext).find("EGL_MESA_device_software") == std::string::npos) {
+            return false;
+        }
+    }
+    return true;
+}
+
 bool IsSoftwareRenderer(const std::string& renderer) {
     for (const char* name : {"llvmpipe", "softpipe", "swrast"}) {
         if (renderer.find(name) != std::string::npos) return true;

@@ -72,12 +72,13 @@ std::pair<std::string, std::string> EyeRaysOf(const std::string& options) {
 TEST(RasterCli, AutoTakesTheKernelOnSoftwareGlAndRasterOnHardware) {
     RC_REQUIRE_GL();
     const std::string renderer = gl->Renderer();
+    using Choice = std::pair<std::string, std::string>;
     const auto expected =
-        IsSoftwareRenderer(renderer)
-            ? std::pair<std::string, std::string>{"kernel", "auto: kernel, software OpenGL (" +
-                                                                renderer + ")"}
-            : std::pair<std::string, std::string>{
-                  "raster", "auto: raster on hardware OpenGL (" + renderer + ")"};
+        OnlySoftwareEglDevices()
+            ? Choice{"kernel", "auto: kernel, software OpenGL only (EGL_MESA_device_software)"}
+        : IsSoftwareRenderer(renderer)
+            ? Choice{"kernel", "auto: kernel, software OpenGL (" + renderer + ")"}
+            : Choice{"raster", "auto: raster on hardware OpenGL (" + renderer + ")"};
     EXPECT_EQ(EyeRaysOf(""), expected);
     EXPECT_EQ(EyeRaysOf("--eye-rays auto"), expected);
 }
@@ -90,6 +91,14 @@ TEST(RasterCli, ExplicitChoicesAndRasterOptionsWin) {
     // A raster experiment stays one on a software renderer.
     EXPECT_EQ(EyeRaysOf("--hull box"), (Choice{"raster", "auto: raster for --hull"}));
     EXPECT_EQ(EyeRaysOf("--depth-bits 32"), (Choice{"raster", "auto: raster for --depth-bits"}));
+}
+
+// The shortcut must not hide a hardware renderer: where EGL lists software devices alone, the
+// context is a software one.
+TEST(RasterCli, OnlySoftwareEglDevicesMeansASoftwareContext) {
+    RC_REQUIRE_GL();
+    if (!OnlySoftwareEglDevices()) GTEST_SKIP() << "EGL lists a hardware device";
+    EXPECT_TRUE(IsSoftwareRenderer(gl->Renderer())) << gl->Renderer();
 }
 
 TEST(RasterCli, SoftwareRenderersAreRecognised) {
