@@ -7,14 +7,9 @@
 
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/launch.h"
 
 namespace rayclass::render {
-
-template <typename T>
-cl::Buffer UploadVector(clrt::Context& ctx, const std::vector<T>& v) {
-    return cl::Buffer(ctx.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, v.size() * sizeof(T),
-                      const_cast<T*>(v.data()));
-}
 
 // Nearest hits of `rays` as eye rays (shaded with `nLights` lights); returns the tests done and,
 // where hitsOut is given, the hits.
