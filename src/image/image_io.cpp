@@ -123,7 +123,7 @@ void WriteImage(const Image& image, const fs::path& out, const WriteOptions& opt
             if (format == Format::kExr) {
                 detail::WriteExr(image, file, out.string(), options.exrCompression);
             } else {
-                detail::WritePng(image, file, options.exposure);
+                detail::WritePng(image, file, options.exposure, options.pngCompression);
             }
         } catch (const std::exception&) {
             // The codec's own message is less precise than the OS error that caused it.

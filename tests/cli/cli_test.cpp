@@ -155,8 +155,9 @@ TEST_F(Cli, RenderHelpDescribesEveryOption) {
     EXPECT_EQ(r.out.rfind("usage: rayclass render SCENE -o OUT.{exr,png} [options]\n", 0), 0u);
     for (const char* option :
          {"-o, --output", "--width", "--height", "--aov", "--max-depth", "--min-weight", "--device",
-          "--reference", "--stats", "--exposure", "--exr-compression", "--batch-rays",
-          "--cl-options", "--depth-bits", "--depth-scale", "-q, --quiet", "RAYCLASS_CACHE_DIR"}) {
+          "--reference", "--stats", "--exposure", "--exr-compression", "--png-compression",
+          "--batch-rays", "--cl-options", "--depth-bits", "--depth-scale", "-q, --quiet",
+          "RAYCLASS_CACHE_DIR"}) {
         EXPECT_NE(r.out.find(option), std::string::npos) << option;
     }
     EXPECT_EQ(r.err, "");
@@ -289,6 +290,14 @@ TEST_F(CliFailure, UsageErrorsExitWith2AndNameTheProblem) {
          2,
          "rayclass render: --exr-compression needs an .exr output\n",
          "x.png"},
+        {{"SCENE", "-o", "x.png", "--png-compression", "best"},
+         2,
+         "rayclass render: --png-compression must be fast, small or none, not 'best'\n",
+         "x.png"},
+        {{"SCENE", "-o", "x.exr", "--png-compression", "small"},
+         2,
+         "rayclass render: --png-compression needs a .png output\n",
+         "x.exr"},
         {{"SCENE", "-o", "x.exr", "--reference", "--ray-encoding", "polar16"},
          2,
          "rayclass render: --ray-encoding polar16 rounds the kernels' ray directions, which "

@@ -230,6 +230,39 @@ TEST_F(ImageIoTest, PngAppliesExposure) {
     EXPECT_THAT(ReadPngBytes(Path("exposed.Png"), width, height), ElementsAre(188, 255, 255));
 }
 
+// The compressions change the file, not its pixels: a render-like image (smooth shading with
+// noise and edges) reads back the same from each, stored rows are the largest file and
+// libpng's defaults the smallest.
+TEST_F(ImageIoTest, EveryPngCompressionGivesTheSamePixels) {
+    Image image(203, 97);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> noise(-0.02f, 0.02f);
+    for (uint32_t y = 0; y < image.height; ++y) {
+        for (uint32_t x = 0; x < image.width; ++x) {
+            const float shade =
+                (x / 40 + y / 30) % 2 ? float(x) / 203.0f : 0.8f - float(y) / 200.0f;
+            image.rgb[size_t(y) * image.width + x] =
+                glm::vec3(shade + noise(rng), 0.5f * shade, 0.25f + noise(rng));
+        }
+    }
+    std::vector<std::vector<uint8_t>> pixels;
+    std::vector<uintmax_t> sizes;
+    for (PngCompression c :
+         {PngCompression::kFast, PngCompression::kSmall, PngCompression::kNone}) {
+        WriteImage(image, Path("c.png"), {.pngCompression = c});
+        uint32_t width = 0, height = 0;
+        pixels.push_back(ReadPngBytes(Path("c.png"), width, height));
+        EXPECT_EQ(width, image.width);
+        EXPECT_EQ(height, image.height);
+        sizes.push_back(fs::file_size(Path("c.png")));
+    }
+    EXPECT_EQ(pixels[1], pixels[0]);
+    EXPECT_EQ(pixels[2], pixels[0]);
+    EXPECT_LT(sizes[1], sizes[0]);
+    EXPECT_LT(sizes[0], sizes[2]);
+    EXPECT_GT(sizes[2], image.PixelCount() * 3);  // stored: every byte and a filter byte a row
+}
+
 TEST_F(ImageIoTest, PngReadsBackAsLinear) {
     Image image(1, 1);
     image.rgb = {glm::vec3(0.0f, 0.5f, 1.0f)};
