@@ -91,6 +91,14 @@ std::string_view Trim(std::string_view s) {
     return s;
 }
 
+bool ContinuesBefore(std::string_view text, size_t end) {
+    const size_t newline = text.rfind('\n', end == 0 ? 0 : end - 1);
+    const size_t start = newline == std::string_view::npos || end == 0 ? 0 : newline + 1;
+    std::string_view physical = text.substr(start, end - start);
+    physical = Trim(physical.substr(0, physical.find('#')));
+    return !physical.empty() && physical.back() == '\\';
+}
+
 bool LineReader::Next(std::string_view& line, int& lineNumber) {
     // One physical line with its comment cut off; a '\' inside a comment continues nothing.
     const auto readPhysical = [this]() {

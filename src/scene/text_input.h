@@ -25,15 +25,19 @@ FileText ReadFile(const std::filesystem::path& file);
 // comment, CR before LF is dropped. Lines come back with surrounding blanks trimmed.
 class LineReader {
   public:
-    explicit LineReader(std::string_view text) : text_(text) {}
+    // `linesBefore`: physical lines of the file before `text` (a piece of it), for the numbers.
+    explicit LineReader(std::string_view text, int linesBefore = 0)
+        : text_(text), physicalLine_(linesBefore) {}
 
     // Next non-empty logical line and the 1-based physical line it starts on; false at the end.
     bool Next(std::string_view& line, int& lineNumber);
+    // Physical lines read so far, with linesBefore.
+    int PhysicalLines() const { return physicalLine_; }
 
   private:
     std::string_view text_;
     size_t pos_ = 0;
-    int physicalLine_ = 0;
+    int physicalLine_;
     std::string joined_;  // holds a line built from continuations
 };
 
@@ -51,6 +55,10 @@ inline std::string_view NextToken(std::string_view& rest) {
 }
 
 std::string_view Trim(std::string_view s);
+
+// Whether the physical line that ends just before `end` (its '\n') continues onto the next one,
+// as LineReader reads it: its text before any '#', trimmed, ends with '\'.
+bool ContinuesBefore(std::string_view text, size_t end);
 
 enum class NumberStatus { kOk, kMalformed, kNonFinite, kOutOfRange };
 

@@ -43,8 +43,10 @@ struct ObjMesh {
 // Reads `file` and the MTL libraries it names. Throws SceneError.
 ObjMesh LoadObj(const std::filesystem::path& file);
 
-// Parses OBJ text; `file` names it in errors and anchors relative mtllib paths.
-ObjMesh ParseObj(std::string_view text, const std::filesystem::path& file);
+// Parses OBJ text; `file` names it in errors and anchors relative mtllib paths. Text of 8 MiB
+// or more is parsed in pieces of at least 4 MiB, at most one a core (`pieces` > 0 sets how
+// many); the mesh and the first error are the same for any number of pieces.
+ObjMesh ParseObj(std::string_view text, const std::filesystem::path& file, size_t pieces = 0);
 
 // 1-based line of the `index`-th (0-based) statement `keyword` of OBJ/MTL `text`, 0 when there
 // is none; for messages about parsed values (it re-reads the text).
