@@ -22,9 +22,9 @@ void CL_CALLBACK FreePages(cl_mem, void* pages) {
 
 }  // namespace
 
-cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags) {
+cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags, Writes writes) {
     bytes = std::max<size_t>(1, bytes);
-    if (ctx.info().type != "cpu" || bytes < kLargeAllocationBytes) {
+    if (ctx.info().type != "cpu" || bytes < kLargeAllocationBytes || writes == Writes::kSome) {
         return clrt::Check("clCreateBuffer",
                            [&] { return cl::Buffer(ctx.context(), flags, bytes); });
     }

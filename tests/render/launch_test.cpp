@@ -1,6 +1,6 @@
 // DeviceBuffer on PoCL's CPU device: a large buffer lies in huge-page host memory of its own,
-// which the device reads and writes in place and which goes when the buffer does; a small one
-// is the device's own.
+// which the device reads and writes in place and which goes when the buffer does; a small one,
+// and one the kernels write in a few places, is the device's own.
 #include "rayclass/render/launch.h"
 
 #include <gtest/gtest.h>
@@ -64,11 +64,14 @@ TEST(DeviceBuffer, ReadOnlyAllocHostPtrBuffersMapForWriting) {
     EXPECT_EQ(back[n - 1], uint32_t(3 * (n - 1)));
 }
 
-TEST(DeviceBuffer, SmallOnesAreTheDevicesOwn) {
+TEST(DeviceBuffer, SmallAndSparselyWrittenOnesAreTheDevicesOwn) {
     cl::Buffer buffer = DeviceBuffer(Ctx(), kLargeAllocationBytes - 1);
     EXPECT_EQ(buffer.getInfo<CL_MEM_FLAGS>() & CL_MEM_USE_HOST_PTR, 0u);
     EXPECT_EQ(buffer.getInfo<CL_MEM_SIZE>(), kLargeAllocationBytes - 1);
     EXPECT_EQ(DeviceBuffer(Ctx(), 0).getInfo<CL_MEM_SIZE>(), 1u);
+    const cl::Buffer sparse =
+        DeviceBuffer(Ctx(), 4 * kLargeAllocationBytes, CL_MEM_READ_WRITE, Writes::kSome);
+    EXPECT_EQ(sparse.getInfo<CL_MEM_FLAGS>() & CL_MEM_USE_HOST_PTR, 0u);
 }
 
 }  // namespace
