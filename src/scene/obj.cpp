@@ -116,10 +116,11 @@ struct PieceStart {
     std::string material;  // the last usemtl's name
 };
 
-// Counts what a piece adds to a PieceStart, reading lines as the parser does (malformed
+// What a piece adds to the PieceStart of the next one, read as the parser reads lines (malformed
 // statements count too: an error before the next piece is reported first anyway).
-void Advance(std::string_view piece, PieceStart& s) {
-    LineReader lines(piece, s.lines);
+PieceStart Count(std::string_view piece) {
+    PieceStart s;
+    LineReader lines(piece);
     std::string_view line;
     int number = 0;
     while (lines.Next(line, number)) {
@@ -139,9 +140,10 @@ void Advance(std::string_view piece, PieceStart& s) {
         }
     }
     s.lines = lines.PhysicalLines();
+    return s;
 }
 
-// `to` followed by a piece whose own counts are `piece` (counted from line 0).
+// `to` followed by a piece that adds `piece` (Count's).
 void Add(PieceStart& to, const PieceStart& piece) {
     if (piece.hasMaterial) {
         to.hasMaterial = true;
@@ -320,7 +322,7 @@ class ObjParser {
 // render on 2 cores, whose other core starts OpenCL meanwhile (Sibenik's 2.4 MB, split in two:
 // 173 -> 183 ms, medians of 20 alternating runs).
 constexpr size_t kPieceBytesMin = size_t(4) << 20;
-// Advance's time over a parse's, per byte: Conference's text took 5 ms to count and 50 ms to
+// Count's time over a parse's, per byte: Conference's text took 5 ms to count and 50 ms to
 // parse in one piece.
 constexpr double kCountShare = 0.1;
 
@@ -500,7 +502,7 @@ ObjMesh ParseObj(std::string_view text, const fs::path& file, size_t pieces) {
         if (k > 0) {
             // Counted down whatever happens: the other threads wait for every count.
             try {
-                Advance(piece[k - 1], added[k - 1]);
+                added[k - 1] = Count(piece[k - 1]);
             } catch (...) {
                 failed[k] = std::current_exception();
             }

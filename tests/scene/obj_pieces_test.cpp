@@ -99,6 +99,16 @@ std::string RandomObj(std::mt19937& rng, int statements, bool error) {
     return text;
 }
 
+// A directory with the two libraries the random files name, and x.obj's path in it.
+struct Libraries {
+    TempDir dir;
+    std::filesystem::path obj = dir.path() / "x.obj";
+    Libraries() {
+        dir.Write("a.mtl", kLibrary);
+        dir.Write("b.mtl", kOtherLibrary);
+    }
+};
+
 void ExpectSameMesh(const ObjMesh& a, const ObjMesh& b, const std::string& what) {
     auto same = [](const auto& x, const auto& y) {
         return x.size() == y.size() &&
@@ -118,10 +128,8 @@ void ExpectSameMesh(const ObjMesh& a, const ObjMesh& b, const std::string& what)
 }
 
 TEST(ObjPieces, AnyNumberOfPiecesGivesTheSameMesh) {
-    TempDir dir;
-    dir.Write("a.mtl", kLibrary);
-    dir.Write("b.mtl", kOtherLibrary);
-    const auto file = dir.path() / "x.obj";
+    const Libraries libraries;
+    const auto& file = libraries.obj;
     std::mt19937 rng(11);
     int triangles = 0;
     for (int round = 0; round < 60; ++round) {
@@ -138,10 +146,8 @@ TEST(ObjPieces, AnyNumberOfPiecesGivesTheSameMesh) {
 }
 
 TEST(ObjPieces, AnyNumberOfPiecesReportsTheFirstError) {
-    TempDir dir;
-    dir.Write("a.mtl", kLibrary);
-    dir.Write("b.mtl", kOtherLibrary);
-    const auto file = dir.path() / "x.obj";
+    const Libraries libraries;
+    const auto& file = libraries.obj;
     std::mt19937 rng(12);
     int errors = 0;
     for (int round = 0; round < 80; ++round) {
@@ -160,10 +166,8 @@ TEST(ObjPieces, AnyNumberOfPiecesReportsTheFirstError) {
 
 // The default splits files of 8 MiB and more (on a machine of more than one core).
 TEST(ObjPieces, LargeFilesSplitByDefaultGiveTheSameMesh) {
-    TempDir dir;
-    dir.Write("a.mtl", kLibrary);
-    dir.Write("b.mtl", kOtherLibrary);
-    const auto file = dir.path() / "big.obj";
+    const Libraries libraries;
+    const auto& file = libraries.obj;
     std::mt19937 rng(13);
     std::string text;
     while (text.size() < (size_t(9) << 20)) text += RandomObj(rng, 2000, false);
