@@ -6,11 +6,14 @@
 #include <filesystem>
 #include <fstream>
 #include <future>
+#include <initializer_list>
 #include <memory>
 #include <optional>
 #include <ostream>
 #include <set>
 #include <sstream>
+#include <string>
+#include <string_view>
 
 #include "rayclass/classify/params.h"
 #include "rayclass/cli/cli.h"
@@ -108,6 +111,19 @@ T ParseNumber(const std::string& option, const std::string& text, T lo, T hi) {
     return value;
 }
 
+// `value` when it is one of `names`, else a UsageError "OPTION must be a, b or c, not 'value'".
+const std::string& OneOf(const std::string& option, const std::string& value,
+                         std::initializer_list<std::string_view> names) {
+    std::string list;
+    size_t k = 0;
+    for (const std::string_view name : names) {
+        if (value == name) return value;
+        if (k++ > 0) list += k == names.size() ? " or " : ", ";
+        list += name;
+    }
+    throw UsageError(option + " must be " + list + ", not '" + value + "'");
+}
+
 std::string Extension(const std::string& path) {
     const auto dot = path.find_last_of('.');
     const auto slash = path.find_last_of('/');
@@ -147,12 +163,7 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
         } else if (a == "--device") {
             r.options.device = value();
         } else if (a == "--accel") {
-            r.options.accel = value();
-            if (r.options.accel != "classify" && r.options.accel != "brute" &&
-                r.options.accel != "bvh" && r.options.accel != "auto") {
-                throw UsageError("--accel must be classify, bvh, auto or brute, not '" +
-                                 r.options.accel + "'");
-            }
+            r.options.accel = OneOf(a, value(), {"classify", "bvh", "auto", "brute"});
         } else if (a == "--classify") {
             const std::string& setting = value();
             const auto eq = setting.find('=');
@@ -166,17 +177,9 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
             r.options.kernel = value();
             render::ParseKernelStyle(r.options.kernel);
         } else if (a == "--ray-encoding") {
-            r.options.rayEncoding = value();
-            if (r.options.rayEncoding != "float" && r.options.rayEncoding != "polar16") {
-                throw UsageError("--ray-encoding must be float or polar16, not '" +
-                                 r.options.rayEncoding + "'");
-            }
+            r.options.rayEncoding = OneOf(a, value(), {"float", "polar16"});
         } else if (a == "--triangle-test") {
-            r.options.triangleTest = value();
-            if (r.options.triangleTest != "moller" && r.options.triangleTest != "watertight") {
-                throw UsageError("--triangle-test must be moller or watertight, not '" +
-                                 r.options.triangleTest + "'");
-            }
+            r.options.triangleTest = OneOf(a, value(), {"moller", "watertight"});
         } else if (a == "--reference") {
             r.reference = true;
         } else if (a == "--stats") {
@@ -184,19 +187,9 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
         } else if (a == "--exposure") {
             r.exposure = ParseNumber<float>(a, value(), -64.0f, 64.0f);
         } else if (a == "--exr-compression") {
-            r.exrCompression = value();
-            if (r.exrCompression != "zip" && r.exrCompression != "piz" &&
-                r.exrCompression != "none") {
-                throw UsageError("--exr-compression must be zip, piz or none, not '" +
-                                 r.exrCompression + "'");
-            }
+            r.exrCompression = OneOf(a, value(), {"zip", "piz", "none"});
         } else if (a == "--png-compression") {
-            r.pngCompression = value();
-            if (r.pngCompression != "fast" && r.pngCompression != "small" &&
-                r.pngCompression != "none") {
-                throw UsageError("--png-compression must be fast, small or none, not '" +
-                                 r.pngCompression + "'");
-            }
+            r.pngCompression = OneOf(a, value(), {"fast", "small", "none"});
         } else if (a == "--batch-rays") {
             r.options.batchRays = ParseNumber<uint32_t>(a, value(), 64, 1u << 24);
         } else if (a == "--cl-options") {
@@ -213,11 +206,7 @@ RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
             raster::ParseHull(r.options.hull);  // throws UsageError on an unknown name
         } else if (a == "--depth-bits") {
             if (r.rasterOption.empty()) r.rasterOption = a;
-            const std::string& bits = value();
-            if (bits != "16" && bits != "24" && bits != "32") {
-                throw UsageError("--depth-bits must be 16, 24 or 32, not '" + bits + "'");
-            }
-            r.depthBits = std::stoi(bits);
+            r.depthBits = std::stoi(OneOf(a, value(), {"16", "24", "32"}));
         } else if (a == "--depth-scale") {
             if (r.rasterOption.empty()) r.rasterOption = a;
             const std::string& scale = value();

@@ -1,6 +1,7 @@
 #include "rayclass/render/launch.h"
 
 #include <algorithm>
+#include <memory>
 #include <numeric>
 
 #include "rayclass/core/large_pages.h"
@@ -9,16 +10,21 @@ namespace rayclass::render {
 
 namespace {
 
-struct LargePages {
-    void* p;
-    size_t bytes;
+// Memory of AllocateLarge's, freed with its owner.
+class LargePages {
+  public:
+    explicit LargePages(size_t bytes) : p_(AllocateLarge(bytes)), bytes_(bytes) {}
+    ~LargePages() { FreeLarge(p_, bytes_); }
+    LargePages(const LargePages&) = delete;
+    LargePages& operator=(const LargePages&) = delete;
+    void* data() const { return p_; }
+
+  private:
+    void* p_;
+    size_t bytes_;
 };
 
-void CL_CALLBACK FreePages(cl_mem, void* pages) {
-    const auto* own = static_cast<LargePages*>(pages);
-    FreeLarge(own->p, own->bytes);
-    delete own;
-}
+void CL_CALLBACK FreePages(cl_mem, void* pages) { delete static_cast<LargePages*>(pages); }
 
 }  // namespace
 
@@ -31,21 +37,16 @@ cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags, Wr
     // PoCL's own allocations are malloc's, on 4 KiB pages: the kernels' first writes to a
     // render's ray and shading buffers took 24k of sibenik.json's 53k page faults. Over memory
     // of our own the device works in place, and the buffer frees it when it goes.
-    auto* pages = new LargePages{nullptr, bytes};
-    try {
-        pages->p = AllocateLarge(bytes);
-        cl::Buffer buffer = clrt::Check("clCreateBuffer", [&] {
-            return cl::Buffer(ctx.context(), (flags & ~CL_MEM_ALLOC_HOST_PTR) | CL_MEM_USE_HOST_PTR,
-                              bytes, pages->p);
-        });
-        clrt::Check("clSetMemObjectDestructorCallback",
-                    [&] { buffer.setDestructorCallback(FreePages, pages); });
-        return buffer;
-    } catch (...) {
-        FreeLarge(pages->p, bytes);
-        delete pages;
-        throw;
-    }
+    // (Declared before the buffer: should the callback fail, the buffer goes first.)
+    auto pages = std::make_unique<LargePages>(bytes);
+    cl::Buffer buffer = clrt::Check("clCreateBuffer", [&] {
+        return cl::Buffer(ctx.context(), (flags & ~CL_MEM_ALLOC_HOST_PTR) | CL_MEM_USE_HOST_PTR,
+                          bytes, pages->data());
+    });
+    clrt::Check("clSetMemObjectDestructorCallback",
+                [&] { buffer.setDestructorCallback(FreePages, pages.get()); });
+    pages.release();  // the buffer's now
+    return buffer;
 }
 
 size_t BatchRays(size_t requested, size_t imageRays, uint32_t nLights, uint64_t maxAllocBytes) {

@@ -389,20 +389,20 @@ ObjMesh Join(std::vector<std::optional<ObjParser>>& parts, const fs::path& file)
     size_t triangles = 0;
     for (const auto& part : parts) triangles += part->mesh_.triangles.size();
     mesh.triangles.reserve(triangles);
+    const auto append = [](auto& to, auto& from) {
+        if (to.empty()) {
+            to = std::move(from);
+        } else {
+            to.insert(to.end(), std::make_move_iterator(from.begin()),
+                      std::make_move_iterator(from.end()));
+        }
+    };
     for (size_t p = 0; p < parts.size(); ++p) {
         ObjMesh& m = parts[p]->mesh_;
         for (ObjTriangle t : m.triangles) {
             if (t.material != kObjNone) t.material = local[p][size_t(t.material)];
             mesh.triangles.push_back(t);
         }
-        auto append = [](auto& to, auto& from) {
-            if (to.empty()) {
-                to = std::move(from);
-            } else {
-                to.insert(to.end(), std::make_move_iterator(from.begin()),
-                          std::make_move_iterator(from.end()));
-            }
-        };
         append(mesh.positions, m.positions);
         append(mesh.normals, m.normals);
         append(mesh.texcoords, m.texcoords);

@@ -91,16 +91,29 @@ std::string_view Trim(std::string_view s) {
     return s;
 }
 
+namespace {
+
+// A physical line (without its '\n') as LineReader reads it: the comment cut off, trimmed.
+std::string_view Uncommented(std::string_view physical) {
+    if (const void* hash = std::memchr(physical.data(), '#', physical.size())) {
+        physical = physical.substr(0, size_t(static_cast<const char*>(hash) - physical.data()));
+    }
+    return Trim(physical);
+}
+
+// Whether an uncommented physical line continues onto the next: a '\' inside a comment
+// continues nothing.
+bool Continues(std::string_view s) { return !s.empty() && s.back() == '\\'; }
+
+}  // namespace
+
 bool ContinuesBefore(std::string_view text, size_t end) {
-    const size_t newline = text.rfind('\n', end == 0 ? 0 : end - 1);
-    const size_t start = newline == std::string_view::npos || end == 0 ? 0 : newline + 1;
-    std::string_view physical = text.substr(start, end - start);
-    physical = Trim(physical.substr(0, physical.find('#')));
-    return !physical.empty() && physical.back() == '\\';
+    const size_t newline = end == 0 ? std::string_view::npos : text.rfind('\n', end - 1);
+    const size_t start = newline == std::string_view::npos ? 0 : newline + 1;
+    return Continues(Uncommented(text.substr(start, end - start)));
 }
 
 bool LineReader::Next(std::string_view& line, int& lineNumber) {
-    // One physical line with its comment cut off; a '\' inside a comment continues nothing.
     const auto readPhysical = [this]() {
         const char* start = text_.data() + pos_;
         const size_t left = text_.size() - pos_;
@@ -108,24 +121,19 @@ bool LineReader::Next(std::string_view& line, int& lineNumber) {
         const size_t length = newline ? size_t(static_cast<const char*>(newline) - start) : left;
         pos_ += newline ? length + 1 : length;
         ++physicalLine_;
-        std::string_view physical(start, length);
-        if (const void* hash = std::memchr(start, '#', length)) {
-            physical = physical.substr(0, size_t(static_cast<const char*>(hash) - start));
-        }
-        return Trim(physical);
+        return Uncommented(std::string_view(start, length));
     };
-    const auto continues = [](std::string_view s) { return !s.empty() && s.back() == '\\'; };
 
     while (pos_ < text_.size()) {
         lineNumber = physicalLine_ + 1;
         std::string_view logical = readPhysical();
-        if (continues(logical)) {
+        if (Continues(logical)) {
             joined_.assign(logical.substr(0, logical.size() - 1));
             std::string_view next = logical;
-            while (continues(next) && pos_ < text_.size()) {
+            while (Continues(next) && pos_ < text_.size()) {
                 next = readPhysical();
                 joined_ += ' ';
-                joined_ += continues(next) ? next.substr(0, next.size() - 1) : next;
+                joined_ += Continues(next) ? next.substr(0, next.size() - 1) : next;
             }
             logical = Trim(joined_);
         }

@@ -4,15 +4,13 @@
 #include "rayclass/core/large_pages.h"
 
 #include <gtest/gtest.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
-#include <cerrno>
 #include <cstdint>
 #include <fstream>
 #include <sstream>
 #include <string>
 
+#include "core/mapped.h"
 #include "rayclass/core/scratch_vector.h"
 
 namespace rayclass {
@@ -20,13 +18,7 @@ namespace {
 
 bool Aligned(const void* p) { return reinterpret_cast<uintptr_t>(p) % kHugePageBytes == 0; }
 
-// Whether the page at p is mapped (mincore fails with ENOMEM on an unmapped range).
-bool Mapped(const void* p) {
-    unsigned char resident;
-    const uintptr_t page =
-        reinterpret_cast<uintptr_t>(p) / sysconf(_SC_PAGESIZE) * sysconf(_SC_PAGESIZE);
-    return mincore(reinterpret_cast<void*>(page), 1, &resident) == 0 || errno != ENOMEM;
-}
+using testing::Mapped;
 
 // The "THPeligible:" field of /proc/self/smaps for the mapping that starts at p ("" if none).
 std::string ThpEligible(const void* p) {

@@ -4,14 +4,12 @@
 #include "rayclass/render/launch.h"
 
 #include <gtest/gtest.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
-#include <cerrno>
 #include <cstdint>
 #include <numeric>
 #include <vector>
 
+#include "core/mapped.h"
 #include "rayclass/core/large_pages.h"
 
 namespace rayclass::render {
@@ -22,10 +20,7 @@ clrt::Context& Ctx() {
     return ctx;
 }
 
-bool Mapped(const void* p) {
-    unsigned char resident;
-    return mincore(const_cast<void*>(p), 1, &resident) == 0 || errno != ENOMEM;
-}
+using rayclass::testing::Mapped;
 
 TEST(DeviceBuffer, LargeOnesLieInHugePagesOfTheirOwnAndGoWithTheBuffer) {
     clrt::Context& ctx = Ctx();
