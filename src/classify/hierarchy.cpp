@@ -156,6 +156,10 @@ void Hierarchy::Insert(RayView rays, RayUse use) {
     nInserted_ += uint32_t(rays.size());
 }
 
+uint32_t Hierarchy::TaskCut(uint32_t nRays) const {
+    return params_.taskRays > 0 ? params_.taskRays : std::max(kTaskRaysMin, nRays / kTasks);
+}
+
 void Hierarchy::Subdivide(LeafBatch& out) {
     counters_ = {};
     // rayIndex is resized, not cleared (and candidates regrown in Join): every slot is written
@@ -163,6 +167,7 @@ void Hierarchy::Subdivide(LeafBatch& out) {
     out.leaves.clear();
     out.missed.clear();
     out.nRays = nInserted_;
+    if (SubdivideFromEnds(out)) return;
     uint32_t begin[kFaceCount], end[kFaceCount];
     Bounds6 faceBounds[kFaceCount];
     ConvertAll(begin, end, faceBounds, out);
@@ -182,14 +187,14 @@ void Hierarchy::Subdivide(LeafBatch& out) {
         }
     }
     Schedule schedule;
-    schedule.cut = params_.taskRays > 0 ? params_.taskRays : std::max(kTaskRaysMin, n / kTasks);
+    schedule.cut = TaskCut(n);
     nParts_ = 0;
     for (int f = 0; f < kFaceCount; ++f) {
         if (begin[f] == end[f]) continue;
         const FaceList& all = (*faceLists_)[f];
         schedule.queue.push_back({FaceRoot(f), begin[f], end[f], 0, faceBounds[f],
                                   View(all, all.Size(), &listFrame_[f]), false, PlanAt(),
-                                  &NewPart(begin[f])});
+                                  &NewPart(begin[f]), CellAt()});
     }
     const int threads = StartWorkers(schedule, n, out);
     OnThreads(threads, [&](int t) { Work(workers_[size_t(t)], t); });
@@ -262,8 +267,12 @@ void Hierarchy::Work(Worker& w, int index) {
         part.leafBegin = w.leaves.size();
         part.nodeBegin = w.nodes.size();
         if (part.newRoot) w.nodes.push_back(part.root);  // local id kLocal | 0
-        Process(w, task.node, task.begin, task.end, task.buf, task.tight, task.list, task.reuseList,
-                task.plan);
+        if (task.cells.root != kNoNode) {
+            ProcessCells(w, task.cells, task.list, task.reuseList);
+        } else {
+            Process(w, task.node, task.begin, task.end, task.buf, task.tight, task.list,
+                    task.reuseList, task.plan);
+        }
         part.leafEnd = w.leaves.size();
         part.nodeEnd = w.nodes.size();
         std::lock_guard lock(s.mutex);
@@ -313,7 +322,7 @@ void Hierarchy::Spawn(Worker& w, uint32_t node, int field, const Box5* newBox, u
         }
         // `list` views a kept list or the face's list: both outlive the task.
         // So does a plan: workers keep theirs until the next Subdivide.
-        s.queue.push_back({root, begin, end, buf, tight, list, reuseList, plan, &part});
+        s.queue.push_back({root, begin, end, buf, tight, list, reuseList, plan, &part, CellAt()});
     }
     s.changed.notify_one();
 }

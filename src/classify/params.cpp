@@ -1,6 +1,7 @@
 #include "rayclass/classify/params.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -41,8 +42,8 @@ uint32_t ParseCount(const std::string& name, const std::string& value, uint32_t 
     return uint32_t(v);
 }
 
-float ParseFloat(const std::string& name, const std::string& value, float lo, float hi,
-                 bool openLo, const char* expected) {
+float ParseFloat(const std::string& name, const std::string& value, float lo, float hi, bool openLo,
+                 const char* expected) {
     const char* s = value.c_str();
     char* end = nullptr;
     errno = 0;
@@ -58,7 +59,8 @@ float ParseFloat(const std::string& name, const std::string& value, float lo, fl
 
 const char* ParamNames() {
     return "min-rays, min-candidates, splits-per-list, split, min-origin-fraction, "
-           "min-dir-fraction, dir-weight, threads, task-rays, plan-rays, vertex-gather";
+           "min-dir-fraction, dir-weight, threads, task-rays, plan-rays, light-cells, "
+           "vertex-gather";
 }
 
 void SetParam(Params& params, const std::string& name, const std::string& value) {
@@ -77,8 +79,7 @@ void SetParam(Params& params, const std::string& name, const std::string& value)
             Bad(name, value, "midpoint or median");
         }
     } else if (name == "min-origin-fraction") {
-        params.minOriginFraction =
-            ParseFloat(name, value, 0.0f, 1.0f, false, "a number in [0, 1]");
+        params.minOriginFraction = ParseFloat(name, value, 0.0f, 1.0f, false, "a number in [0, 1]");
     } else if (name == "min-dir-fraction") {
         params.minDirFraction = ParseFloat(name, value, 0.0f, 1.0f, false, "a number in [0, 1]");
     } else if (name == "dir-weight") {
@@ -87,13 +88,28 @@ void SetParam(Params& params, const std::string& name, const std::string& value)
         params.taskRays = ParseCount(name, value, 0);
     } else if (name == "plan-rays") {
         params.planRays = ParseCount(name, value, 0);
+    } else if (name == "light-cells") {
+        if (value == "auto") {
+            params.lightCells = -1;
+        } else if (value == "off") {
+            params.lightCells = 0;
+        } else {
+            const char* s = value.c_str();
+            char* end = nullptr;
+            const long v = std::strtol(s, &end, 10);
+            if (value.empty() || *end != '\0' || !std::isdigit(static_cast<unsigned char>(s[0])) ||
+                v < 4 || v > 256 || (v & (v - 1)) != 0) {
+                Bad(name, value, "auto, off or a power of two from 4 to 256");
+            }
+            params.lightCells = int(v);
+        }
     } else if (name == "vertex-gather") {
         params.vertexGatherCost = ParseFloat(name, value, 0.0f, 1e30f, false, "a number >= 0");
     } else if (name == "threads") {
         params.threads = std::min<uint32_t>(ParseCount(name, value, 0), 256);
     } else {
-        throw UsageError("unknown classify parameter '" + name + "'; valid names: " +
-                         std::string(ParamNames()));
+        throw UsageError("unknown classify parameter '" + name +
+                         "'; valid names: " + std::string(ParamNames()));
     }
 }
 

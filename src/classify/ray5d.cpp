@@ -109,13 +109,16 @@ CommonEnds FindCommonEnds(RayView rays, const Bounds3f& box, float tolerance) {
     }
     CommonEnds out;
     out.tolerance = tolerance;
+    int covered = 0;
     for (int k = 0; k < seen && out.n < CommonEnds::kMax; ++k) {
         if (count[k] < 2 || 32 * count[k] < live) continue;
         // The middle of the sample's ends: nearer the true point than any one of them.
         const glm::vec3 p = 0.5f * (lo[k] + hi[k]);
         if (!box.Contains(p)) continue;
         out.point[size_t(out.n++)] = p;
+        covered += count[k];
     }
+    out.coverSample = out.n > 0 && covered == live;
     return out;
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
@@ -89,6 +90,15 @@ inline void GrowBounds(Bounds6& b, const float* p) {
 
 // Whether coordinate k varies among the rays of bounds b: only such coordinates are stored.
 inline bool Varies(const Bounds6& b, int k) { return b.lo[k] < b.hi[k]; }
+
+// The face of a ray's direction, or kFaceCount when the direction is zero or not finite (such a
+// ray misses everything, whichever path ToRay5 takes). ToRay5 picks the same face for the rest.
+inline int DirectionFace(const glm::vec3& d) {
+    if (!std::isfinite(d.x) || !std::isfinite(d.y) || !std::isfinite(d.z)) return kFaceCount;
+    const int a = DominantAxis(d);
+    if (!(std::abs(d[a]) > 0.0f)) return kFaceCount;
+    return 2 * a + (d[a] < 0.0f ? 1 : 0);
+}
 
 inline Bounds6 EmptyBounds() {
     Bounds6 b;

@@ -9,6 +9,7 @@
 
 #include "rayclass/classify/hierarchy.h"
 #include "rayclass/classify/query.h"
+#include "rayclass/geometry/offset.h"
 
 namespace rayclass::classify {
 
@@ -91,6 +92,60 @@ inline std::vector<Hit<float>> Query(const scene::Scene& s, const LeafBatch& bat
     std::vector<Hit<float>> hits(rays.size());
     QueryHost(s, batch, rays, hits);
     return hits;
+}
+
+inline glm::vec3 RandomDirection(std::mt19937& rng) {
+    std::normal_distribution<float> n;
+    glm::vec3 d;
+    do d = glm::vec3(n(rng), n(rng), n(rng));
+    while (glm::length(d) < 1e-3f);
+    return glm::normalize(d);
+}
+
+// Shadow rays as the renderer makes them: slot i * lights.size() + l runs from just above the
+// surface that eye-like ray i hits to light l; every seventh slot is empty (no direction), as for
+// a light behind the surface.
+inline std::vector<Ray> ShadowSlots(const scene::Scene& s, const std::vector<glm::vec3>& lights,
+                             uint32_t seed, int n) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> pos(-1.2f, 1.2f);
+    std::vector<Ray> out;
+    for (int i = 0; out.size() < size_t(n) * lights.size(); ++i) {
+        Ray eye;
+        eye.origin = glm::vec3(pos(rng), pos(rng), -1.5f);
+        eye.direction = RandomDirection(rng);
+        const Hit<float> h = geometry::IntersectBruteForce(s, ToGeometryRay(eye));
+        if (!h.Valid()) continue;
+        const glm::vec3 p = eye.origin + h.t * eye.direction;
+        for (size_t l = 0; l < lights.size(); ++l) {
+            Ray r;
+            r.tMax = 0.0f;
+            r.direction = glm::vec3(0.0f);
+            if ((out.size() % 7) != 3) {
+                r.origin = geometry::OffsetRayOrigin(p, -eye.direction);
+                const glm::vec3 toLight = lights[l] - r.origin;
+                r.tMax = glm::length(toLight);
+                r.direction = toLight / r.tMax;
+            }
+            out.push_back(r);
+        }
+    }
+    return out;
+}
+
+inline std::vector<bool> Blocked(const scene::Scene& s, const LeafBatch& batch,
+                          const std::vector<Ray>& rays) {
+    std::vector<Hit<float>> hits(rays.size());
+    QueryHost(s, batch, rays, hits, /*anyHit=*/true);
+    std::vector<bool> out;
+    for (const auto& h : hits) out.push_back(h.Valid());
+    return out;
+}
+
+inline std::vector<bool> BlockedBruteForce(const scene::Scene& s, const std::vector<Ray>& rays) {
+    std::vector<bool> out;
+    for (const Ray& r : rays) out.push_back(geometry::Occluded(s, ToGeometryRay(r)));
+    return out;
 }
 
 inline void ExpectEveryRayOnce(const LeafBatch& batch, uint32_t nRays) {

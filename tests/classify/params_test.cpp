@@ -57,6 +57,24 @@ TEST(SetParam, UnknownNameListsTheValidNames) {
     }
 }
 
+TEST(SetParam, LightCellsIsAutoOffOrAPowerOfTwoFrom4To256) {
+    Params p;
+    EXPECT_EQ(p.lightCells, -1);
+    SetParam(p, "light-cells", "off");
+    EXPECT_EQ(p.lightCells, 0);
+    SetParam(p, "light-cells", "256");
+    EXPECT_EQ(p.lightCells, 256);
+    SetParam(p, "light-cells", "4");
+    EXPECT_EQ(p.lightCells, 4);
+    SetParam(p, "light-cells", "auto");
+    EXPECT_EQ(p.lightCells, -1);
+    for (const char* v : {"0", "2", "48", "512", "-4", "+64", "64x", "", "on"}) {
+        EXPECT_EQ(MessageOf("light-cells", v),
+                  std::string("classify parameter light-cells=") + v +
+                      ": expected auto, off or a power of two from 4 to 256");
+    }
+}
+
 TEST(SetParam, VertexGatherIsANonNegativeNumber) {
     EXPECT_EQ(MessageOf("vertex-gather", "-1"),
               "classify parameter vertex-gather=-1: expected a number >= 0");

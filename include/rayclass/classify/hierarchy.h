@@ -102,8 +102,15 @@ struct LeafBatch {
     // sibenik_mirror) are written once, by every thread, and never zeroed first; its capacity
     // is room reserved for the next generation, of which only the pages written are touched.
     DenseScratchVector<RcCandidate> candidates;
-    std::vector<rc_uint> missed;          // rays that miss the scene box: answered "no hit"
-    uint32_t nRays = 0;                   // rays of the generation (leaf rays + missed)
+    std::vector<rc_uint> missed;  // rays that miss the scene box: answered "no hit"
+    uint32_t nRays = 0;           // rays of the generation (leaf rays + missed)
+};
+
+// The bounds of the rays of a range of direction cells (Hierarchy::SubdivideFromEnds): their
+// (u, v) cells and their largest end X.
+struct CellBox {
+    uint8_t uLo, uHi, vLo, vHi;  // in cells; uLo > uHi when no cell holds a ray
+    float end;
 };
 
 // What a generation's rays ask for: the nearest hit, or any hit (shadow rays).
@@ -111,13 +118,14 @@ enum class RayUse : uint8_t { kNearestHit, kAnyHit };
 
 // Counters of the last Subdivide().
 struct BuildCounters {
-    uint64_t boxTests = 0;    // candidate tests made while filtering lists
-    uint64_t rayMoves = 0;    // rays moved by partitions and plans (sum over levels)
-    uint64_t fromEnd = 0;     // any-hit rays classified from their common end (CommonEnds)
-    uint32_t plans = 0;       // nodes whose next levels of splits were planned at once
-    uint32_t sharedPlans = 0;  // plans whose rays more than one thread moved
-    uint32_t maxDepth = 0;    // deepest leaf
-    size_t scratchBytes = 0;  // peak bytes of the per-depth list and ray buffers
+    uint64_t boxTests = 0;      // candidate tests made while filtering lists
+    uint64_t rayMoves = 0;      // rays moved by partitions and plans (sum over levels)
+    uint64_t fromEnd = 0;       // any-hit rays classified from their common end (CommonEnds)
+    uint32_t cellsPerSide = 0;  // the direction grid of SubdivideFromEnds; 0: the general path
+    uint32_t plans = 0;         // nodes whose next levels of splits were planned at once
+    uint32_t sharedPlans = 0;   // plans whose rays more than one thread moved
+    uint32_t maxDepth = 0;      // deepest leaf
+    size_t scratchBytes = 0;    // peak bytes of the per-depth list and ray buffers
 };
 
 class Hierarchy {
@@ -251,6 +259,13 @@ class Hierarchy {
         const Plan* plan = nullptr;
         int level = 0, cellLo = 0, cellHi = 0;
     };
+    // A node of a generation sorted into direction cells (see CellGrid): the cells whose keys
+    // start with `prefix`, `depth` bits long, within root `root`.
+    struct CellAt {
+        uint32_t root = kNoNode;  // end * kFaceCount + face; kNoNode: no cell node
+        uint32_t prefix = 0;
+        int depth = 0;
+    };
     // A subtree to build: a face root, or a later child of a node with many rays.
     struct Task {
         uint32_t node, begin, end;
@@ -260,6 +275,7 @@ class Hierarchy {
         bool reuseList;
         PlanAt plan;
         Part* part;
+        CellAt cells;  // a node of the direction cells instead (ProcessCells)
     };
     struct Schedule;  // the task queue of one Subdivide (private to the module)
     // One thread's state while subdividing. The arrays keep their memory between generations.
@@ -275,8 +291,8 @@ class Hierarchy {
         ScratchVector<RcCandidate> candidates;
         size_t listAt = 0, listEnd = 0;  // the rest of the chunk of output room it claimed
         std::vector<Node> nodes;
-        ListArena stack;  // the lists of the nodes on the path being built
-        ListArena kept;   // lists of nodes whose later children are tasks
+        ListArena stack;         // the lists of the nodes on the path being built
+        ListArena kept;          // lists of nodes whose later children are tasks
         std::deque<Plan> plans;  // this generation's (tasks of any thread may read them)
     };
 
@@ -339,6 +355,24 @@ class Hierarchy {
     bool PlannedSplit(const PlanAt& at, uint32_t begin, uint32_t end, uint32_t& split,
                       Bounds6 childBox[2], PlanAt childAt[2]) const;
     Bounds6 Bounds(int face, int buf, uint32_t begin, uint32_t end) const;
+    // Any-hit rays that all end at common points (point lights) classified from there without
+    // moving them level by level (light_cells.cpp): one counting sort puts the rays in order of
+    // a key, the point, the face of the direction from it and the (u, v) cell of a grid of
+    // 2^bits x 2^bits on that face, the cell's bits interleaved (u's first), so that every
+    // halving of a cell range, u and v in turn, leaves two ranges of keys and of rays. The
+    // hierarchy is the binary tree of those halvings, split by the cost function; a node's
+    // bounds come from a pyramid of the cells' (u, v) ranges and largest ends, so no node reads
+    // a ray. Returns false, doing nothing, when the generation is not such rays.
+    bool SubdivideFromEnds(LeafBatch& out);
+    // The keys of `rays` (kNoNode for a ray that misses) and each cell's count and largest end,
+    // added to `count` and `end`; the misses go to `missed`. False when a ray neither ends at one
+    // of the points nor misses (the generation then takes Subdivide's general path).
+    bool CellKeys(RayView rays, const CommonEnds& ends, uint32_t firstId, uint32_t* keys,
+                  uint32_t* count, float* end, std::vector<rc_uint>& missed,
+                  uint64_t& fromEnd) const;
+    void ProcessCells(Worker& w, CellAt at, const ListView& list, bool reuseList);
+    void SpawnCells(Worker& w, const CellAt& at, const ListView& list, bool reuseList);
+    Bounds6 CellBounds(const CellAt& at) const;
     // Sets the coordinates that do not vary among the face's rays to their value.
     void SetConstants(int face, Bounds6& b) const;
     float SplitValue(Worker& w, int dim, int buf, uint32_t begin, uint32_t end,
@@ -364,6 +398,8 @@ class Hierarchy {
     // workers' own arrays.
     void Join(LeafBatch& out, size_t listsEnd, int threads);
     Part& NewPart(uint32_t begin);
+    // Nodes with more rays than this hand their later children to the task queue.
+    uint32_t TaskCut(uint32_t nRays) const;
     int Threads(uint32_t nRays) const;
 
     const scene::Scene& scene_;
@@ -395,6 +431,23 @@ class Hierarchy {
     // Per face: coordinates that vary among its rays, and the value of those that do not.
     bool active_[kFaceCount][kCoords] = {};
     float constant_[kFaceCount][kCoords] = {};
+    // The direction cells of the last SubdivideFromEnds: the grid, and per root (point and face)
+    // a pyramid of the (u, v) ranges of the non-empty cells under each node of its quadtree,
+    // level after level from the root (1, 4, 16, ... entries; level q's index is a key's top
+    // 2q bits), with the largest end of their rays.
+    struct CellGrid {
+        int bits = 0;
+        uint32_t roots = 0;
+        float origin[CommonEnds::kMax * kFaceCount][3];  // each root's point in its face's frame
+        ScratchVector<uint32_t> key;                     // per ray
+        std::vector<ScratchVector<uint32_t>> count;      // per piece and cell, then positions
+        std::vector<ScratchVector<float>> end;           // per piece and cell: the largest end
+        // Per root, each cell's first position in the root, then the root's size.
+        ScratchVector<uint32_t> begin;
+        std::vector<uint32_t> rootBegin;  // per root, its first position; then the total
+        ScratchVector<CellBox> box;       // the roots' pyramids, one after another
+    };
+    CellGrid cells_;
     // Scratch kept between generations so that steady state allocates nothing.
     std::vector<Worker> workers_;
     std::deque<Part> parts_;  // the first nParts_ belong to this generation's tasks

@@ -74,6 +74,12 @@ struct Params {
     // The top levels of a generation then stream the rays through memory once: below about
     // 64k rays a node's rays stay in the core's cache and single splits cost less.
     uint32_t planRays = 65536;
+    // Any-hit rays that all end at common points (shadow rays to point lights inside the scene
+    // box) are sorted by cell of their direction from the point, on a grid of lightCells x
+    // lightCells cells on each face of the direction cube, and the hierarchy splits ranges of
+    // cells instead of moving rays (Hierarchy::SubdivideFromEnds). A power of two from 4 to 256;
+    // 0: never (such rays take the general path), -1: chosen from the number of rays.
+    int lightCells = -1;
 
     // Minimum hypercube size: a dimension is split only while its extent exceeds this fraction of
     // the face root's extent (scene box side for X, Y, Z; 2 for u, v). Below it the nearest
@@ -94,7 +100,7 @@ struct Params {
 //   min-rays N, min-candidates N, splits-per-list N (N >= 1), split midpoint|median,
 //   min-origin-fraction F, min-dir-fraction F (0 <= F <= 1), dir-weight W (W > 0),
 //   threads N (0: one per core), task-rays N (0: automatic), plan-rays N (0: never),
-//   vertex-gather F (F >= 0).
+//   light-cells auto|off|N (N a power of two from 4 to 256), vertex-gather F (F >= 0).
 // Throws rayclass::UsageError naming the valid names or values when `name` is unknown or `value`
 // does not parse completely or is out of range.
 void SetParam(Params& params, const std::string& name, const std::string& value);

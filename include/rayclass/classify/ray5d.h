@@ -17,10 +17,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <glm/glm.hpp>
 #include <span>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "rayclass/core/bounds.h"
 
@@ -82,6 +81,9 @@ struct CommonEnds {
     // there. It is a quarter of the classification's padding: taking the segment from the point
     // moves it by no more than that, and the padding keeps the rest for the beam test.
     float tolerance = 0.0f;
+    // Whether every live segment of the sample FindCommonEnds read ended at one of the points:
+    // then a generation is likely to hold no other (SubdivideFromEnds tries it).
+    bool coverSample = false;
 
     // The point `ray` ends at, or -1.
     int Match(const Ray& ray) const;

@@ -1,0 +1,156 @@
+// Sixteen rays at a time in AVX-512 registers: loading them from a RayView, taking them from
+// their common ends and finding their faces, with the float operations of the scalar paths
+// (ToRay5, CommonEnds::Oriented), so that both map a ray alike. Private to the classify module;
+// included only where __AVX512F__ is defined.
+#pragma once
+
+#include <cstddef>
+
+#include "avx512.h"
+#include "rayclass/classify/ray5d.h"
+#include "support.h"
+
+namespace rayclass::classify {
+
+// Gather offsets (in floats) of 16 consecutive rays of `rays` from the first.
+inline __m512i RayOffsets16(const RayView& rays) {
+    return _mm512_mullo_epi32(
+        _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+        _mm512_set1_epi32(int(rays.Stride() / 4)));
+}
+
+// DominantAxis of 16 directions (ties to the lower axis): a mask per axis, the direction's
+// absolute components, |d_a| and whether d_a < 0.
+struct Axis16 {
+    __mmask16 isX, isY, isZ, neg;
+    __m512 ax, ay, az, da;
+};
+
+inline Axis16 DominantAxis16(__m512 dx, __m512 dy, __m512 dz) {
+    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
+    Axis16 a;
+    a.ax = _mm512_and_ps(dx, absMask);
+    a.ay = _mm512_and_ps(dy, absMask);
+    a.az = _mm512_and_ps(dz, absMask);
+    a.isX = _mm512_cmp_ps_mask(a.ax, a.ay, _CMP_GE_OQ) & _mm512_cmp_ps_mask(a.ax, a.az, _CMP_GE_OQ);
+    a.isY = __mmask16(~a.isX & _mm512_cmp_ps_mask(a.ay, a.az, _CMP_GE_OQ));
+    a.isZ = __mmask16(~a.isX & ~a.isY);
+    a.da = _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, a.az, a.ay), a.ax);
+    const __m512 sd = _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, dz, dy), dx);
+    a.neg = _mm512_cmp_ps_mask(sd, _mm512_setzero_ps(), _CMP_LT_OQ);
+    return a;
+}
+
+// 16 rays' fields, gathered from a RayView.
+struct Rays16 {
+    __m512 ox, oy, oz, tmin, dx, dy, dz, tmax;
+};
+
+inline Rays16 Gather16(const float* at, __m512i idx, __mmask16 live) {
+    const __m512 zero = _mm512_setzero_ps();
+    Rays16 r;
+    r.ox = _mm512_mask_i32gather_ps(zero, live, idx, at + 0, 4);
+    r.oy = _mm512_mask_i32gather_ps(zero, live, idx, at + 1, 4);
+    r.oz = _mm512_mask_i32gather_ps(zero, live, idx, at + 2, 4);
+    r.tmin = _mm512_mask_i32gather_ps(zero, live, idx, at + 3, 4);
+    r.dx = _mm512_mask_i32gather_ps(zero, live, idx, at + 4, 4);
+    r.dy = _mm512_mask_i32gather_ps(zero, live, idx, at + 5, 4);
+    r.dz = _mm512_mask_i32gather_ps(zero, live, idx, at + 6, 4);
+    r.tmax = _mm512_mask_i32gather_ps(zero, live, idx, at + 7, 4);
+    return r;
+}
+
+// The same for `live` consecutive rays of 32 bytes each (classify::Ray, RcRay): plain loads of two
+// rays a vector, then three rounds of two-source permutes that transpose both 256-bit halves
+// (8 x 8 floats each) at once, instead of eight gathers.
+inline Rays16 Load16Packed(const float* at, size_t live) {
+    __m512 a[8];  // rays k (low half) and k + 8 (high half)
+    for (size_t k = 0; k < 8; ++k) {
+        const __m256 lo = k < live ? _mm256_loadu_ps(at + 8 * k) : _mm256_setzero_ps();
+        const __m256 hi = k + 8 < live ? _mm256_loadu_ps(at + 8 * (k + 8)) : _mm256_setzero_ps();
+        a[k] = _mm512_insertf32x8(_mm512_castps256_ps512(lo), hi, 1);
+    }
+    // Rays 2m and 2m + 1: their even fields and their odd fields, interleaved.
+    const __m512i even =
+        _mm512_setr_epi32(0, 16, 2, 18, 4, 20, 6, 22, 8, 24, 10, 26, 12, 28, 14, 30);
+    const __m512i odd = _mm512_add_epi32(even, _mm512_set1_epi32(1));
+    __m512 e[4], o[4];
+    for (int m = 0; m < 4; ++m) {
+        e[m] = _mm512_permutex2var_ps(a[2 * m], even, a[2 * m + 1]);
+        o[m] = _mm512_permutex2var_ps(a[2 * m], odd, a[2 * m + 1]);
+    }
+    // Four rays side by side: the first and third of each pair's four fields, and the second and
+    // fourth.
+    const __m512i f02 = _mm512_setr_epi32(0, 1, 16, 17, 4, 5, 20, 21, 8, 9, 24, 25, 12, 13, 28, 29);
+    const __m512i f13 = _mm512_add_epi32(f02, _mm512_set1_epi32(2));
+    __m512 q[2][4];
+    for (int n = 0; n < 2; ++n) {
+        q[n][0] = _mm512_permutex2var_ps(e[2 * n], f02, e[2 * n + 1]);  // ox, dx
+        q[n][1] = _mm512_permutex2var_ps(e[2 * n], f13, e[2 * n + 1]);  // oz, dz
+        q[n][2] = _mm512_permutex2var_ps(o[2 * n], f02, o[2 * n + 1]);  // oy, dy
+        q[n][3] = _mm512_permutex2var_ps(o[2 * n], f13, o[2 * n + 1]);  // tmin, tmax
+    }
+    // One field, eight rays a half.
+    const __m512i first =
+        _mm512_setr_epi32(0, 1, 2, 3, 16, 17, 18, 19, 8, 9, 10, 11, 24, 25, 26, 27);
+    const __m512i second = _mm512_add_epi32(first, _mm512_set1_epi32(4));
+    Rays16 r;
+    r.ox = _mm512_permutex2var_ps(q[0][0], first, q[1][0]);
+    r.dx = _mm512_permutex2var_ps(q[0][0], second, q[1][0]);
+    r.oz = _mm512_permutex2var_ps(q[0][1], first, q[1][1]);
+    r.dz = _mm512_permutex2var_ps(q[0][1], second, q[1][1]);
+    r.oy = _mm512_permutex2var_ps(q[0][2], first, q[1][2]);
+    r.dy = _mm512_permutex2var_ps(q[0][2], second, q[1][2]);
+    r.tmin = _mm512_permutex2var_ps(q[0][3], first, q[1][3]);
+    r.tmax = _mm512_permutex2var_ps(q[0][3], second, q[1][3]);
+    return r;
+}
+
+// CommonEnds::Oriented for the live lanes of r, with the same float operations, so both paths
+// take a ray alike. Returns the lanes taken from an end; `which`, when given, gets each such
+// lane's end (CommonEnds::Match).
+inline __mmask16 Orient16(const CommonEnds& ends, __mmask16 live, Rays16& r,
+                          __m512i* which = nullptr) {
+    if (ends.n == 0) return 0;
+    const __m512 zero = _mm512_setzero_ps();
+    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
+    const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
+    const __m512 tol = _mm512_set1_ps(ends.tolerance);
+    const __mmask16 noDir = _mm512_cmp_ps_mask(r.dx, zero, _CMP_EQ_OQ) &
+                            _mm512_cmp_ps_mask(r.dy, zero, _CMP_EQ_OQ) &
+                            _mm512_cmp_ps_mask(r.dz, zero, _CMP_EQ_OQ);
+    const __mmask16 segment = __mmask16(
+        live & ~noDir & _mm512_cmp_ps_mask(r.tmin, r.tmax, _CMP_LT_OQ) &
+        _mm512_cmp_ps_mask(_mm512_and_ps(r.tmax, absMask), _mm512_set1_ps(kFloatMax), _CMP_LE_OQ));
+    if (!segment) return 0;
+    const __m512 ex = _mm512_add_ps(r.ox, _mm512_mul_ps(r.tmax, r.dx));
+    const __m512 ey = _mm512_add_ps(r.oy, _mm512_mul_ps(r.tmax, r.dy));
+    const __m512 ez = _mm512_add_ps(r.oz, _mm512_mul_ps(r.tmax, r.dz));
+    auto near = [&](__m512 e, float p) {
+        return _mm512_cmp_ps_mask(_mm512_and_ps(_mm512_sub_ps(e, _mm512_set1_ps(p)), absMask), tol,
+                                  _CMP_LE_OQ);
+    };
+    __mmask16 matched = 0;
+    __m512 px = zero, py = zero, pz = zero;
+    for (int k = 0; k < ends.n; ++k) {
+        const glm::vec3& p = ends.point[size_t(k)];
+        const __mmask16 m =
+            __mmask16(segment & ~matched & near(ex, p.x) & near(ey, p.y) & near(ez, p.z));
+        px = _mm512_mask_blend_ps(m, px, _mm512_set1_ps(p.x));
+        py = _mm512_mask_blend_ps(m, py, _mm512_set1_ps(p.y));
+        pz = _mm512_mask_blend_ps(m, pz, _mm512_set1_ps(p.z));
+        if (which) *which = _mm512_mask_blend_epi32(m, *which, _mm512_set1_epi32(k));
+        matched |= m;
+    }
+    r.ox = _mm512_mask_blend_ps(matched, r.ox, px);
+    r.oy = _mm512_mask_blend_ps(matched, r.oy, py);
+    r.oz = _mm512_mask_blend_ps(matched, r.oz, pz);
+    r.tmax = _mm512_mask_blend_ps(matched, r.tmax, _mm512_sub_ps(r.tmax, r.tmin));
+    r.tmin = _mm512_mask_blend_ps(matched, r.tmin, zero);
+    r.dx = _mm512_mask_xor_ps(r.dx, matched, r.dx, signMask);
+    r.dy = _mm512_mask_xor_ps(r.dy, matched, r.dy, signMask);
+    r.dz = _mm512_mask_xor_ps(r.dz, matched, r.dz, signMask);
+    return matched;
+}
+
+}  // namespace rayclass::classify
