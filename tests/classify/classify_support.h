@@ -106,7 +106,7 @@ inline glm::vec3 RandomDirection(std::mt19937& rng) {
 // surface that eye-like ray i hits to light l; every seventh slot is empty (no direction), as for
 // a light behind the surface.
 inline std::vector<Ray> ShadowSlots(const scene::Scene& s, const std::vector<glm::vec3>& lights,
-                             uint32_t seed, int n) {
+                                    uint32_t seed, int n) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> pos(-1.2f, 1.2f);
     std::vector<Ray> out;
@@ -134,7 +134,7 @@ inline std::vector<Ray> ShadowSlots(const scene::Scene& s, const std::vector<glm
 }
 
 inline std::vector<bool> Blocked(const scene::Scene& s, const LeafBatch& batch,
-                          const std::vector<Ray>& rays) {
+                                 const std::vector<Ray>& rays) {
     std::vector<Hit<float>> hits(rays.size());
     QueryHost(s, batch, rays, hits, /*anyHit=*/true);
     std::vector<bool> out;
