@@ -695,15 +695,6 @@ int Hierarchy::SplitDim(int face, const float* extent) const {
     return dim;
 }
 
-namespace {
-// The midpoint split of [lo, hi]. When lo and hi are adjacent floats the middle rounds onto lo;
-// hi still splits them.
-float Midpoint(float lo, float hi) {
-    const float m = 0.5f * (lo + hi);
-    return m > lo ? m : hi;
-}
-}  // namespace
-
 float Hierarchy::SplitValue(Worker& w, int dim, int buf, uint32_t begin, uint32_t end,
                             const Bounds6& tight) {
     const float lo = tight.lo[dim], hi = tight.hi[dim];

@@ -89,6 +89,8 @@ bool Hierarchy::SubdivideFromEnds(LeafBatch& out) {
     if (ends.n == 0 || !ends.coverSample || rays.size() == 0) return false;
     const uint32_t n = uint32_t(rays.size());
     CellGrid& g = cells_;
+    g.rays = rays;
+    g.ends = ends;
     g.roots = uint32_t(ends.n) * kFaceCount;
     g.bits = CellBits(n, g.roots, params_.lightCells);
     const int bits2 = 2 * g.bits;
@@ -174,12 +176,13 @@ bool Hierarchy::SubdivideFromEnds(LeafBatch& out) {
 
     // Pass 2: the rays' ids in key order, straight into the leaves' ray array.
     out.rayIndex.resize(nLeafRays);
+    rayOut_ = out.rayIndex.data();
     OnThreads(threads, [&](int t) {
         for (size_t p = size_t(t); p < pieces; p += size_t(threads)) {
             uint32_t* next = g.count[p].data();
             const uint32_t* key = g.key.data();
             const uint32_t* rootBegin = g.rootBegin.data();
-            rc_uint* to = out.rayIndex.data();
+            rc_uint* to = rayOut_;
             const uint32_t end = uint32_t(std::min(size_t(n), (p + 1) * step));
             for (uint32_t i = uint32_t(p * step); i < end; ++i) {
                 const uint32_t k = key[i];
@@ -219,6 +222,7 @@ bool Hierarchy::SubdivideFromEnds(LeafBatch& out) {
     const int workers = StartWorkers(schedule, nLeafRays, out);
     OnThreads(workers, [&](int t) { Work(workers_[size_t(t)], t); });
     Join(out, schedule.listsEnd.load(), workers);
+    rayOut_ = nullptr;
     size_t scratch =
         (g.key.capacity() + g.begin.capacity()) * 4 + g.box.capacity() * sizeof(CellBox);
     for (size_t p = 0; p < g.count.size(); ++p)
@@ -469,7 +473,11 @@ void Hierarchy::ProcessCells(Worker& w, CellAt at, const ListView& list, bool re
     node.face = uint8_t(face);
     node.depth = uint8_t(at.depth);
     int dim = 0;
-    if (at.depth < bits2 && ChooseSplit(node, tight, nRays, own, dim)) {
+    if (ChooseSplit(node, tight, nRays, own, dim)) {
+        if (at.depth == bits2) {
+            RefineCell(w, at.root, begin, nRays, at.depth, own);
+            return;
+        }
         const bool reuse = filtered && (at.depth + 1) % std::max(params_.splitsPerList, 1) != 0;
         const CellAt left{at.root, 2 * at.prefix, at.depth + 1};
         const CellAt right{at.root, 2 * at.prefix + 1, at.depth + 1};
@@ -484,6 +492,66 @@ void Hierarchy::ProcessCells(Worker& w, CellAt at, const ListView& list, bool re
     leaf.rayBegin = begin;
     leaf.rayCount = nRays;
     PushLeaf(w, leaf, NewNode(w, node.box, face, at.depth, false), own, tight.hi[kDims]);
+}
+
+void Hierarchy::RefineCell(Worker& w, uint32_t root, uint32_t begin, uint32_t n, int depth,
+                           const ListView& list) {
+    const CellGrid& g = cells_;
+    const float faceEnd = BoxInFace(int(root % kFaceCount), sceneBox_).hi[0];
+    std::vector<CellRay>& rays = w.cellRays;
+    rays.resize(n);
+    for (uint32_t j = 0; j < n; ++j) {
+        // Mapped as CellKeys mapped it: from its point, through ToRay5's fast path.
+        const uint32_t id = rayOut_[begin + j];
+        const Ray ray = g.rays[id];
+        Ray5 p;
+        ToRay5(g.ends.Oriented(ray, g.ends.Match(ray)), sceneBox_, p);
+        rays[j] = {p.p[3], p.p[4], std::min(p.p[0] + p.reach, faceEnd), id};
+    }
+    ProcessCellRays(w, root, rays.data(), n, begin, depth, list, true);
+}
+
+void Hierarchy::ProcessCellRays(Worker& w, uint32_t root, CellRay* rays, uint32_t n, uint32_t slot,
+                                int depth, const ListView& list, bool reuseList) {
+    const ArenaMark release(w.stack);
+    const int face = int(root % kFaceCount);
+    Bounds6 tight;
+    for (int k = 0; k < 3; ++k) tight.lo[k] = tight.hi[k] = cells_.origin[root][k];
+    tight.lo[3] = tight.lo[4] = kInf;
+    tight.hi[3] = tight.hi[4] = tight.hi[kDims] = -kInf;
+    for (uint32_t j = 0; j < n; ++j) {
+        tight.lo[3] = std::min(tight.lo[3], rays[j].u);
+        tight.hi[3] = std::max(tight.hi[3], rays[j].u);
+        tight.lo[4] = std::min(tight.lo[4], rays[j].v);
+        tight.hi[4] = std::max(tight.hi[4], rays[j].v);
+        tight.hi[kDims] = std::max(tight.hi[kDims], rays[j].end);
+    }
+    tight.lo[kDims] = tight.lo[0];
+    const bool filtered = !reuseList && !KeepsMost(tight, list);
+    ListView own = filtered ? Filter(w, tight, list, false) : CutAtEnd(tight, list);
+    Node node;
+    node.box = tight.ToBox5();
+    node.face = uint8_t(face);
+    node.depth = uint8_t(std::min(depth, 255));
+    int dim = 0;
+    if (ChooseSplit(node, tight, n, own, dim)) {
+        const float value = Midpoint(tight.lo[dim], tight.hi[dim]);
+        CellRay* mid = std::partition(
+            rays, rays + n, [&](const CellRay& r) { return (dim == 3 ? r.u : r.v) < value; });
+        const uint32_t left = uint32_t(mid - rays);
+        if (left > 0 && left < n) {
+            const bool reuse = filtered && (depth + 1) % std::max(params_.splitsPerList, 1) != 0;
+            ProcessCellRays(w, root, rays, left, slot, depth + 1, own, reuse);
+            ProcessCellRays(w, root, mid, n - left, slot + left, depth + 1, own, reuse);
+            return;
+        }
+    }
+    if (!filtered) own = Filter(w, tight, list, false);
+    for (uint32_t j = 0; j < n; ++j) rayOut_[slot + j] = rays[j].id;
+    RcLeaf leaf{};
+    leaf.rayBegin = slot;
+    leaf.rayCount = n;
+    PushLeaf(w, leaf, NewNode(w, node.box, face, node.depth, false), own, tight.hi[kDims]);
 }
 
 }  // namespace rayclass::classify

@@ -88,6 +88,13 @@ inline void GrowBounds(Bounds6& b, const float* p) {
     }
 }
 
+// The midpoint split of [lo, hi]. When lo and hi are adjacent floats the middle rounds onto lo;
+// hi still splits them.
+inline float Midpoint(float lo, float hi) {
+    const float m = 0.5f * (lo + hi);
+    return m > lo ? m : hi;
+}
+
 // Whether coordinate k varies among the rays of bounds b: only such coordinates are stored.
 inline bool Varies(const Bounds6& b, int k) { return b.lo[k] < b.hi[k]; }
 

@@ -50,6 +50,7 @@ options:
                           min-candidates, splits-per-list, split (midpoint|median),
                           min-origin-fraction, min-dir-fraction, dir-weight, threads
                           (classification threads, 0 = one per core), task-rays, plan-rays,
+                          light-cells (auto|off|N: shadow rays sorted by direction cells),
                           vertex-gather (--kernel auto's price of a vertex-style block)
   --ray-encoding E        ray directions as float (default) or polar16: packed 16-bit polar
                           angles, the thesis's compact form (costs accuracy, see README)

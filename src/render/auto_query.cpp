@@ -52,6 +52,7 @@ class AutoQuery final : public RayQuery {
     std::string Name() const override { return "auto"; }
     double HostSeconds() const override { return classified_->HostSeconds(); }
     uint64_t ShadowRaysFromLight() const override { return classified_->ShadowRaysFromLight(); }
+    uint64_t ShadowRaysInCells() const override { return classified_->ShadowRaysInCells(); }
     uint64_t EyeRaysFromCamera() const override { return classified_->EyeRaysFromCamera(); }
 
     void Reset() override {

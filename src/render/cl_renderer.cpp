@@ -196,6 +196,7 @@ void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& q
     for (const auto& [name, s] : ks) stats.timeS["kernel_" + name] = s;
     stats.queryTimeS = query.HostSeconds();
     stats.shadowRaysFromLight = query.ShadowRaysFromLight();
+    stats.shadowRaysInCells = query.ShadowRaysInCells();
     stats.eyeRaysFromCamera = query.EyeRaysFromCamera();
     for (const auto& [name, seconds] : ks) {
         if (name.starts_with("rc_query") || name.starts_with("rc_occluded") ||

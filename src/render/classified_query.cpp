@@ -69,6 +69,7 @@ class ClassifiedQuery final : public RayQuery {
         return hostSeconds_;
     }
     uint64_t ShadowRaysFromLight() const override { return shadowFromLight_; }
+    uint64_t ShadowRaysInCells() const override { return shadowInCells_; }
     uint64_t EyeRaysFromCamera() const override {
         std::lock_guard<std::mutex> lock(mutex_);
         return eyeFromCamera_;
@@ -166,7 +167,9 @@ class ClassifiedQuery final : public RayQuery {
         // Every slot: empty ones have no direction and miss at once.
         Classify(shadowHierarchy_, classify::RayView(hostRays.data(), n, sizeof(RcRay)),
                  classify::RayUse::kAnyHit, shadowBatch_, ShadowStyle());
-        shadowFromLight_ += shadowHierarchy_.Counters().fromEnd;
+        const classify::BuildCounters& built = shadowHierarchy_.Counters();
+        shadowFromLight_ += built.fromEnd;
+        shadowInCells_ += built.cellsPerSide > 0 ? built.fromEnd : 0;
         return Query(shadowBatch_, shadowRays, blocked, nullptr, timer).tests;
     }
 
@@ -425,6 +428,7 @@ class ClassifiedQuery final : public RayQuery {
     double hostSeconds_ = 0;
     uint64_t eyeFromCamera_ = 0;    // Prepare's, which runs on a worker thread
     uint64_t shadowFromLight_ = 0;  // Occluded's, which runs on the render thread only
+    uint64_t shadowInCells_ = 0;    // of them, sorted into direction cells
     std::vector<std::unique_ptr<ClassifiedBatch>> pool_;  // recycled batches
 };
 

@@ -43,6 +43,7 @@ nlohmann::json RenderStats::ToJson() const {
     j["rays_by_generation"] = gens;
     j["intersection_tests"] = intersectionTests;
     j["shadow_rays_from_light"] = shadowRaysFromLight;
+    j["shadow_rays_in_cells"] = shadowRaysInCells;
     j["eye_rays_from_camera"] = eyeRaysFromCamera;
     j["mrays_per_s"] = queryTimeS > 0 ? double(RaysTotal()) / queryTimeS * 1e-6 : 0.0;
     j["time_s"] = timeS;

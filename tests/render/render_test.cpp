@@ -110,6 +110,8 @@ TEST_P(RenderMatchesReference, WithinBounds) {
         EXPECT_LT(stats.intersectionTests, bruteStats.intersectionTests) << style;
         EXPECT_EQ(stats.shadowRaysFromLight, c.lightsInBox ? stats.raysByKind["shadow"] : 0u)
             << style;
+        // Every generation's shadow rays end at lights in the box: all go to direction cells.
+        EXPECT_EQ(stats.shadowRaysInCells, stats.shadowRaysFromLight) << style;
     }
     // Auto without the gather's price (a GPU's default) answers some leaves of a batch in each
     // style: the mixed batch must give the same image too.

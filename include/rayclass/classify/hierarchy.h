@@ -266,6 +266,11 @@ class Hierarchy {
         uint32_t prefix = 0;
         int depth = 0;
     };
+    // A ray of a cell that is split further than the grid: its slopes, its end and its id.
+    struct CellRay {
+        float u, v, end;
+        uint32_t id;
+    };
     // A subtree to build: a face root, or a later child of a node with many rays.
     struct Task {
         uint32_t node, begin, end;
@@ -291,9 +296,10 @@ class Hierarchy {
         ScratchVector<RcCandidate> candidates;
         size_t listAt = 0, listEnd = 0;  // the rest of the chunk of output room it claimed
         std::vector<Node> nodes;
-        ListArena stack;         // the lists of the nodes on the path being built
-        ListArena kept;          // lists of nodes whose later children are tasks
-        std::deque<Plan> plans;  // this generation's (tasks of any thread may read them)
+        ListArena stack;                // the lists of the nodes on the path being built
+        ListArena kept;                 // lists of nodes whose later children are tasks
+        std::deque<Plan> plans;         // this generation's (tasks of any thread may read them)
+        std::vector<CellRay> cellRays;  // the rays of the cell being refined (RefineCell)
     };
 
     // The coordinates of each face's rays that Convert has not stored because all its rays had
@@ -371,6 +377,13 @@ class Hierarchy {
                   uint32_t* count, float* end, std::vector<rc_uint>& missed,
                   uint64_t& fromEnd) const;
     void ProcessCells(Worker& w, CellAt at, const ListView& list, bool reuseList);
+    // A single cell whose rays the cost function splits further: its rays, read again, are
+    // split ray by ray (midpoints of their tight (u, v) bounds) below the grid.
+    void RefineCell(Worker& w, uint32_t root, uint32_t begin, uint32_t n, int depth,
+                    const ListView& list);
+    // Rays [0, n) of `rays`, whose ids go to the output from `slot` on.
+    void ProcessCellRays(Worker& w, uint32_t root, CellRay* rays, uint32_t n, uint32_t slot,
+                         int depth, const ListView& list, bool reuseList);
     void SpawnCells(Worker& w, const CellAt& at, const ListView& list, bool reuseList);
     Bounds6 CellBounds(const CellAt& at) const;
     // Sets the coordinates that do not vary among the face's rays to their value.
@@ -438,6 +451,8 @@ class Hierarchy {
     struct CellGrid {
         int bits = 0;
         uint32_t roots = 0;
+        RayView rays;                                    // the generation's
+        CommonEnds ends;                                 // and their points
         float origin[CommonEnds::kMax * kFaceCount][3];  // each root's point in its face's frame
         ScratchVector<uint32_t> key;                     // per ray
         std::vector<ScratchVector<uint32_t>> count;      // per piece and cell, then positions

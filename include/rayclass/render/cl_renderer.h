@@ -116,6 +116,9 @@ class RayQuery {
     virtual double HostSeconds() const { return 0.0; }
     // Shadow rays answered so far that the classification took from their light.
     virtual uint64_t ShadowRaysFromLight() const { return 0; }
+    // Of them, those sorted into cells of their direction from the light
+    // (classify::Hierarchy::SubdivideFromEnds).
+    virtual uint64_t ShadowRaysInCells() const { return 0; }
     // Eye rays classified so far from their camera (RaySource), not read back.
     virtual uint64_t EyeRaysFromCamera() const { return 0; }
     // Called once all of generation `generation`'s rays are on the device, before its first
