@@ -7,7 +7,15 @@
 // cells' (u, v) bits interleaved, so that every node of the hierarchy is a range of cells and of
 // rays, and a pyramid over the cells gives any node's bounds without reading a ray. A node's
 // (u, v) bounds are those of its non-empty cells, so they are looser than its rays' by up to a
-// cell on each side: the grid is fine enough that leaves span several cells.
+// cell on each side: the grid is fine enough that leaves span several cells. A single cell that
+// the cost function would still split (a thin cone through dense geometry) is split ray by ray
+// below the grid, its rays read again.
+//
+// Measured on Sibenik's and Conference's 786,432 anchor shadow rays, two cores, 128 cells a
+// side (classify_bench, 5 runs alternating with light-cells=off): 9.1-12.6 against 12.5-15.2
+// ns a ray and 12.6-16.1 against 14.6-17.4, for 9.61 against 9.30 and 5.63 against 5.56 tests
+// a ray. Splitting single cells further costs about 1 ns a ray on Sibenik, and saves Conference
+// 7 % of its tests (6.08 without: one 55-ray cell kept a list of 103,300 candidates).
 #include <algorithm>
 #include <array>
 #include <atomic>

@@ -368,7 +368,9 @@ class Hierarchy {
     // halving of a cell range, u and v in turn, leaves two ranges of keys and of rays. The
     // hierarchy is the binary tree of those halvings, split by the cost function; a node's
     // bounds come from a pyramid of the cells' (u, v) ranges and largest ends, so no node reads
-    // a ray. Returns false, doing nothing, when the generation is not such rays.
+    // a ray (below a single cell, RefineCell reads them). Each leaf gets a node of its own that
+    // no other links to, as ClassifyPinhole's do. Returns false, doing nothing, when the
+    // generation is not such rays.
     bool SubdivideFromEnds(LeafBatch& out);
     // The keys of `rays` (kNoNode for a ray that misses) and each cell's count and largest end,
     // added to `count` and `end`; the misses go to `missed`. False when a ray neither ends at one
