@@ -7,15 +7,15 @@
 // cells' (u, v) bits interleaved, so that every node of the hierarchy is a range of cells and of
 // rays, and a pyramid over the cells gives any node's bounds without reading a ray. A node's
 // (u, v) bounds are those of its non-empty cells, so they are looser than its rays' by up to a
-// cell on each side: the grid is fine enough that leaves span several cells. A single cell that
-// the cost function would still split (a thin cone through dense geometry) is split ray by ray
-// below the grid, its rays read again.
+// cell on each side: the grid is fine enough that leaves span several cells. A single cell with
+// a long list that the cost function would still split (a thin cone through dense geometry) is
+// split ray by ray below the grid, its rays read again: without that, one 55-ray cell of
+// Conference's anchor shadow rays kept a list of 103,300 candidates.
 //
 // Measured on Sibenik's and Conference's 786,432 anchor shadow rays, two cores, 128 cells a
-// side (classify_bench, 5 runs alternating with light-cells=off): 9.1-12.6 against 12.5-15.2
-// ns a ray and 12.6-16.1 against 14.6-17.4, for 9.61 against 9.30 and 5.63 against 5.56 tests
-// a ray. Splitting single cells further costs about 1 ns a ray on Sibenik, and saves Conference
-// 7 % of its tests (6.08 without: one 55-ray cell kept a list of 103,300 candidates).
+// side (classify_bench, 5 runs alternating with light-cells=off): 7.6-8.6 against 12.0-13.5 ns
+// a ray and 10.2-12.6 against 14.0-16.5, for 9.68 against 9.30 and 5.80 against 5.56 tests a
+// ray.
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -41,6 +41,15 @@ namespace {
 // 9.68 tests a ray, 256 (4 a cell) in 15.5-16.4 ns for 9.49 tests, 64 in 9.7-10.1 ns for 11.18.
 constexpr uint32_t kRaysPerCell = 8;
 constexpr int kMinCellBits = 2, kMaxCellBits = 8;  // 4 to 256 cells a side (8-bit cell indices)
+
+// A single cell whose list holds fewer candidates than this is a leaf, whatever the cost
+// function says: refining reads its rays again and splits them one by one, which costs more than
+// the cost function's split, and short lists gain little. raybench, 786,432 shadow rays, host ms
+// and tests a ray with a minimum of 0 / 256 / 1024 / never: Sibenik reverse camera 12.4 / 5.8 /
+// 5.2 / 6.2 ms (refining 400k rays at 0), 6.31 / 6.38 / 6.41 / 6.41 tests; Conference anchor
+// 14.3 / 10.1 / 12.2 / 9.2 ms, 6.92 / 7.04 / 7.50 / 7.53 tests, reverse 8.7 / 7.3 / 7.2 / 6.5
+// ms, 8.23 / 8.48 / 9.24 / 9.35 tests (one run each, kernels too noisy to compare).
+constexpr size_t kRefineCandidates = 256;
 
 // A cell's bounds grow by this on each side: (u + 1) rounds by at most 2^-24 for |u| <= 1, so u
 // lies at most that far outside the cell its rounded value picks.
@@ -481,7 +490,9 @@ void Hierarchy::ProcessCells(Worker& w, CellAt at, const ListView& list, bool re
     node.face = uint8_t(face);
     node.depth = uint8_t(at.depth);
     int dim = 0;
-    if (ChooseSplit(node, tight, nRays, own, dim)) {
+    // A single cell is split further only when its list is long (see kRefineCandidates).
+    const bool split = at.depth < bits2 || own.n >= kRefineCandidates;
+    if (split && ChooseSplit(node, tight, nRays, own, dim)) {
         if (at.depth == bits2) {
             RefineCell(w, at.root, begin, nRays, at.depth, own);
             return;

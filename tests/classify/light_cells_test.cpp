@@ -80,6 +80,32 @@ TEST(LightCells, EveryRayLandsOnceInsideItsLeafOnEveryGrid) {
     }
 }
 
+// A cell with a long list is split further, its rays one by one: below the grid's depth, leaves
+// hold the rays of part of a cell, inside their tight bounds, and the answers stay exact.
+TEST(LightCells, CellsWithLongListsAreSplitBelowTheGrid) {
+    const scene::Scene s = RandomScene(91, 3000, 0, 0);
+    const std::vector<Ray> rays = ShadowSlots(s, {kLights[0]}, 92, 4000);
+    Hierarchy h(s, CellParams(s, 4));
+    const LeafBatch batch = h.Classify(rays, RayUse::kAnyHit);
+    ASSERT_EQ(h.Counters().cellsPerSide, 4u);
+    ExpectEveryRayOnce(batch, uint32_t(rays.size()));
+    const CommonEnds ends = FindCommonEnds(rays, h.SceneBox(), 0.25f * h.GetParams().padding);
+    int below = 0;
+    for (const RcLeaf& leaf : batch.leaves) {
+        const Node& node = h.Nodes()[leaf.node];
+        below += node.depth > 4 ? 1 : 0;  // 4 cells a side: a single cell is at depth 4
+        for (uint32_t j = 0; j < leaf.rayCount; ++j) {
+            Ray5 p;
+            float end;
+            ASSERT_TRUE(PointFromLight(ends, h.SceneBox(), rays[batch.rayIndex[leaf.rayBegin + j]],
+                                       p, end));
+            ASSERT_TRUE(node.box.Contains(p.p));
+        }
+    }
+    EXPECT_GT(below, 20);
+    EXPECT_EQ(Blocked(s, batch, rays), BlockedBruteForce(s, rays));
+}
+
 TEST(LightCells, ResultDoesNotDependOnTheThreadCount) {
     const scene::Scene s = RandomScene(85, 600, 4, 2);
     const std::vector<Ray> rays = ShadowSlots(s, kLights, 86, 6000);
