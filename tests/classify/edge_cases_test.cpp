@@ -108,9 +108,9 @@ TEST(EdgeCases, RaysExactlyOnFaceBoundaries) {
         const float a = float(i % 20) / 10.0f - 1.0f;
         const float b = float(i / 20) / 10.0f - 1.0f;
         const float sx = i % 2 ? -1.0f : 1.0f;
-        rays.push_back({glm::vec3(-0.5f, a, b), 0, {1, sx, 0}, 1e30f});   // |dx| = |dy|
-        rays.push_back({glm::vec3(1.5f, a, b), 0, {-1, 0, sx}, 1e30f});   // |dx| = |dz|
-        rays.push_back({glm::vec3(0.5f, a, b), 0, {sx, sx, sx}, 1e30f});  // all three equal
+        rays.push_back({glm::vec3(-0.5f, a, b), 0, {1, sx, 0}, 1e30f});       // |dx| = |dy|
+        rays.push_back({glm::vec3(1.5f, a, b), 0, {-1, 0, sx}, 1e30f});       // |dx| = |dz|
+        rays.push_back({glm::vec3(0.5f, a, b), 0, {sx, sx, sx}, 1e30f});      // all three equal
     }
     ExpectExact(s, rays);
 }
@@ -143,8 +143,8 @@ TEST(EdgeCases, RaysStartingOnAPrimitive) {
         if (glm::length(dir) < 1e-3f) dir = {1, 0, 0};
         rays.push_back({p, 0, dir, 1e30f});
         rays.push_back({p, 1e-4f, dir, 1e30f});
-        rays.push_back(
-            {geometry::OffsetRayOrigin(p, glm::vec3(dir.x < 0 ? -1 : 1, 0, 0)), 0, dir, 1e30f});
+        rays.push_back({geometry::OffsetRayOrigin(p, glm::vec3(dir.x < 0 ? -1 : 1, 0, 0)), 0, dir,
+                        1e30f});
     }
     ExpectExact(s, rays);
 }
@@ -170,9 +170,9 @@ TEST(EdgeCases, OriginsOutsideTheBoxAndRaysThatMissIt) {
 
 TEST(EdgeCases, ZeroAreaTriangles) {
     scene::Scene s = Walls();
-    s.triangles.push_back(Tri({0.5f, 0, 0}, {0.5f, 0, 0}, {0.5f, 0, 0}));   // a point
-    s.triangles.push_back(Tri({0.5f, -1, 0}, {0.5f, 1, 0}, {0.5f, 0, 0}));  // a segment
-    s.triangles.push_back(Tri({1.5f, 0, -1}, {1.5f, 0, 1}, {1.5f, 0, 1}));  // repeated vertex
+    s.triangles.push_back(Tri({0.5f, 0, 0}, {0.5f, 0, 0}, {0.5f, 0, 0}));      // a point
+    s.triangles.push_back(Tri({0.5f, -1, 0}, {0.5f, 1, 0}, {0.5f, 0, 0}));     // a segment
+    s.triangles.push_back(Tri({1.5f, 0, -1}, {1.5f, 0, 1}, {1.5f, 0, 1}));     // repeated vertex
     std::vector<Ray> rays;
     for (int i = 0; i < 500; ++i) {
         const float a = float(i % 25) / 12.0f - 1.0f, b = float(i / 25) / 10.0f - 1.0f;
@@ -188,8 +188,8 @@ TEST(EdgeCases, ScenesOfOnePrimitive) {
     std::normal_distribution<float> n;
     std::vector<Ray> rays;
     for (int i = 0; i < 2000; ++i) {
-        rays.push_back(
-            {glm::vec3(pos(rng), pos(rng), pos(rng)), 0, glm::vec3(n(rng), n(rng), n(rng)), 1e30f});
+        rays.push_back({glm::vec3(pos(rng), pos(rng), pos(rng)), 0,
+                        glm::vec3(n(rng), n(rng), n(rng)), 1e30f});
         rays.push_back({glm::vec3(pos(rng), pos(rng), pos(rng)), 0,
                         -rays.back().origin + 0.1f * glm::vec3(n(rng), n(rng), n(rng)), 1e30f});
     }
@@ -249,8 +249,7 @@ TEST(EdgeCases, BoundedRaysListsStopAtTheirEnd) {
         for (int k = 0; k < 40; ++k) {
             Ray r;
             r.origin = glm::vec3(-0.5f, -1.9f + 0.095f * float(j), -1.9f + 0.095f * float(k));
-            r.direction =
-                glm::normalize(glm::vec3(1.0f, 0.05f * float(j % 5), -0.03f * float(k % 7)));
+            r.direction = glm::normalize(glm::vec3(1.0f, 0.05f * float(j % 5), -0.03f * float(k % 7)));
             r.tMax = 0.9f;  // ends before x = 0.5
             rays.push_back(r);
         }

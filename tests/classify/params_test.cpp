@@ -87,44 +87,16 @@ TEST(SetParam, RejectsValuesThatDoNotParseOrAreOutOfRange) {
     EXPECT_NE(MessageOf("min-rays", "").find("min-rays=: expected an integer >= 0"),
               std::string::npos);
     for (const char* v : {"", "x", "8x", "-1", "1.5", "99999999999"}) {
-        EXPECT_THROW(
-            {
-                Params p;
-                SetParam(p, "min-rays", v);
-            },
-            UsageError)
-            << v;
+        EXPECT_THROW({ Params p; SetParam(p, "min-rays", v); }, UsageError) << v;
     }
-    EXPECT_THROW(
-        {
-            Params p;
-            SetParam(p, "splits-per-list", "0");
-        },
-        UsageError);
+    EXPECT_THROW({ Params p; SetParam(p, "splits-per-list", "0"); }, UsageError);
     const std::string split = MessageOf("split", "mean");
     EXPECT_NE(split.find("expected midpoint or median"), std::string::npos) << split;
     for (const char* v : {"-0.1", "1.5", "nan", "inf", "", "0.5x"}) {
-        EXPECT_THROW(
-            {
-                Params p;
-                SetParam(p, "min-origin-fraction", v);
-            },
-            UsageError)
-            << v;
-        EXPECT_THROW(
-            {
-                Params p;
-                SetParam(p, "min-dir-fraction", v);
-            },
-            UsageError)
-            << v;
+        EXPECT_THROW({ Params p; SetParam(p, "min-origin-fraction", v); }, UsageError) << v;
+        EXPECT_THROW({ Params p; SetParam(p, "min-dir-fraction", v); }, UsageError) << v;
     }
-    EXPECT_THROW(
-        {
-            Params p;
-            SetParam(p, "dir-weight", "0");
-        },
-        UsageError);
+    EXPECT_THROW({ Params p; SetParam(p, "dir-weight", "0"); }, UsageError);
     // A failed call leaves the parameter as it was.
     Params p;
     const uint32_t before = p.minRays;
