@@ -70,7 +70,6 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
     const bool packed = rays.Stride() == 8 * sizeof(float);
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
-    const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
     const __m512 fmax = _mm512_set1_ps(kFloatMax);
     const __m512 zero = _mm512_setzero_ps();
     const __m512 one = _mm512_set1_ps(1.0f);
@@ -91,7 +90,8 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
                           : Gather16(rays.Floats(i), idx, live);
         fromEnd += uint64_t(std::popcount(unsigned(Orient16(ends, live, r))));
         const auto [ox, oy, oz, tmin, dx, dy, dz, tmax] = r;
-        const auto [isX, isY, isZ, neg, ax, ay, az, da] = DominantAxis16(dx, dy, dz);
+        const Axis16 axis = DominantAxis16(dx, dy, dz);
+        const auto [isX, isY, isZ, neg, ax, ay, az, da] = axis;
         // start = tMin == 0 ? origin : origin + tMin d
         const __mmask16 t0 = _mm512_cmp_ps_mask(tmin, zero, _CMP_EQ_OQ);
         const __m512 sx = _mm512_mask_blend_ps(t0, _mm512_add_ps(ox, _mm512_mul_ps(tmin, dx)), ox);
@@ -150,27 +150,8 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
             fast |= clip;
             rejected = __mmask16(outside & ~clip);
         }
-        // Frame: X = s p_a, Y = p_b, Z = p_c with b = a + 1, c = a + 2 (mod 3).
-        const auto [qx, qy, qz] = start;
-        const __m512 pa = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, qz, qy), qx);
-        const __m512 x = _mm512_mask_xor_ps(pa, neg, pa, signMask);
-        const __m512 y = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, qx, qz), qy);
-        const __m512 z = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, qy, qx), qz);
-        const __m512 db = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dx, dz), dy);
-        const __m512 dc = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dy, dx), dz);
-        const __m512 inv = _mm512_div_ps(one, _mm512_mask_blend_ps(fast, one, da));
-        const __m512 u = _mm512_mul_ps(db, inv);
-        const __m512 v = _mm512_mul_ps(dc, inv);
-        // Not finite (or beyond the largest float) becomes the largest float, as in both scalar
-        // paths.
-        const __m512 reach = Min16(_mm512_mul_ps(_mm512_sub_ps(segHi, segLo), da), fmax);
-        const __m512 hiA =
-            _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, bhi[2], bhi[1]), bhi[0]);
-        const __m512 loA =
-            _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, blo[2], blo[1]), blo[0]);
-        const __m512 xEnd = _mm512_mask_xor_ps(hiA, neg, loA, signMask);  // BoxInFace's hi X
-        const __m512 end = Min16(_mm512_add_ps(x, reach), xEnd);
-        const __m512 p[kCoords] = {x, y, z, u, v, end};
+        const Point16 q = FacePoint16(start, dx, dy, dz, segLo, segHi, axis, fast, blo, bhi);
+        const __m512 p[kCoords] = {q.x, q.y, q.z, q.u, q.v, q.end};
         const __m512i id = _mm512_add_epi32(_mm512_set1_epi32(int(firstId + i)), lane);
         // Faces 2a + neg; bucket the fast lanes of each face present.
         const __mmask16 byAxis[3] = {isX, isY, isZ};

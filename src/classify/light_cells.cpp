@@ -269,7 +269,6 @@ bool Hierarchy::CellKeys(RayView rays, const CommonEnds& endsIn, uint32_t firstI
     const __m512i idx = RayOffsets16(rays);
     const bool packed = rays.Stride() == 8 * sizeof(float);
     const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
-    const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
     const __m512 fmax = _mm512_set1_ps(kFloatMax);
     const __m512 zero = _mm512_setzero_ps();
     const __m512 one = _mm512_set1_ps(1.0f);
@@ -311,7 +310,8 @@ bool Hierarchy::CellKeys(RayView rays, const CommonEnds& endsIn, uint32_t firstI
             missed.push_back(firstId + uint32_t(i + j));
         }
         const auto [ox, oy, oz, tmin, dx, dy, dz, tmax] = r;
-        const auto [isX, isY, isZ, neg, ax, ay, az, da] = DominantAxis16(dx, dy, dz);
+        const Axis16 axes = DominantAxis16(dx, dy, dz);
+        const auto [isX, isY, isZ, neg, ax, ay, az, da] = axes;
         const __m512 dsum = _mm512_add_ps(_mm512_add_ps(dx, dy), dz);
         const __mmask16 inside = _mm512_cmp_ps_mask(ox, blo[0], _CMP_GE_OQ) &
                                  _mm512_cmp_ps_mask(ox, bhi[0], _CMP_LE_OQ) &
@@ -328,20 +328,9 @@ bool Hierarchy::CellKeys(RayView rays, const CommonEnds& endsIn, uint32_t firstI
             continue;
         }
         // (tMin is 0 once oriented, so the start is the origin.)
-        const __m512 pa = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, oz, oy), ox);
-        const __m512 x = _mm512_mask_xor_ps(pa, neg, pa, signMask);
-        const __m512 db = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dx, dz), dy);
-        const __m512 dc = _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, dy, dx), dz);
-        const __m512 inv = _mm512_div_ps(one, _mm512_mask_blend_ps(fast, one, da));
-        const __m512 u = _mm512_mul_ps(db, inv);
-        const __m512 v = _mm512_mul_ps(dc, inv);
-        const __m512 reach = Min16(_mm512_mul_ps(_mm512_sub_ps(tmax, tmin), da), fmax);
-        const __m512 hiA =
-            _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, bhi[2], bhi[1]), bhi[0]);
-        const __m512 loA =
-            _mm512_mask_blend_ps(isX, _mm512_mask_blend_ps(isY, blo[2], blo[1]), blo[0]);
-        const __m512 xEnd = _mm512_mask_xor_ps(hiA, neg, loA, signMask);  // BoxInFace's hi X
-        const __m512 e = Min16(_mm512_add_ps(x, reach), xEnd);
+        const __m512 origin[3] = {ox, oy, oz};
+        const Point16 p = FacePoint16(origin, dx, dy, dz, tmin, tmax, axes, fast, blo, bhi);
+        const __m512 u = p.u, v = p.v, e = p.end;
         // face = 2 axis + (d_a < 0); root = end * kFaceCount + face
         const __m512i axis = _mm512_mask_blend_epi32(isZ, _mm512_mask_blend_epi32(isY, zeroI, oneI),
                                                      _mm512_set1_epi32(2));

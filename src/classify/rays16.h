@@ -41,6 +41,45 @@ inline Axis16 DominantAxis16(__m512 dx, __m512 dy, __m512 dz) {
     return a;
 }
 
+// 16 rays mapped into their faces' frames: ToRay5's point and end X (its start's X plus its reach,
+// cut where the face's X leaves the box).
+struct Point16 {
+    __m512 x, y, z, u, v, end;
+};
+
+// The point of rays that start at `start` (the box's corners blo, bhi) with directions d and
+// segments [segLo, segHi], in the frame of their dominant axis `a`, for the lanes in `fast` (the
+// others divide by one): ToRay5's fast path, operation for operation. Frame: X = s p_a, Y = p_b,
+// Z = p_c with b = a + 1, c = a + 2 (mod 3).
+inline Point16 FacePoint16(const __m512 start[3], __m512 dx, __m512 dy, __m512 dz, __m512 segLo,
+                           __m512 segHi, const Axis16& a, __mmask16 fast, const __m512 blo[3],
+                           const __m512 bhi[3]) {
+    const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
+    const __m512 one = _mm512_set1_ps(1.0f);
+    const __m512 qx = start[0], qy = start[1], qz = start[2];
+    Point16 p;
+    const __m512 pa = _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, qz, qy), qx);
+    p.x = _mm512_mask_xor_ps(pa, a.neg, pa, signMask);
+    p.y = _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, qx, qz), qy);
+    p.z = _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, qy, qx), qz);
+    const __m512 db = _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, dx, dz), dy);
+    const __m512 dc = _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, dy, dx), dz);
+    const __m512 inv = _mm512_div_ps(one, _mm512_mask_blend_ps(fast, one, a.da));
+    p.u = _mm512_mul_ps(db, inv);
+    p.v = _mm512_mul_ps(dc, inv);
+    // Not finite (or beyond the largest float) becomes the largest float, as in both scalar
+    // paths.
+    const __m512 reach =
+        Min16(_mm512_mul_ps(_mm512_sub_ps(segHi, segLo), a.da), _mm512_set1_ps(kFloatMax));
+    const __m512 hiA =
+        _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, bhi[2], bhi[1]), bhi[0]);
+    const __m512 loA =
+        _mm512_mask_blend_ps(a.isX, _mm512_mask_blend_ps(a.isY, blo[2], blo[1]), blo[0]);
+    const __m512 xEnd = _mm512_mask_xor_ps(hiA, a.neg, loA, signMask);  // BoxInFace's hi X
+    p.end = Min16(_mm512_add_ps(p.x, reach), xEnd);
+    return p;
+}
+
 // 16 rays' fields, gathered from a RayView.
 struct Rays16 {
     __m512 ox, oy, oz, tmin, dx, dy, dz, tmax;
