@@ -97,16 +97,8 @@ uint64_t Hierarchy::Convert(RayView rays, const CommonEnds& ends, uint32_t first
         const __m512 sx = _mm512_mask_blend_ps(t0, _mm512_add_ps(ox, _mm512_mul_ps(tmin, dx)), ox);
         const __m512 sy = _mm512_mask_blend_ps(t0, _mm512_add_ps(oy, _mm512_mul_ps(tmin, dy)), oy);
         const __m512 sz = _mm512_mask_blend_ps(t0, _mm512_add_ps(oz, _mm512_mul_ps(tmin, dz)), oz);
-        const __mmask16 inside = _mm512_cmp_ps_mask(sx, blo[0], _CMP_GE_OQ) &
-                                 _mm512_cmp_ps_mask(sx, bhi[0], _CMP_LE_OQ) &
-                                 _mm512_cmp_ps_mask(sy, blo[1], _CMP_GE_OQ) &
-                                 _mm512_cmp_ps_mask(sy, bhi[1], _CMP_LE_OQ) &
-                                 _mm512_cmp_ps_mask(sz, blo[2], _CMP_GE_OQ) &
-                                 _mm512_cmp_ps_mask(sz, bhi[2], _CMP_LE_OQ);
-        const __m512 dsum = _mm512_add_ps(_mm512_add_ps(dx, dy), dz);
-        const __mmask16 mappable =
-            __mmask16(live & _mm512_cmp_ps_mask(da, zero, _CMP_GT_OQ) &
-                      _mm512_cmp_ps_mask(_mm512_and_ps(dsum, absMask), fmax, _CMP_LE_OQ));
+        const __mmask16 inside = InBox16(sx, sy, sz, blo, bhi);
+        const __mmask16 mappable = __mmask16(live & Mappable16(axis, dx, dy, dz));
         __mmask16 fast = __mmask16(mappable & inside & _mm512_cmp_ps_mask(tmin, tmax, _CMP_LT_OQ));
         // Rays that start outside the box (the camera of a scene seen from outside, a light
         // beyond it): ToRay5Clipped's slab clip, operation for operation, so the points are

@@ -268,9 +268,6 @@ bool Hierarchy::CellKeys(RayView rays, const CommonEnds& endsIn, uint32_t firstI
     // point, inside the box.
     const __m512i idx = RayOffsets16(rays);
     const bool packed = rays.Stride() == 8 * sizeof(float);
-    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
-    const __m512 fmax = _mm512_set1_ps(kFloatMax);
-    const __m512 zero = _mm512_setzero_ps();
     const __m512 one = _mm512_set1_ps(1.0f);
     const __m512 halfV = _mm512_set1_ps(half);
     const __m512 blo[3] = {_mm512_set1_ps(sceneBox_.lo.x), _mm512_set1_ps(sceneBox_.lo.y),
@@ -312,16 +309,8 @@ bool Hierarchy::CellKeys(RayView rays, const CommonEnds& endsIn, uint32_t firstI
         const auto [ox, oy, oz, tmin, dx, dy, dz, tmax] = r;
         const Axis16 axes = DominantAxis16(dx, dy, dz);
         const auto [isX, isY, isZ, neg, ax, ay, az, da] = axes;
-        const __m512 dsum = _mm512_add_ps(_mm512_add_ps(dx, dy), dz);
-        const __mmask16 inside = _mm512_cmp_ps_mask(ox, blo[0], _CMP_GE_OQ) &
-                                 _mm512_cmp_ps_mask(ox, bhi[0], _CMP_LE_OQ) &
-                                 _mm512_cmp_ps_mask(oy, blo[1], _CMP_GE_OQ) &
-                                 _mm512_cmp_ps_mask(oy, bhi[1], _CMP_LE_OQ) &
-                                 _mm512_cmp_ps_mask(oz, blo[2], _CMP_GE_OQ) &
-                                 _mm512_cmp_ps_mask(oz, bhi[2], _CMP_LE_OQ);
         const __mmask16 fast =
-            __mmask16(matched & inside & _mm512_cmp_ps_mask(da, zero, _CMP_GT_OQ) &
-                      _mm512_cmp_ps_mask(_mm512_and_ps(dsum, absMask), fmax, _CMP_LE_OQ));
+            __mmask16(matched & InBox16(ox, oy, oz, blo, bhi) & Mappable16(axes, dx, dy, dz));
         if (matched & ~fast) return false;
         if (!fast) {
             _mm512_mask_storeu_epi32(keys + i, live, _mm512_set1_epi32(-1));

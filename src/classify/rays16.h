@@ -41,6 +41,22 @@ inline Axis16 DominantAxis16(__m512 dx, __m512 dy, __m512 dz) {
     return a;
 }
 
+// The lanes whose point (x, y, z) lies in the box [blo, bhi], bounds included.
+inline __mmask16 InBox16(__m512 x, __m512 y, __m512 z, const __m512 blo[3], const __m512 bhi[3]) {
+    return _mm512_cmp_ps_mask(x, blo[0], _CMP_GE_OQ) & _mm512_cmp_ps_mask(x, bhi[0], _CMP_LE_OQ) &
+           _mm512_cmp_ps_mask(y, blo[1], _CMP_GE_OQ) & _mm512_cmp_ps_mask(y, bhi[1], _CMP_LE_OQ) &
+           _mm512_cmp_ps_mask(z, blo[2], _CMP_GE_OQ) & _mm512_cmp_ps_mask(z, bhi[2], _CMP_LE_OQ);
+}
+
+// The lanes whose direction ToRay5's fast path maps: d_a > 0 and a finite sum of components (not
+// finite when a component is NaN or infinite).
+inline __mmask16 Mappable16(const Axis16& a, __m512 dx, __m512 dy, __m512 dz) {
+    const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
+    const __m512 dsum = _mm512_add_ps(_mm512_add_ps(dx, dy), dz);
+    return _mm512_cmp_ps_mask(a.da, _mm512_setzero_ps(), _CMP_GT_OQ) &
+           _mm512_cmp_ps_mask(_mm512_and_ps(dsum, absMask), _mm512_set1_ps(kFloatMax), _CMP_LE_OQ);
+}
+
 // 16 rays mapped into their faces' frames: ToRay5's point and end X (its start's X plus its reach,
 // cut where the face's X leaves the box).
 struct Point16 {
