@@ -82,6 +82,21 @@ bool Dead(const Ray& r) {
 }
 
 // The grid's cells a side, as a power of two, for nRays rays from `roots` points and faces.
+// The 5D point and end X of `ray`, which ends at point `match` of `ends`, taken from there through
+// ToRay5's fast path (the vector loop's arithmetic); false when that path does not take it.
+bool PointFromEnd(const CommonEnds& ends, int match, const Ray& ray, const Bounds3f& box, Ray5& p,
+                  float& end) {
+    const Ray o = ends.Oriented(ray, match);
+    const glm::vec3& d = o.direction;
+    if (!box.Contains(o.origin) || !(std::abs(d[DominantAxis(d)]) > 0.0f) ||
+        !std::isfinite(d.x + d.y + d.z)) {
+        return false;
+    }
+    ToRay5(o, box, p);
+    end = std::min(p.p[0] + p.reach, BoxInFace(p.face, box).hi[0]);
+    return true;
+}
+
 int CellBits(uint32_t nRays, uint32_t roots, int lightCells) {
     if (lightCells > 0) return std::countr_zero(unsigned(lightCells));
     int bits = kMinCellBits;
@@ -259,8 +274,6 @@ bool Hierarchy::CellKeys(RayView rays, const CommonEnds& endsIn, uint32_t firstI
     const int bits = cells_.bits;
     const float half = float(1u << bits) * 0.5f;
     const int top = (1 << bits) - 1;
-    float faceEnd[kFaceCount];  // where each face's X leaves the scene box, as Convert cuts
-    for (int f = 0; f < kFaceCount; ++f) faceEnd[f] = BoxInFace(f, sceneBox_).hi[0];
     const size_t n = rays.size();
     size_t i = 0;
 #if defined(RC_CELLS_AVX512)
@@ -330,13 +343,13 @@ bool Hierarchy::CellKeys(RayView rays, const CommonEnds& endsIn, uint32_t firstI
         const __m512i key = _mm512_or_si512(
             _mm512_maskz_slli_epi32(all, root, unsigned(2 * bits)),
             _mm512_or_si512(_mm512_maskz_slli_epi32(all, spread(cell(u)), 1), spread(cell(v))));
-        _mm512_mask_storeu_epi32(keys + i, live,
-                                 _mm512_mask_blend_epi32(fast, _mm512_set1_epi32(-1), key));
+        // Rays that miss keep no key.
+        const __m512i k = _mm512_mask_blend_epi32(fast, _mm512_set1_epi32(-1), key);
+        _mm512_mask_storeu_epi32(keys + i, live, k);
         // The cells' counts and largest ends: neighbouring rays often share a cell (a run of
         // 3 on average on Sibenik's shadow rays at 128 cells a side), so each run of equal keys
         // in the block updates its cell once (its length, and the largest end found by a
         // segmented max over the run).
-        const __m512i k = _mm512_mask_blend_epi32(fast, _mm512_set1_epi32(-1), key);
         const __m512i previous = _mm512_maskz_permutexvar_epi32(
             all, _mm512_maskz_sub_epi32(all, _mm512_maskz_max_epi32(all, lane, oneI), oneI), k);
         const __mmask16 starts = __mmask16(_mm512_cmpneq_epi32_mask(k, previous) | 1u);
@@ -377,17 +390,9 @@ bool Hierarchy::CellKeys(RayView rays, const CommonEnds& endsIn, uint32_t firstI
             missed.push_back(firstId + uint32_t(i));
             continue;
         }
-        const Ray o = ends.Oriented(ray, match);
-        // ToRay5's fast path (the point lies in the box); other rays take the general path.
-        const glm::vec3& d = o.direction;
-        const int a = DominantAxis(d);
-        if (!sceneBox_.Contains(o.origin) || !(std::abs(d[a]) > 0.0f) ||
-            !std::isfinite(d.x + d.y + d.z)) {
-            return false;
-        }
         Ray5 r5;
-        ToRay5(o, sceneBox_, r5);
-        const float e = std::min(r5.p[0] + r5.reach, faceEnd[r5.face]);
+        float e;
+        if (!PointFromEnd(ends, match, ray, sceneBox_, r5, e)) return false;
         auto cellOf = [&](float s) {
             return uint32_t(std::clamp(int(std::floor((s + 1.0f) * half)), 0, top));
         };
@@ -494,16 +499,16 @@ void Hierarchy::ProcessCells(Worker& w, CellAt at, const ListView& list, bool re
 void Hierarchy::RefineCell(Worker& w, uint32_t root, uint32_t begin, uint32_t n, int depth,
                            const ListView& list) {
     const CellGrid& g = cells_;
-    const float faceEnd = BoxInFace(int(root % kFaceCount), sceneBox_).hi[0];
     std::vector<CellRay>& rays = w.cellRays;
     rays.resize(n);
     for (uint32_t j = 0; j < n; ++j) {
-        // Mapped as CellKeys mapped it: from its point, through ToRay5's fast path.
+        // Mapped as CellKeys mapped it (which took every ray of a cell).
         const uint32_t id = rayOut_[begin + j];
         const Ray ray = g.rays[id];
         Ray5 p;
-        ToRay5(g.ends.Oriented(ray, g.ends.Match(ray)), sceneBox_, p);
-        rays[j] = {p.p[3], p.p[4], std::min(p.p[0] + p.reach, faceEnd), id};
+        float end = 0.0f;
+        PointFromEnd(g.ends, g.ends.Match(ray), ray, sceneBox_, p, end);
+        rays[j] = {p.p[3], p.p[4], end, id};
     }
     ProcessCellRays(w, root, rays.data(), n, begin, depth, list, true);
 }

@@ -42,8 +42,8 @@ uint32_t ParseCount(const std::string& name, const std::string& value, uint32_t 
     return uint32_t(v);
 }
 
-float ParseFloat(const std::string& name, const std::string& value, float lo, float hi, bool openLo,
-                 const char* expected) {
+float ParseFloat(const std::string& name, const std::string& value, float lo, float hi,
+                 bool openLo, const char* expected) {
     const char* s = value.c_str();
     char* end = nullptr;
     errno = 0;
@@ -79,7 +79,8 @@ void SetParam(Params& params, const std::string& name, const std::string& value)
             Bad(name, value, "midpoint or median");
         }
     } else if (name == "min-origin-fraction") {
-        params.minOriginFraction = ParseFloat(name, value, 0.0f, 1.0f, false, "a number in [0, 1]");
+        params.minOriginFraction =
+            ParseFloat(name, value, 0.0f, 1.0f, false, "a number in [0, 1]");
     } else if (name == "min-dir-fraction") {
         params.minDirFraction = ParseFloat(name, value, 0.0f, 1.0f, false, "a number in [0, 1]");
     } else if (name == "dir-weight") {
@@ -108,8 +109,8 @@ void SetParam(Params& params, const std::string& name, const std::string& value)
     } else if (name == "threads") {
         params.threads = std::min<uint32_t>(ParseCount(name, value, 0), 256);
     } else {
-        throw UsageError("unknown classify parameter '" + name +
-                         "'; valid names: " + std::string(ParamNames()));
+        throw UsageError("unknown classify parameter '" + name + "'; valid names: " +
+                         std::string(ParamNames()));
     }
 }
 

@@ -102,8 +102,8 @@ struct LeafBatch {
     // sibenik_mirror) are written once, by every thread, and never zeroed first; its capacity
     // is room reserved for the next generation, of which only the pages written are touched.
     DenseScratchVector<RcCandidate> candidates;
-    std::vector<rc_uint> missed;  // rays that miss the scene box: answered "no hit"
-    uint32_t nRays = 0;           // rays of the generation (leaf rays + missed)
+    std::vector<rc_uint> missed;          // rays that miss the scene box: answered "no hit"
+    uint32_t nRays = 0;                   // rays of the generation (leaf rays + missed)
 };
 
 // The bounds of the rays of a range of direction cells (Hierarchy::SubdivideFromEnds): their

@@ -17,9 +17,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
-#include <glm/glm.hpp>
 #include <span>
 #include <vector>
+
+#include <glm/glm.hpp>
 
 #include "rayclass/core/bounds.h"
 

@@ -38,7 +38,7 @@ struct RenderStats {
     uint64_t shadowRaysInCells = 0;    // of them, sorted into direction cells (SubdivideFromEnds)
     uint64_t eyeRaysFromCamera = 0;    // classified from their camera (ClassifyPinhole)
     bool programFromCache = false;     // the kernels' binary came from the program cache
-    double queryTimeS = 0;             // time of the ray-query kernels (nearest hit and shadow)
+    double queryTimeS = 0;  // time of the ray-query kernels (nearest hit and shadow)
     // Named stages in seconds: "scene_load", "program_build", "kernel_<name>", "host", "total".
     std::map<std::string, double> timeS;
 
