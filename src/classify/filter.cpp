@@ -176,6 +176,9 @@ void FillFaceList(int face, const ListFrame& frame, const Bounds3f* boxes, const
 
 size_t CountUpTo(const ListView& list, float endHi) {
     const float limit = float(ToSteps(*list.frame, 0, endHi)) + kStepMargin;
+    // Beams that run to the scene box's far side (eye rays' always) keep the whole list: no
+    // search through it, whose first probes miss the cache on a long list.
+    if (list.n == 0 || float(list.x0[list.n - 1]) <= limit) return list.n;
     return size_t(std::upper_bound(list.x0, list.x0 + list.n, limit,
                                    [](float v, uint16_t q) { return v < float(q); }) -
                   list.x0);

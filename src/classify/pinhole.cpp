@@ -260,8 +260,14 @@ bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t
             part.worker = t;
             part.leafBegin = w.leaves.size();
             part.nodeBegin = w.nodes.size();
-            ends[b] = slots[b];
-            ProcessRect(w, cam, bands[b], -1, 0, nullptr, ends[b], missed[b]);
+            // The band's slot counter and misses are this thread's until the band is done: the
+            // bands' entries of `ends` (and `missed`'s vector headers) share cache lines, and
+            // updating them leaf by leaf from both threads bounced the lines between the cores.
+            uint32_t slot = slots[b];
+            std::vector<rc_uint> bandMissed;
+            ProcessRect(w, cam, bands[b], -1, 0, nullptr, slot, bandMissed);
+            ends[b] = slot;
+            missed[b] = std::move(bandMissed);
             part.leafEnd = w.leaves.size();
             part.nodeEnd = w.nodes.size();
         }
