@@ -327,9 +327,9 @@ class ClassifiedQuery final : public RayQuery {
         }
         if (!fragmentLeaves.empty()) {
             const auto t1 = Clock::now();
-            // Sized first and written by index: push_back's capacity checks took half again as
-            // long (0.11 ms for Sibenik's 49k eye-ray packets). The arrays stay unchanged until
-            // SumTests below has waited for the kernel, so a CPU device reads them in place.
+            // Sized first and written by index (a push_back loop took 0.11 ms for Sibenik's 49k
+            // eye-ray packets). The arrays stay unchanged until SumTests below has waited for
+            // the kernel, so a CPU device reads them in place.
             uint32_t nPackets = 0;
             for (uint32_t l : fragmentLeaves) nPackets += (cb.batch.leaves[l].rayCount + 15) / 16;
             packetLeaf_.resize(nPackets);
