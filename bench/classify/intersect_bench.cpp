@@ -69,7 +69,7 @@ void BM_FilterBoxes(benchmark::State& state) {
     (void)h;
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> pos(-1.0f, 1.0f);
-    classify::Hierarchy::FaceList in, out;
+    classify::FaceList in, out;
     in.Resize(kPrims);
     out.Resize(kPrims);
     // Boxes in [-1, 1.1] on every axis, in 16-bit steps as the face lists hold them.

@@ -1,5 +1,5 @@
-// The conservative candidate test of a hypercube's beam against padded primitive boxes, and the
-// list filter built on it. Private to the classify module.
+// The candidate lists' fixed-point frame, and the conservative test of a hypercube's beam against
+// padded primitive boxes with the list filter built on it. Private to the classify module.
 //
 // Haines & Wallace ("Shaft Culling for Efficient Ray-Traced Radiosity", 1994, after the beam
 // tests of their ray classification) test a box against each side of the beam polyhedron at the
@@ -18,31 +18,10 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "rayclass/classify/hierarchy.h"
+#include "lists.h"
+#include "support.h"
 
 namespace rayclass::classify {
-
-inline ListView View(const Hierarchy::FaceList& l, size_t n, const ListFrame* frame) {
-    return {l.x0.data(), l.x1.data(),   l.y0.data(), l.y1.data(), l.z0.data(),
-            l.z1.data(), l.prim.data(), n,           frame};
-}
-
-// Where a filter writes its kept boxes: n entries from these pointers on.
-struct ListOut {
-    uint16_t* x0;
-    uint16_t* x1;
-    uint16_t* y0;
-    uint16_t* y1;
-    uint16_t* z0;
-    uint16_t* z1;
-    uint32_t* prim;
-};
-
-// Entries [at, ...) of `l`.
-inline ListOut Out(Hierarchy::FaceList& l, size_t at) {
-    return {l.x0.data() + at, l.x1.data() + at, l.y0.data() + at,  l.y1.data() + at,
-            l.z0.data() + at, l.z1.data() + at, l.prim.data() + at};
-}
 
 // The frame of boxes within [lo, hi] (X, Y, Z of a face; the default frame when lo > hi).
 ListFrame MakeListFrame(const float lo[3], const float hi[3]);

@@ -1,21 +1,7 @@
 // Any-hit rays that end at common points (shadow rays to point lights) classified from the points
-// by cells of their direction (Hierarchy::SubdivideFromEnds).
-//
-// From its point, a light's rays share their origin: only their direction and their end vary.
-// The general path moves every ray once a level (or a plan's four levels) and reads it again for
-// each node's bounds; here one counting sort puts the rays in the order of their cells, the
-// cells' (u, v) bits interleaved, so that every node of the hierarchy is a range of cells and of
-// rays, and a pyramid over the cells gives any node's bounds without reading a ray. A node's
-// (u, v) bounds are those of its non-empty cells, so they are looser than its rays' by up to a
-// cell on each side: the grid is fine enough that leaves span several cells. A single cell with
-// a long list that the cost function would still split (a thin cone through dense geometry) is
-// split ray by ray below the grid, its rays read again: without that, one 55-ray cell of
-// Conference's anchor shadow rays kept a list of 103,300 candidates.
-//
-// Measured on Sibenik's and Conference's 786,432 anchor shadow rays, two cores, 128 cells a
-// side (classify_bench, 5 runs alternating with light-cells=off): 7.6-8.6 against 12.0-13.5 ns
-// a ray and 10.2-12.6 against 14.0-16.5, for 9.68 against 9.30 and 5.80 against 5.56 tests a
-// ray.
+// by cells of their direction (LightCellSubdivision).
+#include "light_cells.h"
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -23,7 +9,6 @@
 #include <cmath>
 
 #include "filter.h"
-#include "rayclass/classify/hierarchy.h"
 #include "support.h"
 
 #if defined(__AVX512F__) && defined(__AVX512CD__)
@@ -36,19 +21,15 @@ namespace rayclass::classify {
 namespace {
 
 // The automatic grid: at least this many rays a cell if they filled every face evenly. Finer
-// cells tighten the bounds, but cost their zeroing, pyramid and scattered counts: on Sibenik's
-// 786,432 anchor shadow rays 128 cells a side (8 a cell) classified in 9.6-12.8 ns a ray for
-// 9.68 tests a ray, 256 (4 a cell) in 15.5-16.4 ns for 9.49 tests, 64 in 9.7-10.1 ns for 11.18.
+// cells tighten the bounds, but cost their zeroing, pyramid and scattered counts; coarser ones
+// lengthen the lists.
 constexpr uint32_t kRaysPerCell = 8;
 constexpr int kMinCellBits = 2, kMaxCellBits = 8;  // 4 to 256 cells a side (8-bit cell indices)
 
 // A single cell whose list holds fewer candidates than this is a leaf, whatever the cost
 // function says: refining reads its rays again and splits them one by one, which costs more than
-// the cost function's split, and short lists gain little. raybench, 786,432 shadow rays, host ms
-// and tests a ray with a minimum of 0 / 256 / 1024 / never: Sibenik reverse camera 12.4 / 5.8 /
-// 5.2 / 6.2 ms (refining 400k rays at 0), 6.31 / 6.38 / 6.41 / 6.41 tests; Conference anchor
-// 14.3 / 10.1 / 12.2 / 9.2 ms, 6.92 / 7.04 / 7.50 / 7.53 tests, reverse 8.7 / 7.3 / 7.2 / 6.5
-// ms, 8.23 / 8.48 / 9.24 / 9.35 tests (one run each, kernels too noisy to compare).
+// the cost function's split, and short lists gain little: refining every cell read a large
+// share of a generation's rays again for a few percent fewer tests.
 constexpr size_t kRefineCandidates = 256;
 
 // A cell's bounds grow by this on each side: (u + 1) rounds by at most 2^-24 for |u| <= 1, so u
@@ -81,7 +62,6 @@ bool Dead(const Ray& r) {
            !std::isfinite(r.origin.x) || !std::isfinite(r.origin.y) || !std::isfinite(r.origin.z);
 }
 
-// The grid's cells a side, as a power of two, for nRays rays from `roots` points and faces.
 // The 5D point and end X of `ray`, which ends at point `match` of `ends`, taken from there through
 // ToRay5's fast path (the vector loop's arithmetic); false when that path does not take it.
 bool PointFromEnd(const CommonEnds& ends, int match, const Ray& ray, const Bounds3f& box, Ray5& p,
@@ -97,12 +77,153 @@ bool PointFromEnd(const CommonEnds& ends, int match, const Ray& ray, const Bound
     return true;
 }
 
+// The grid's cells a side, as a power of two, for nRays rays from `roots` points and faces.
 int CellBits(uint32_t nRays, uint32_t roots, int lightCells) {
     if (lightCells > 0) return std::countr_zero(unsigned(lightCells));
     int bits = kMinCellBits;
     while (bits < kMaxCellBits && uint64_t(roots) * kRaysPerCell << (2 * bits) < nRays) ++bits;
     return bits;
 }
+
+#if defined(RC_CELLS_AVX512)
+// The keys of 16 rays: a ray's root (point * kFaceCount + face) above its (u, v) cell's bits,
+// interleaved, u's first.
+class CellKeyer16 {
+  public:
+    explicit CellKeyer16(int bits)
+        : bits_(bits),
+          half_(_mm512_set1_ps(float(1u << bits) * 0.5f)),
+          top_(_mm512_set1_epi32((1 << bits) - 1)) {}
+
+    // `which`: the point each lane ends at.
+    __m512i Key(__m512i which, const Axis16& axes, __m512 u, __m512 v) const {
+        const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi32(1);
+        // face = 2 axis + (d_a < 0); root = point * kFaceCount + face
+        const __m512i axis = _mm512_mask_blend_epi32(
+            axes.isZ, _mm512_mask_blend_epi32(axes.isY, zero, one), _mm512_set1_epi32(2));
+        const __m512i face = _mm512_mask_add_epi32(_mm512_add_epi32(axis, axis), axes.neg,
+                                                   _mm512_add_epi32(axis, axis), one);
+        const __m512i root =
+            _mm512_add_epi32(_mm512_mullo_epi32(which, _mm512_set1_epi32(kFaceCount)), face);
+        return _mm512_or_si512(
+            _mm512_maskz_slli_epi32(kAll, root, unsigned(2 * bits_)),
+            _mm512_or_si512(_mm512_maskz_slli_epi32(kAll, Spread(Cell(u)), 1), Spread(Cell(v))));
+    }
+
+  private:
+    static constexpr __mmask16 kAll = 0xFFFF;
+
+    // The cell of slope s: floor((s + 1) half), clamped to the grid.
+    __m512i Cell(__m512 s) const {
+        const __m512i c = _mm512_maskz_cvt_roundps_epi32(
+            kAll, _mm512_mul_ps(_mm512_add_ps(s, _mm512_set1_ps(1.0f)), half_),
+            _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+        return _mm512_maskz_min_epi32(kAll, _mm512_maskz_max_epi32(kAll, c, _mm512_setzero_si512()),
+                                      top_);
+    }
+    // Spread of each lane.
+    static __m512i Spread(__m512i x) {
+        x = _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_slli_epi32(kAll, x, 4)),
+                             _mm512_set1_epi32(0x0F0F));
+        x = _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_slli_epi32(kAll, x, 2)),
+                             _mm512_set1_epi32(0x3333));
+        return _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_slli_epi32(kAll, x, 1)),
+                                _mm512_set1_epi32(0x5555));
+    }
+
+    int bits_;
+    __m512 half_;
+    __m512i top_;
+};
+
+// Adds the lanes `fast` of keys k with ends e to their cells' counts and largest ends.
+// Neighbouring rays often share a cell, so each run of equal keys in the block updates its cell
+// once (its length, and the largest end found by a segmented max over the run).
+void AddRuns16(__m512i k, __m512 e, __mmask16 fast, uint32_t* count, float* end) {
+    const __mmask16 all = 0xFFFF;
+    const __m512i zeroI = _mm512_setzero_si512(), oneI = _mm512_set1_epi32(1);
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    // Lane i: the mask of lanes 0 .. i.
+    const __m512i lanesUpTo =
+        _mm512_maskz_sub_epi32(all, _mm512_maskz_sllv_epi32(all, _mm512_set1_epi32(2), lane), oneI);
+    const __m512i previous = _mm512_maskz_permutexvar_epi32(
+        all, _mm512_maskz_sub_epi32(all, _mm512_maskz_max_epi32(all, lane, oneI), oneI), k);
+    const __mmask16 starts = __mmask16(_mm512_cmpneq_epi32_mask(k, previous) | 1u);
+    const __mmask16 runEnds = __mmask16(((starts >> 1) | 0x8000u) & fast);
+    // Each lane's run starts at the last start at or below it.
+    const __m512i below = _mm512_and_si512(_mm512_set1_epi32(starts), lanesUpTo);
+    const __m512i runStart =
+        _mm512_sub_epi32(_mm512_set1_epi32(31), _mm512_maskz_lzcnt_epi32(all, below));
+    const __m512i runLength = _mm512_add_epi32(_mm512_sub_epi32(lane, runStart), oneI);
+    __m512 runEnd = e;
+    for (int step = 1; step < 16; step *= 2) {
+        const __m512i from = _mm512_sub_epi32(lane, _mm512_set1_epi32(step));
+        const __mmask16 inRun = _mm512_cmpge_epi32_mask(from, runStart);
+        runEnd = _mm512_mask_max_ps(
+            runEnd, inRun, runEnd,
+            _mm512_maskz_permutexvar_ps(all, _mm512_maskz_max_epi32(all, from, zeroI), runEnd));
+    }
+    alignas(64) uint32_t runKey[16], runCount[16];
+    alignas(64) float runMax[16];
+    _mm512_store_si512(runKey, _mm512_maskz_compress_epi32(runEnds, k));
+    _mm512_store_si512(runCount, _mm512_maskz_compress_epi32(runEnds, runLength));
+    _mm512_store_ps(runMax, _mm512_maskz_compress_ps(runEnds, runEnd));
+    for (int j = 0, runs = std::popcount(unsigned(runEnds)); j < runs; ++j) {
+        float* at = end + runKey[j];
+        count[runKey[j]] += runCount[j];
+        // A max without a branch: a compare and jump around the store mispredicts.
+        _mm_store_ss(at, _mm_max_ss(_mm_load_ss(at), _mm_load_ss(runMax + j)));
+    }
+}
+
+// CellKeys' blocks of 16 rays: the conversion's fast path of ToRay5, operation for operation, on
+// rays that all start at their point, inside the box. Sets `done` to the rays it took.
+bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f& box, int bits,
+                 uint32_t firstId, const KeyOut& out, std::vector<rc_uint>& missed,
+                 uint64_t& fromEnd, size_t& done) {
+    const __m512i idx = RayOffsets16(rays);
+    const bool packed = rays.Stride() == 8 * sizeof(float);
+    const __m512 blo[3] = {_mm512_set1_ps(box.lo.x), _mm512_set1_ps(box.lo.y),
+                           _mm512_set1_ps(box.lo.z)};
+    const __m512 bhi[3] = {_mm512_set1_ps(box.hi.x), _mm512_set1_ps(box.hi.y),
+                           _mm512_set1_ps(box.hi.z)};
+    const CellKeyer16 keyer(bits);
+    const size_t n = rays.size();
+    size_t i = 0;
+    for (; i < n; i += 16) {
+        const __mmask16 live = LiveLanes16(n, i);
+        Rays16 r = packed ? Load16Packed(rays.Floats(i), std::min<size_t>(16, n - i))
+                          : Gather16(rays.Floats(i), idx, live);
+        __m512i which = _mm512_setzero_si512();
+        const __mmask16 matched = Orient16(ends, live, r, &which);
+        for (unsigned other = unsigned(live & ~matched); other; other &= other - 1) {
+            const size_t j = size_t(std::countr_zero(other));
+            if (!Dead(rays[i + j])) return false;
+            missed.push_back(firstId + uint32_t(i + j));
+        }
+        const Axis16 axes = DominantAxis16(r.dx, r.dy, r.dz);
+        const __mmask16 fast = __mmask16(matched & InBox16(r.ox, r.oy, r.oz, blo, bhi) &
+                                         Mappable16(axes, r.dx, r.dy, r.dz));
+        if (matched & ~fast) return false;
+        if (!fast) {
+            _mm512_mask_storeu_epi32(out.keys + i, live, _mm512_set1_epi32(-1));
+            continue;
+        }
+        // (tMin is 0 once oriented, so the start is the origin.)
+        const __m512 origin[3] = {r.ox, r.oy, r.oz};
+        const Point16 p =
+            FacePoint16(origin, r.dx, r.dy, r.dz, r.tmin, r.tmax, axes, fast, blo, bhi);
+        // Rays that miss keep no key.
+        const __m512i k =
+            _mm512_mask_blend_epi32(fast, _mm512_set1_epi32(-1), keyer.Key(which, axes, p.u, p.v));
+        _mm512_mask_storeu_epi32(out.keys + i, live, k);
+        AddRuns16(k, p.end, fast, out.count, out.end);
+        fromEnd += uint64_t(std::popcount(unsigned(fast)));
+    }
+    done = i;
+    return true;
+}
+#endif
 
 const CellBox kEmptyCell{255, 0, 255, 0, -kInf};
 
@@ -111,11 +232,25 @@ CellBox Merge(const CellBox& a, const CellBox& b) {
             std::max(a.vHi, b.vHi), std::max(a.end, b.end)};
 }
 
+// The levels of a root's pyramid above its cells (its last level), from the cells up.
+void BuildPyramid(CellBox* box, int bits) {
+    for (int q = bits - 1; q >= 0; --q) {
+        const CellBox* below = box + LevelOffset(q + 1);
+        CellBox* level = box + LevelOffset(q);
+        for (size_t j = 0; j < (size_t(1) << (2 * q)); ++j) {
+            level[j] = Merge(Merge(below[4 * j], below[4 * j + 1]),
+                             Merge(below[4 * j + 2], below[4 * j + 3]));
+        }
+    }
+}
+
 }  // namespace
 
-bool Hierarchy::SubdivideFromEnds(LeafBatch& out) {
-    if (params_.lightCells == 0 || inserted_.size() != 1 || sceneBox_.Empty()) return false;
-    const auto& [rays, ends] = inserted_[0];
+bool LightCellSubdivision::Classify(const Generation& gen, LeafBatch& out) {
+    if (core_.params.lightCells == 0 || gen.inserted.size() != 1 || core_.sceneBox.Empty()) {
+        return false;
+    }
+    const auto& [rays, ends] = gen.inserted[0];
     // Only when the sample suggests that every ray ends at a point: a generation with others
     // finds out in the first pass over its rays and starts again on the general path.
     if (ends.n == 0 || !ends.coverSample || rays.size() == 0) return false;
@@ -124,56 +259,80 @@ bool Hierarchy::SubdivideFromEnds(LeafBatch& out) {
     g.rays = rays;
     g.ends = ends;
     g.roots = uint32_t(ends.n) * kFaceCount;
-    g.bits = CellBits(n, g.roots, params_.lightCells);
-    const int bits2 = 2 * g.bits;
-    const uint32_t perRoot = 1u << bits2;
-    const size_t nKeys = size_t(g.roots) * perRoot;
-
-    // Pass 1, in pieces of whole blocks of 16 rays: each ray's key, and per piece each cell's
-    // count and largest end.
-    const int threads = Threads(n);
+    g.bits = CellBits(n, g.roots, core_.params.lightCells);
+    const int threads = core_.pool.Threads(n);
     const size_t step = (size_t(n) + size_t(threads) * 16 - 1) / (size_t(threads) * 16) * 16;
-    const size_t pieces = (size_t(n) + step - 1) / step;
-    if (g.count.size() < pieces) {
-        g.count.resize(pieces);
-        g.end.resize(pieces);
+    const Pieces pieces{threads, step, (size_t(n) + step - 1) / step};
+    std::vector<rc_uint> missed;
+    uint64_t fromEnd = 0;
+    if (!CountCells(pieces, missed, fromEnd)) return false;
+    const uint32_t nLeafRays = PlaceCells(pieces);
+    out.rayIndex.resize(nLeafRays);
+    rayOut_ = out.rayIndex.data();
+    SortRays(pieces);
+    out.missed.insert(out.missed.end(), missed.begin(), missed.end());
+    core_.counters.fromEnd += fromEnd;
+    core_.counters.rayMoves = nLeafRays;
+    core_.counters.cellsPerSide = 1u << g.bits;
+    BuildRoots(nLeafRays, out);
+    rayOut_ = nullptr;
+    return true;
+}
+
+bool LightCellSubdivision::CountCells(const Pieces& pieces, std::vector<rc_uint>& missed,
+                                      uint64_t& fromEnd) {
+    CellGrid& g = cells_;
+    const uint32_t n = uint32_t(g.rays.size());
+    const size_t nKeys = size_t(g.roots) << (2 * g.bits);
+    if (g.count.size() < pieces.count) {
+        g.count.resize(pieces.count);
+        g.end.resize(pieces.count);
     }
     Regrow(g.key, n);
-    std::vector<std::vector<rc_uint>> missed(pieces);
-    std::vector<uint64_t> fromEnd(pieces, 0);
+    std::vector<std::vector<rc_uint>> pieceMissed(pieces.count);
+    std::vector<uint64_t> pieceFromEnd(pieces.count, 0);
     std::atomic<bool> other{false};
-    OnThreads(threads, [&](int t) {
-        for (size_t p = size_t(t); p < pieces; p += size_t(threads)) {
+    OnThreads(pieces.threads, [&](int t) {
+        for (size_t p = size_t(t); p < pieces.count; p += size_t(pieces.threads)) {
             Regrow(g.count[p], nKeys);
             Regrow(g.end[p], nKeys);
             std::fill_n(g.count[p].data(), nKeys, 0u);
             std::fill_n(g.end[p].data(), nKeys, -kInf);
-            const size_t at = p * step, len = std::min(step, size_t(n) - at);
-            if (!CellKeys(rays.Sub(at, len), ends, uint32_t(at), g.key.data() + at,
-                          g.count[p].data(), g.end[p].data(), missed[p], fromEnd[p])) {
+            const size_t at = p * pieces.step, len = std::min(pieces.step, size_t(n) - at);
+            const KeyOut keyOut{g.key.data() + at, g.count[p].data(), g.end[p].data()};
+            if (!CellKeys(g.rays.Sub(at, len), g.ends, uint32_t(at), keyOut, pieceMissed[p],
+                          pieceFromEnd[p])) {
                 other = true;
             }
         }
     });
     if (other) return false;
+    for (size_t p = 0; p < pieces.count; ++p) {
+        missed.insert(missed.end(), pieceMissed[p].begin(), pieceMissed[p].end());
+        fromEnd += pieceFromEnd[p];
+    }
+    return true;
+}
 
+uint32_t LightCellSubdivision::PlaceCells(const Pieces& pieces) {
     // Within a root, each cell's rays follow the cells before, and within a cell each piece's
-    // the pieces before (so a cell's rays keep their order); the counts become each piece's
-    // next position, and each root gets its pyramid.
+    // the pieces before (so a cell's rays keep their order).
+    CellGrid& g = cells_;
+    const uint32_t perRoot = 1u << (2 * g.bits);
     const uint32_t stride = perRoot + 1;
     Regrow(g.begin, size_t(g.roots) * stride);
     const size_t pyramid = LevelOffset(g.bits + 1);
     Regrow(g.box, size_t(g.roots) * pyramid);
     g.rootBegin.assign(g.roots + 1, 0);
     std::atomic<uint32_t> nextRoot{0};
-    OnThreads(threads, [&](int) {
-        std::vector<uint32_t*> counts(pieces);
-        std::vector<const float*> ends(pieces);
+    OnThreads(pieces.threads, [&](int) {
+        std::vector<uint32_t*> counts(pieces.count);
+        std::vector<const float*> ends(pieces.count);
         for (uint32_t r; (r = nextRoot.fetch_add(1)) < g.roots;) {
             uint32_t* begin = g.begin.data() + size_t(r) * stride;
             CellBox* box = g.box.data() + size_t(r) * pyramid;
             CellBox* cells = box + LevelOffset(g.bits);
-            for (size_t p = 0; p < pieces; ++p) {
+            for (size_t p = 0; p < pieces.count; ++p) {
                 counts[p] = g.count[p].data() + size_t(r) * perRoot;
                 ends[p] = g.end[p].data() + size_t(r) * perRoot;
             }
@@ -181,7 +340,7 @@ bool Hierarchy::SubdivideFromEnds(LeafBatch& out) {
             for (uint32_t c = 0; c < perRoot; ++c) {
                 begin[c] = at;
                 float e = -kInf;
-                for (size_t p = 0; p < pieces; ++p) {
+                for (size_t p = 0; p < pieces.count; ++p) {
                     const uint32_t count = counts[p][c];
                     counts[p][c] = at;
                     at += count;
@@ -192,222 +351,109 @@ bool Hierarchy::SubdivideFromEnds(LeafBatch& out) {
             }
             begin[perRoot] = at;
             g.rootBegin[r + 1] = at;  // the root's size, until summed below
-            if (at == 0) continue;
-            for (int q = g.bits - 1; q >= 0; --q) {
-                const CellBox* below = box + LevelOffset(q + 1);
-                CellBox* level = box + LevelOffset(q);
-                for (size_t j = 0; j < (size_t(1) << (2 * q)); ++j) {
-                    level[j] = Merge(Merge(below[4 * j], below[4 * j + 1]),
-                                     Merge(below[4 * j + 2], below[4 * j + 3]));
-                }
-            }
+            if (at > 0) BuildPyramid(box, g.bits);
         }
     });
     for (uint32_t r = 0; r < g.roots; ++r) g.rootBegin[r + 1] += g.rootBegin[r];
-    const uint32_t nLeafRays = g.rootBegin[g.roots];
+    return g.rootBegin[g.roots];
+}
 
-    // Pass 2: the rays' ids in key order, straight into the leaves' ray array.
-    out.rayIndex.resize(nLeafRays);
-    rayOut_ = out.rayIndex.data();
-    OnThreads(threads, [&](int t) {
-        for (size_t p = size_t(t); p < pieces; p += size_t(threads)) {
+void LightCellSubdivision::SortRays(const Pieces& pieces) {
+    CellGrid& g = cells_;
+    const uint32_t n = uint32_t(g.rays.size());
+    const int bits2 = 2 * g.bits;
+    OnThreads(pieces.threads, [&](int t) {
+        for (size_t p = size_t(t); p < pieces.count; p += size_t(pieces.threads)) {
             uint32_t* next = g.count[p].data();
             const uint32_t* key = g.key.data();
             const uint32_t* rootBegin = g.rootBegin.data();
             rc_uint* to = rayOut_;
-            const uint32_t end = uint32_t(std::min(size_t(n), (p + 1) * step));
-            for (uint32_t i = uint32_t(p * step); i < end; ++i) {
+            const uint32_t end = uint32_t(std::min(size_t(n), (p + 1) * pieces.step));
+            for (uint32_t i = uint32_t(p * pieces.step); i < end; ++i) {
                 const uint32_t k = key[i];
                 if (k != kNoNode) to[rootBegin[k >> bits2] + next[k]++] = i;
             }
         }
     });
-    for (size_t p = 0; p < pieces; ++p) {
-        out.missed.insert(out.missed.end(), missed[p].begin(), missed[p].end());
-        counters_.fromEnd += fromEnd[p];
-    }
-    counters_.rayMoves = nLeafRays;
-    counters_.cellsPerSide = 1u << g.bits;
+}
 
-    // The hierarchy: a task per root (point and face) with rays.
+void LightCellSubdivision::BuildRoots(uint32_t nLeafRays, LeafBatch& out) {
+    CellGrid& g = cells_;
     for (uint32_t r = 0; r < g.roots; ++r) {
-        const glm::vec3& point = ends.point[r / kFaceCount];
+        const glm::vec3& point = g.ends.point[r / kFaceCount];
         const int face = int(r % kFaceCount), a = FaceAxis(face);
         g.origin[r][0] = FaceX(face, point);
         g.origin[r][1] = point[(a + 1) % 3];
         g.origin[r][2] = point[(a + 2) % 3];
     }
-    Schedule schedule;
-    schedule.cut = TaskCut(nLeafRays);
-    nParts_ = 0;
+    WorkerPool& pool = core_.pool;
+    const int threads = pool.Start(nLeafRays, pool.TaskCut(nLeafRays), out);
+    if (refine_.size() < size_t(threads)) refine_.resize(size_t(threads));
     for (uint32_t r = 0; r < g.roots; ++r) {
         if (g.rootBegin[r] == g.rootBegin[r + 1]) continue;
-        const int face = int(r % kFaceCount);
-        const FaceList& all = (*faceLists_)[face];
-        Task task{};
-        task.node = kNoNode;
-        task.list = View(all, all.Size(), &listFrame_[face]);
-        task.part = &NewPart(g.rootBegin[r]);
-        task.cells = {r, 0, 0};
-        schedule.queue.push_back(task);
+        const ListView list = core_.faceLists->Whole(int(r % kFaceCount));
+        pool.Queue(g.rootBegin[r], [this, r, list](Worker& w) {
+            ProcessCells(w, CellAt{r, 0, 0}, list, false);
+        });
     }
-    const int workers = StartWorkers(schedule, nLeafRays, out);
-    OnThreads(workers, [&](int t) { Work(workers_[size_t(t)], t); });
-    Join(out, schedule.listsEnd.load(), workers);
-    rayOut_ = nullptr;
-    size_t scratch =
-        (g.key.capacity() + g.begin.capacity()) * 4 + g.box.capacity() * sizeof(CellBox);
-    for (size_t p = 0; p < g.count.size(); ++p)
-        scratch += (g.count[p].capacity() + g.end[p].capacity()) * 4;
-    FinishWorkers(scratch);
-    return true;
+    pool.Run(threads);
+    pool.Join(out, threads);
+    pool.Finish(ScratchBytes(), core_.counters);
 }
 
-bool Hierarchy::CellKeys(RayView rays, const CommonEnds& endsIn, uint32_t firstId, uint32_t* keys,
-                         uint32_t* count, float* end, std::vector<rc_uint>& missed,
-                         uint64_t& fromEndOut) const {
-    // Locals: the pieces' counters of rays taken from an end share a cache line, and updating
-    // them in place a block at a time made this pass 1.6x slower on two cores (4.1 against
-    // 2.6 ms for Sibenik's shadow rays); the copied points need no reload after each store.
+size_t LightCellSubdivision::ScratchBytes() const {
+    const CellGrid& g = cells_;
+    size_t bytes = (g.key.capacity() + g.begin.capacity()) * 4 + g.box.capacity() * sizeof(CellBox);
+    for (size_t p = 0; p < g.count.size(); ++p) {
+        bytes += (g.count[p].capacity() + g.end[p].capacity()) * 4;
+    }
+    return bytes;
+}
+
+bool LightCellSubdivision::CellKeys(RayView rays, const CommonEnds& endsIn, uint32_t firstId,
+                                    const KeyOut& out, std::vector<rc_uint>& missed,
+                                    uint64_t& fromEndOut) const {
+    // Locals: the pieces' counters of rays taken from an end share a cache line, which updating
+    // them in place a block at a time bounces between the cores; the copied points need no
+    // reload after each store.
     const CommonEnds ends = endsIn;
     uint64_t fromEnd = 0;
+    size_t i = 0;
+#if defined(RC_CELLS_AVX512)
+    if (!BlockKeys16(rays, ends, core_.sceneBox, cells_.bits, firstId, out, missed, fromEnd, i)) {
+        return false;
+    }
+#endif
     const int bits = cells_.bits;
     const float half = float(1u << bits) * 0.5f;
     const int top = (1 << bits) - 1;
-    const size_t n = rays.size();
-    size_t i = 0;
-#if defined(RC_CELLS_AVX512)
-    // Convert's fast path of ToRay5, operation for operation, on rays that all start at their
-    // point, inside the box.
-    const __m512i idx = RayOffsets16(rays);
-    const bool packed = rays.Stride() == 8 * sizeof(float);
-    const __m512 one = _mm512_set1_ps(1.0f);
-    const __m512 halfV = _mm512_set1_ps(half);
-    const __m512 blo[3] = {_mm512_set1_ps(sceneBox_.lo.x), _mm512_set1_ps(sceneBox_.lo.y),
-                           _mm512_set1_ps(sceneBox_.lo.z)};
-    const __m512 bhi[3] = {_mm512_set1_ps(sceneBox_.hi.x), _mm512_set1_ps(sceneBox_.hi.y),
-                           _mm512_set1_ps(sceneBox_.hi.z)};
-    const __mmask16 all = 0xFFFF;
-    const __m512i zeroI = _mm512_setzero_si512(), oneI = _mm512_set1_epi32(1);
-    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-    // Lane i: the mask of lanes 0 .. i.
-    const __m512i lanesUpTo =
-        _mm512_maskz_sub_epi32(all, _mm512_maskz_sllv_epi32(all, _mm512_set1_epi32(2), lane), oneI);
-    const __m512i topI = _mm512_set1_epi32(top);
-    auto spread = [&](__m512i x) {
-        x = _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_slli_epi32(all, x, 4)),
-                             _mm512_set1_epi32(0x0F0F));
-        x = _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_slli_epi32(all, x, 2)),
-                             _mm512_set1_epi32(0x3333));
-        return _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_slli_epi32(all, x, 1)),
-                                _mm512_set1_epi32(0x5555));
+    auto cellOf = [&](float s) {
+        return uint32_t(std::clamp(int(std::floor((s + 1.0f) * half)), 0, top));
     };
-    auto cell = [&](__m512 s) {
-        const __m512i c =
-            _mm512_maskz_cvt_roundps_epi32(all, _mm512_mul_ps(_mm512_add_ps(s, one), halfV),
-                                           _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-        return _mm512_maskz_min_epi32(all, _mm512_maskz_max_epi32(all, c, zeroI), topI);
-    };
-    for (; i < n; i += 16) {
-        const __mmask16 live = LiveLanes16(n, i);
-        Rays16 r = packed ? Load16Packed(rays.Floats(i), std::min<size_t>(16, n - i))
-                          : Gather16(rays.Floats(i), idx, live);
-        __m512i which = zeroI;
-        const __mmask16 matched = Orient16(ends, live, r, &which);
-        for (unsigned other = unsigned(live & ~matched); other; other &= other - 1) {
-            const size_t j = size_t(std::countr_zero(other));
-            if (!Dead(rays[i + j])) return false;
-            missed.push_back(firstId + uint32_t(i + j));
-        }
-        const auto [ox, oy, oz, tmin, dx, dy, dz, tmax] = r;
-        const Axis16 axes = DominantAxis16(dx, dy, dz);
-        const auto [isX, isY, isZ, neg, ax, ay, az, da] = axes;
-        const __mmask16 fast =
-            __mmask16(matched & InBox16(ox, oy, oz, blo, bhi) & Mappable16(axes, dx, dy, dz));
-        if (matched & ~fast) return false;
-        if (!fast) {
-            _mm512_mask_storeu_epi32(keys + i, live, _mm512_set1_epi32(-1));
-            continue;
-        }
-        // (tMin is 0 once oriented, so the start is the origin.)
-        const __m512 origin[3] = {ox, oy, oz};
-        const Point16 p = FacePoint16(origin, dx, dy, dz, tmin, tmax, axes, fast, blo, bhi);
-        const __m512 u = p.u, v = p.v, e = p.end;
-        // face = 2 axis + (d_a < 0); root = end * kFaceCount + face
-        const __m512i axis = _mm512_mask_blend_epi32(isZ, _mm512_mask_blend_epi32(isY, zeroI, oneI),
-                                                     _mm512_set1_epi32(2));
-        const __m512i face = _mm512_mask_add_epi32(_mm512_add_epi32(axis, axis), neg,
-                                                   _mm512_add_epi32(axis, axis), oneI);
-        const __m512i root =
-            _mm512_add_epi32(_mm512_mullo_epi32(which, _mm512_set1_epi32(kFaceCount)), face);
-        const __m512i key = _mm512_or_si512(
-            _mm512_maskz_slli_epi32(all, root, unsigned(2 * bits)),
-            _mm512_or_si512(_mm512_maskz_slli_epi32(all, spread(cell(u)), 1), spread(cell(v))));
-        // Rays that miss keep no key.
-        const __m512i k = _mm512_mask_blend_epi32(fast, _mm512_set1_epi32(-1), key);
-        _mm512_mask_storeu_epi32(keys + i, live, k);
-        // The cells' counts and largest ends: neighbouring rays often share a cell (a run of
-        // 3 on average on Sibenik's shadow rays at 128 cells a side), so each run of equal keys
-        // in the block updates its cell once (its length, and the largest end found by a
-        // segmented max over the run).
-        const __m512i previous = _mm512_maskz_permutexvar_epi32(
-            all, _mm512_maskz_sub_epi32(all, _mm512_maskz_max_epi32(all, lane, oneI), oneI), k);
-        const __mmask16 starts = __mmask16(_mm512_cmpneq_epi32_mask(k, previous) | 1u);
-        const __mmask16 runEnds = __mmask16(((starts >> 1) | 0x8000u) & fast);
-        // Each lane's run starts at the last start at or below it.
-        const __m512i below = _mm512_and_si512(_mm512_set1_epi32(starts), lanesUpTo);
-        const __m512i runStart =
-            _mm512_sub_epi32(_mm512_set1_epi32(31), _mm512_maskz_lzcnt_epi32(all, below));
-        const __m512i runLength = _mm512_add_epi32(_mm512_sub_epi32(lane, runStart), oneI);
-        __m512 runEnd = e;
-        for (int step = 1; step < 16; step *= 2) {
-            const __m512i from = _mm512_sub_epi32(lane, _mm512_set1_epi32(step));
-            const __mmask16 inRun = _mm512_cmpge_epi32_mask(from, runStart);
-            runEnd = _mm512_mask_max_ps(
-                runEnd, inRun, runEnd,
-                _mm512_maskz_permutexvar_ps(all, _mm512_maskz_max_epi32(all, from, zeroI), runEnd));
-        }
-        alignas(64) uint32_t runKey[16], runCount[16];
-        alignas(64) float runMax[16];
-        _mm512_store_si512(runKey, _mm512_maskz_compress_epi32(runEnds, k));
-        _mm512_store_si512(runCount, _mm512_maskz_compress_epi32(runEnds, runLength));
-        _mm512_store_ps(runMax, _mm512_maskz_compress_ps(runEnds, runEnd));
-        for (int j = 0, runs = std::popcount(unsigned(runEnds)); j < runs; ++j) {
-            float* at = end + runKey[j];
-            count[runKey[j]] += runCount[j];
-            // A max without a branch: a compare and jump around the store mispredicts.
-            _mm_store_ss(at, _mm_max_ss(_mm_load_ss(at), _mm_load_ss(runMax + j)));
-        }
-        fromEnd += uint64_t(std::popcount(unsigned(fast)));
-    }
-#endif
-    for (; i < n; ++i) {
+    for (; i < rays.size(); ++i) {
         const Ray ray = rays[i];
         const int match = ends.Match(ray);
         if (match < 0) {
             if (!Dead(ray)) return false;
-            keys[i] = kNoNode;
+            out.keys[i] = kNoNode;
             missed.push_back(firstId + uint32_t(i));
             continue;
         }
         Ray5 r5;
         float e;
-        if (!PointFromEnd(ends, match, ray, sceneBox_, r5, e)) return false;
-        auto cellOf = [&](float s) {
-            return uint32_t(std::clamp(int(std::floor((s + 1.0f) * half)), 0, top));
-        };
+        if (!PointFromEnd(ends, match, ray, core_.sceneBox, r5, e)) return false;
         const uint32_t key = (uint32_t(match * kFaceCount + r5.face) << (2 * bits)) |
                              Spread(cellOf(r5.p[3])) << 1 | Spread(cellOf(r5.p[4]));
-        keys[i] = key;
-        ++count[key];
-        end[key] = std::max(end[key], e);
+        out.keys[i] = key;
+        ++out.count[key];
+        out.end[key] = std::max(out.end[key], e);
         ++fromEnd;
     }
     fromEndOut = fromEnd;
     return true;
 }
 
-Bounds6 Hierarchy::CellBounds(const CellAt& at) const {
+Bounds6 LightCellSubdivision::CellBounds(const CellAt& at) const {
     const CellGrid& g = cells_;
     const CellBox* level =
         g.box.data() + size_t(at.root) * LevelOffset(g.bits + 1) + LevelOffset((at.depth + 1) / 2);
@@ -426,25 +472,18 @@ Bounds6 Hierarchy::CellBounds(const CellAt& at) const {
     return t;
 }
 
-void Hierarchy::SpawnCells(Worker& w, const CellAt& at, const ListView& list, bool reuseList) {
-    Schedule& s = *w.schedule;
+void LightCellSubdivision::SpawnCells(const CellAt& at, const ListView& list, bool reuseList) {
     const uint32_t begin = cells_.rootBegin[at.root] +
                            cells_.begin[size_t(at.root) * ((size_t(1) << (2 * cells_.bits)) + 1) +
                                         (size_t(at.prefix) << (2 * cells_.bits - at.depth))];
-    {
-        std::lock_guard lock(s.mutex);
-        Task task{};
-        task.node = kNoNode;
-        task.list = list;  // a kept list or the face's: both outlive the task
-        task.reuseList = reuseList;
-        task.part = &NewPart(begin);
-        task.cells = at;
-        s.queue.push_back(task);
-    }
-    s.changed.notify_one();
+    // `list` views a kept list or the face's: both outlive the task.
+    core_.pool.Spawn(begin, [&](Part&) -> TaskBody {
+        return [this, at, list, reuseList](Worker& w) { ProcessCells(w, at, list, reuseList); };
+    });
 }
 
-void Hierarchy::ProcessCells(Worker& w, CellAt at, const ListView& list, bool reuseList) {
+void LightCellSubdivision::ProcessCells(Worker& w, CellAt at, const ListView& list,
+                                        bool reuseList) {
     const int bits2 = 2 * cells_.bits;
     const uint32_t* cellBegin = cells_.begin.data() + size_t(at.root) * ((size_t(1) << bits2) + 1);
     const uint32_t rootBegin = cells_.rootBegin[at.root];
@@ -465,9 +504,9 @@ void Hierarchy::ProcessCells(Worker& w, CellAt at, const ListView& list, bool re
     const ArenaMark release(w.stack);
     const int face = int(at.root % kFaceCount);
     const Bounds6 tight = CellBounds(at);
-    const bool spawns = nRays > w.schedule->cut;
+    const bool spawns = nRays > core_.pool.Cut();
     const bool filtered = !reuseList && !KeepsMost(tight, list);
-    ListView own = filtered ? Filter(w, tight, list, spawns) : CutAtEnd(tight, list);
+    ListView own = filtered ? w.Filter(tight, list, spawns) : CutAtEnd(tight, list);
     Node node;
     node.box = tight.ToBox5();
     node.face = uint8_t(face);
@@ -475,31 +514,32 @@ void Hierarchy::ProcessCells(Worker& w, CellAt at, const ListView& list, bool re
     int dim = 0;
     // A single cell is split further only when its list is long (see kRefineCandidates).
     const bool split = at.depth < bits2 || own.n >= kRefineCandidates;
-    if (split && ChooseSplit(node, tight, nRays, own, dim)) {
+    if (split && core_.cost.ChooseSplit(node, tight, nRays, own, dim)) {
         if (at.depth == bits2) {
             RefineCell(w, at.root, begin, nRays, at.depth, own);
             return;
         }
-        const bool reuse = filtered && (at.depth + 1) % std::max(params_.splitsPerList, 1) != 0;
+        const bool reuse =
+            filtered && (at.depth + 1) % std::max(core_.params.splitsPerList, 1) != 0;
         const CellAt left{at.root, 2 * at.prefix, at.depth + 1};
         const CellAt right{at.root, 2 * at.prefix + 1, at.depth + 1};
         // A node with many rays queues its right half, so that another thread can start on it.
-        if (spawns) SpawnCells(w, right, own, reuse);
+        if (spawns) SpawnCells(right, own, reuse);
         ProcessCells(w, left, own, reuse);
         if (!spawns) ProcessCells(w, right, own, reuse);
         return;
     }
-    if (!filtered) own = Filter(w, tight, list, false);
+    if (!filtered) own = w.Filter(tight, list, false);
     RcLeaf leaf{};
     leaf.rayBegin = begin;
     leaf.rayCount = nRays;
-    PushLeaf(w, leaf, NewNode(w, node.box, face, at.depth, false), own, tight.hi[kDims]);
+    w.PushLeaf(leaf, w.NewNode(node.box, face, at.depth, false), own, tight.hi[kDims]);
 }
 
-void Hierarchy::RefineCell(Worker& w, uint32_t root, uint32_t begin, uint32_t n, int depth,
-                           const ListView& list) {
+void LightCellSubdivision::RefineCell(Worker& w, uint32_t root, uint32_t begin, uint32_t n,
+                                      int depth, const ListView& list) {
     const CellGrid& g = cells_;
-    std::vector<CellRay>& rays = w.cellRays;
+    std::vector<CellRay>& rays = refine_[size_t(w.index)];
     rays.resize(n);
     for (uint32_t j = 0; j < n; ++j) {
         // Mapped as CellKeys mapped it (which took every ray of a cell).
@@ -507,14 +547,15 @@ void Hierarchy::RefineCell(Worker& w, uint32_t root, uint32_t begin, uint32_t n,
         const Ray ray = g.rays[id];
         Ray5 p;
         float end = 0.0f;
-        PointFromEnd(g.ends, g.ends.Match(ray), ray, sceneBox_, p, end);
+        PointFromEnd(g.ends, g.ends.Match(ray), ray, core_.sceneBox, p, end);
         rays[j] = {p.p[3], p.p[4], end, id};
     }
     ProcessCellRays(w, root, rays.data(), n, begin, depth, list, true);
 }
 
-void Hierarchy::ProcessCellRays(Worker& w, uint32_t root, CellRay* rays, uint32_t n, uint32_t slot,
-                                int depth, const ListView& list, bool reuseList) {
+void LightCellSubdivision::ProcessCellRays(Worker& w, uint32_t root, CellRay* rays, uint32_t n,
+                                           uint32_t slot, int depth, const ListView& list,
+                                           bool reuseList) {
     const ArenaMark release(w.stack);
     const int face = int(root % kFaceCount);
     Bounds6 tight;
@@ -530,30 +571,31 @@ void Hierarchy::ProcessCellRays(Worker& w, uint32_t root, CellRay* rays, uint32_
     }
     tight.lo[kDims] = tight.lo[0];
     const bool filtered = !reuseList && !KeepsMost(tight, list);
-    ListView own = filtered ? Filter(w, tight, list, false) : CutAtEnd(tight, list);
+    ListView own = filtered ? w.Filter(tight, list, false) : CutAtEnd(tight, list);
     Node node;
     node.box = tight.ToBox5();
     node.face = uint8_t(face);
     node.depth = uint8_t(std::min(depth, 255));
     int dim = 0;
-    if (ChooseSplit(node, tight, n, own, dim)) {
+    if (core_.cost.ChooseSplit(node, tight, n, own, dim)) {
         const float value = Midpoint(tight.lo[dim], tight.hi[dim]);
         CellRay* mid = std::partition(
             rays, rays + n, [&](const CellRay& r) { return (dim == 3 ? r.u : r.v) < value; });
         const uint32_t left = uint32_t(mid - rays);
         if (left > 0 && left < n) {
-            const bool reuse = filtered && (depth + 1) % std::max(params_.splitsPerList, 1) != 0;
+            const bool reuse =
+                filtered && (depth + 1) % std::max(core_.params.splitsPerList, 1) != 0;
             ProcessCellRays(w, root, rays, left, slot, depth + 1, own, reuse);
             ProcessCellRays(w, root, mid, n - left, slot + left, depth + 1, own, reuse);
             return;
         }
     }
-    if (!filtered) own = Filter(w, tight, list, false);
+    if (!filtered) own = w.Filter(tight, list, false);
     for (uint32_t j = 0; j < n; ++j) rayOut_[slot + j] = rays[j].id;
     RcLeaf leaf{};
     leaf.rayBegin = slot;
     leaf.rayCount = n;
-    PushLeaf(w, leaf, NewNode(w, node.box, face, node.depth, false), own, tight.hi[kDims]);
+    w.PushLeaf(leaf, w.NewNode(node.box, face, node.depth, false), own, tight.hi[kDims]);
 }
 
 }  // namespace rayclass::classify

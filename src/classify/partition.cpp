@@ -371,4 +371,93 @@ void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule,
     }
 }
 
+namespace {
+
+#if defined(__AVX512F__)
+// GroupRays' first pass: each block of 16 rays' groups as two masks (box0's, box1's), kept in
+// dest at the block's first position (positions are the task's own, so threads do not share
+// them); count[g] gets each group's size.
+void MarkGroups16(const PartitionIo& io, const bool* active, const float* constant,
+                  const Box5& box0, const Box5& box1, uint32_t begin, uint32_t end, uint32_t* dest,
+                  uint32_t count[3]) {
+    __mmask16 in0 = 0xFFFF, in1 = 0xFFFF;  // what the coordinates that never vary allow
+    for (int k = 0; k < kDims; ++k) {
+        if (active[k]) continue;
+        if (!(constant[k] >= box0.lo[k] && constant[k] <= box0.hi[k])) in0 = 0;
+        if (!(constant[k] >= box1.lo[k] && constant[k] <= box1.hi[k])) in1 = 0;
+    }
+    for (uint32_t i = begin; i < end; i += 16) {
+        const __mmask16 live = LiveLanes16(end, i);
+        __mmask16 c0 = __mmask16(live & in0), c1 = __mmask16(live & in1);
+        for (int k = 0; k < kDims; ++k) {
+            if (!active[k]) continue;
+            const __m512 v = _mm512_maskz_loadu_ps(live, io.src[k] + i);
+            c0 = _mm512_mask_cmp_ps_mask(c0, v, _mm512_set1_ps(box0.lo[k]), _CMP_GE_OQ);
+            c0 = _mm512_mask_cmp_ps_mask(c0, v, _mm512_set1_ps(box0.hi[k]), _CMP_LE_OQ);
+            c1 = _mm512_mask_cmp_ps_mask(c1, v, _mm512_set1_ps(box1.lo[k]), _CMP_GE_OQ);
+            c1 = _mm512_mask_cmp_ps_mask(c1, v, _mm512_set1_ps(box1.hi[k]), _CMP_LE_OQ);
+        }
+        c1 = __mmask16(c1 & ~c0);
+        count[0] += uint32_t(std::popcount(unsigned(c0)));
+        count[1] += uint32_t(std::popcount(unsigned(c1)));
+        count[2] += uint32_t(std::popcount(unsigned(live & ~c0 & ~c1)));
+        dest[i] = uint32_t(c0) | uint32_t(c1) << 16;
+    }
+}
+
+// GroupRays' second pass: every group in ray order after the groups before it.
+void MoveGroups16(const PartitionIo& io, const bool* active, uint32_t begin, uint32_t end,
+                  const uint32_t* dest, const uint32_t count[3]) {
+    uint32_t next[3] = {begin, begin + count[0], begin + count[0] + count[1]};
+    for (uint32_t i = begin; i < end; i += 16) {
+        const __mmask16 live = LiveLanes16(end, i);
+        const __mmask16 group[3] = {__mmask16(dest[i]), __mmask16(dest[i] >> 16),
+                                    __mmask16(live & ~(dest[i] | dest[i] >> 16))};
+        for (int k = 0; k < kCoords; ++k) {
+            if (!active[k]) continue;
+            const __m512 v = _mm512_maskz_loadu_ps(live, io.src[k] + i);
+            for (int g = 0; g < 3; ++g) {
+                if (!group[g]) continue;
+                const uint32_t n = uint32_t(std::popcount(unsigned(group[g])));
+                _mm512_mask_storeu_ps(io.dst[k] + next[g], __mmask16((1u << n) - 1u),
+                                      _mm512_maskz_compress_ps(group[g], v));
+            }
+        }
+        const __m512i id = _mm512_maskz_loadu_epi32(live, io.srcId + i);
+        for (int g = 0; g < 3; ++g) {
+            if (!group[g]) continue;
+            const uint32_t n = uint32_t(std::popcount(unsigned(group[g])));
+            _mm512_mask_storeu_epi32(io.dstId + next[g], __mmask16((1u << n) - 1u),
+                                     _mm512_maskz_compress_epi32(group[g], id));
+            next[g] += n;
+        }
+    }
+}
+#endif
+
+}  // namespace
+
+void GroupRays(const PartitionIo& io, const bool* active, const float* constant, const Box5& box0,
+               const Box5& box1, uint32_t begin, uint32_t end, uint32_t* dest, uint32_t count[3]) {
+#if defined(__AVX512F__)
+    MarkGroups16(io, active, constant, box0, box1, begin, end, dest, count);
+    MoveGroups16(io, active, begin, end, dest, count);
+#else
+    for (uint32_t i = begin; i < end; ++i) {
+        std::array<float, kDims> p;
+        for (int k = 0; k < kDims; ++k) p[k] = active[k] ? io.src[k][i] : constant[k];
+        const uint32_t g = box0.Contains(p) ? 0 : (box1.Contains(p) ? 1 : 2);
+        dest[i] = g;
+        ++count[g];
+    }
+    uint32_t next[3] = {begin, begin + count[0], begin + count[0] + count[1]};
+    for (uint32_t i = begin; i < end; ++i) dest[i] = next[dest[i]]++;
+    for (int k = 0; k < kCoords; ++k) {
+        if (!active[k]) continue;
+        for (uint32_t i = begin; i < end; ++i) io.dst[k][dest[i]] = io.src[k][i];
+    }
+    for (uint32_t i = begin; i < end; ++i) io.dstId[dest[i]] = io.srcId[i];
+#endif
+}
+
 }  // namespace rayclass::classify

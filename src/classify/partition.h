@@ -6,7 +6,6 @@
 
 #include <cstdint>
 
-#include "rayclass/classify/hierarchy.h"
 #include "rayclass/core/scratch_vector.h"
 #include "support.h"
 
@@ -59,5 +58,13 @@ struct CellRule {
 // depend on their number.
 void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule, uint32_t begin,
                 uint32_t end, uint32_t* cellBegin, Bounds6* cell, int pieces);
+
+// Moves the rays [begin, end) of io.src into io.dst by the child of an earlier split whose
+// interval contains them: box0's, else box1's, else the remainder's (groups 0, 1, 2, each in ray
+// order, one after the other); count[g] gets each group's size. Coordinates whose `active` entry
+// is false are not moved: all rays have the value `constant` there. `dest` (room for end
+// entries) is scratch.
+void GroupRays(const PartitionIo& io, const bool* active, const float* constant, const Box5& box0,
+               const Box5& box1, uint32_t begin, uint32_t end, uint32_t* dest, uint32_t count[3]);
 
 }  // namespace rayclass::classify

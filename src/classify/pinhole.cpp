@@ -1,11 +1,11 @@
-// Eye rays of a pinhole camera classified by rectangles of the image (Hierarchy::ClassifyPinhole).
+// Eye rays of a pinhole camera classified by rectangles of the image (PinholeSubdivision).
+#include "pinhole.h"
+
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <vector>
 
 #include "filter.h"
-#include "rayclass/classify/hierarchy.h"
 #include "support.h"
 
 namespace rayclass::classify {
@@ -35,7 +35,7 @@ constexpr uint64_t kClipPixels = 64;
 constexpr uint32_t kColumnAlign = 4;
 // Batches of this many rays or more are cut into kBands bands of rows, which the threads take
 // in turn. Each band filters a face's whole list first, but with one band a thread the threads'
-// work differed by a third (Sibenik). The bands do not depend on the thread count, and neither
+// work was uneven. The bands do not depend on the thread count, and neither
 // does the result.
 constexpr uint32_t kBandedRaysMin = 32768;
 constexpr uint32_t kBands = 8;
@@ -46,7 +46,7 @@ bool Finite(const rc_float4& v) {
 
 }  // namespace
 
-struct Hierarchy::Pinhole {
+struct PinholeSubdivision::Camera {
     glm::dvec3 position, forward, right, up;
     double tanX = 1.0, tanY = 1.0;
     uint32_t width = 1, height = 1;
@@ -172,11 +172,15 @@ struct Hierarchy::Pinhole {
             half[0].y1 = half[1].y0 = r.y0 + h / 2;
         }
     }
+    // The camera of `camera`'s pixels [firstPixel, firstPixel + n), in the face frames of scene
+    // box `box`; false when its basis is degenerate or not finite, the pixels run past the
+    // image, or it lies more than kCameraReach box sizes outside the box.
+    bool Set(const RcCamera& camera, uint32_t firstPixel, uint32_t n, const Bounds3f& box);
 };
 
-bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t n,
-                                LeafBatch& out) {
-    const glm::vec3 eye(camera.position.x, camera.position.y, camera.position.z);
+bool PinholeSubdivision::Camera::Set(const RcCamera& camera, uint32_t firstPixel, uint32_t n,
+                                     const Bounds3f& box) {
+    const glm::vec3 eyeAt(camera.position.x, camera.position.y, camera.position.z);
     const glm::dvec3 f(camera.forward.x, camera.forward.y, camera.forward.z);
     const glm::dvec3 r(camera.right.x, camera.right.y, camera.right.z);
     const glm::dvec3 u(camera.up.x, camera.up.y, camera.up.z);
@@ -185,125 +189,119 @@ bool Hierarchy::ClassifyPinhole(const RcCamera& camera, uint32_t first, uint32_t
                       Finite(camera.up) && std::isfinite(camera.tanHalfFovX) &&
                       std::isfinite(camera.tanHalfFovY) && camera.width > 0 && camera.height > 0 &&
                       glm::dot(f, glm::cross(r, u)) != 0.0 &&
-                      uint64_t(first) + n <= uint64_t(camera.width) * camera.height;
+                      uint64_t(firstPixel) + n <= uint64_t(camera.width) * camera.height;
     // The rays are not clipped to the scene box, as Convert clips rays: the beams start at the
     // camera, which is exact for them too, and ProcessRect answers the rays that cannot reach
     // the box as misses.
-    const glm::vec3 reach = sceneBox_.Size() * kCameraReach;
-    const bool near = glm::all(glm::greaterThanEqual(eye, sceneBox_.lo - reach)) &&
-                      glm::all(glm::lessThanEqual(eye, sceneBox_.hi + reach));
-    if (!sane || sceneBox_.Empty() || !near || !inserted_.empty()) return false;
-
-    Pinhole cam;
-    cam.position = glm::dvec3(eye);
-    cam.forward = f;
-    cam.right = r;
-    cam.up = u;
-    cam.tanX = camera.tanHalfFovX;
-    cam.tanY = camera.tanHalfFovY;
-    cam.width = camera.width;
-    cam.height = camera.height;
-    cam.perWidth = 2.0 / double(camera.width);
-    cam.perHeight = 2.0 / double(camera.height);
-    cam.first = first;
-    cam.last = uint64_t(first) + n;
+    const glm::vec3 reach = box.Size() * kCameraReach;
+    const bool near = glm::all(glm::greaterThanEqual(eyeAt, box.lo - reach)) &&
+                      glm::all(glm::lessThanEqual(eyeAt, box.hi + reach));
+    if (!sane || box.Empty() || !near) return false;
+    position = glm::dvec3(eyeAt);
+    forward = f;
+    right = r;
+    up = u;
+    tanX = camera.tanHalfFovX;
+    tanY = camera.tanHalfFovY;
+    width = camera.width;
+    height = camera.height;
+    perWidth = 2.0 / double(camera.width);
+    perHeight = 2.0 / double(camera.height);
+    first = firstPixel;
+    last = uint64_t(firstPixel) + n;
     for (int face = 0; face < kFaceCount; ++face) {
         const int a = FaceAxis(face);
-        cam.eye[face][0] = FaceX(face, eye);
-        cam.eye[face][1] = eye[(a + 1) % 3];
-        cam.eye[face][2] = eye[(a + 2) % 3];
-        cam.end[face] = BoxInFace(face, sceneBox_).hi[0];
+        eye[face][0] = FaceX(face, eyeAt);
+        eye[face][1] = eyeAt[(a + 1) % 3];
+        eye[face][2] = eyeAt[(a + 2) % 3];
+        end[face] = BoxInFace(face, box).hi[0];
     }
-    cam.outside = !glm::all(glm::greaterThanEqual(eye, sceneBox_.lo)) ||
-                  !glm::all(glm::lessThanEqual(eye, sceneBox_.hi));
-    const double grow = kMissMargin * double(sceneBox_.Diagonal());
-    cam.reachableLo = glm::dvec3(sceneBox_.lo) - grow;
-    cam.reachableHi = glm::dvec3(sceneBox_.hi) + grow;
+    outside = !glm::all(glm::greaterThanEqual(eyeAt, box.lo)) ||
+              !glm::all(glm::lessThanEqual(eyeAt, box.hi));
+    const double grow = kMissMargin * double(box.Diagonal());
+    reachableLo = glm::dvec3(box.lo) - grow;
+    reachableHi = glm::dvec3(box.hi) + grow;
+    return true;
+}
 
-    counters_ = {};
+bool PinholeSubdivision::Classify(const RcCamera& camera, uint32_t first, uint32_t n,
+                                  LeafBatch& out) {
+    Camera cam;
+    if (!cam.Set(camera, first, n, core_.sceneBox)) return false;
+    core_.counters = {};
     out.leaves.clear();
     out.missed.clear();
     out.nRays = n;
     out.rayIndex.resize(n);
     if (n == 0) return true;
     rayOut_ = out.rayIndex.data();
-    Schedule schedule;
-    schedule.cut = kNoNode;
-    nParts_ = 0;
-    const int threads = StartWorkers(schedule, n, out);
+    ClassifyBands(cam, out);
+    rayOut_ = nullptr;
+    return true;
+}
+
+void PinholeSubdivision::ClassifyBands(const Camera& cam, LeafBatch& out) {
+    const uint32_t n = uint32_t(cam.last - cam.first);
+    WorkerPool& pool = core_.pool;
+    const int threads = pool.Start(n, kNoNode, out);
     // Bands of whole rows, taken in turn by whichever thread is free; band b's rays follow band
     // b - 1's.
-    const uint32_t yFirst = uint32_t(first / cam.width),
+    const uint32_t yFirst = uint32_t(cam.first / cam.width),
                    rows = uint32_t((cam.last - 1) / cam.width) + 1 - yFirst;
     const uint32_t nBands = n < kBandedRaysMin ? 1 : std::min(rows, kBands);
     std::vector<PixelRect> bands;
     std::vector<uint32_t> slots;
-    std::vector<Part*> parts;
     uint32_t slot = 0;
     for (uint32_t b = 0; b < nBands; ++b) {
         const PixelRect band{0, yFirst + uint32_t(uint64_t(rows) * b / nBands), cam.width,
                              yFirst + uint32_t(uint64_t(rows) * (b + 1) / nBands)};
         bands.push_back(band);
         slots.push_back(slot);
-        parts.push_back(&NewPart(slot));
         slot += cam.Count(band);
     }
-    // Per band: where its slots end, and its rays that get no leaf.
-    std::vector<uint32_t> ends(nBands);
-    std::vector<std::vector<rc_uint>> missed(nBands);
-    std::atomic<uint32_t> next{0};
-    OnThreads(threads, [&](int t) {
-        Worker& w = workers_[size_t(t)];
-        for (uint32_t b; (b = next.fetch_add(1)) < nBands;) {
-            Part& part = *parts[b];
-            w.part = &part;
-            part.worker = t;
-            part.leafBegin = w.leaves.size();
-            part.nodeBegin = w.nodes.size();
-            // The band's slot counter and misses are this thread's until the band is done: the
-            // bands' entries of `ends` (and `missed`'s vector headers) share cache lines, and
-            // updating them leaf by leaf from both threads bounced the lines between the cores.
-            uint32_t slot = slots[b];
-            std::vector<rc_uint> bandMissed;
-            ProcessRect(w, cam, bands[b], -1, 0, nullptr, slot, bandMissed);
-            ends[b] = slot;
-            missed[b] = std::move(bandMissed);
-            part.leafEnd = w.leaves.size();
-            part.nodeEnd = w.nodes.size();
-        }
-    });
+    // Per band: its part, its rays that got a leaf and those that did not.
+    std::vector<Part*> parts;
+    std::vector<RectOut> done(nBands);
+    for (uint32_t b = 0; b < nBands; ++b) {
+        parts.push_back(&pool.Queue(slots[b], [&, b](Worker& w) {
+            // The band's slot counter and misses are this thread's until the band is done:
+            // updating the bands' entries, which share cache lines, leaf by leaf from both
+            // threads bounced the lines between the cores.
+            RectOut band{slots[b], {}};
+            ProcessRect(w, cam, bands[b], -1, 0, nullptr, band);
+            done[b] = std::move(band);
+        }));
+    }
+    pool.Run(threads);
     // The bands' slots close up over the rays that got no leaf.
     uint32_t used = 0;
     for (uint32_t b = 0; b < nBands; ++b) {
         const uint32_t shift = slots[b] - used;
         if (shift > 0) {
-            std::copy(rayOut_ + slots[b], rayOut_ + ends[b], rayOut_ + used);
+            std::copy(rayOut_ + slots[b], rayOut_ + done[b].slot, rayOut_ + used);
             Part& part = *parts[b];
-            Worker& w = workers_[size_t(part.worker)];
+            Worker& w = pool.WorkerOf(part);
             for (size_t l = part.leafBegin; l < part.leafEnd; ++l) w.leaves[l].rayBegin -= shift;
             part.begin -= shift;
         }
-        used += ends[b] - slots[b];
-        out.missed.insert(out.missed.end(), missed[b].begin(), missed[b].end());
+        used += done[b].slot - slots[b];
+        out.missed.insert(out.missed.end(), done[b].missed.begin(), done[b].missed.end());
     }
     out.rayIndex.resize(used);
-    Join(out, schedule.listsEnd.load(), threads);
-    rayOut_ = nullptr;
-    FinishWorkers(0);
-    return true;
+    pool.Join(out, threads);
+    pool.Finish(0, core_.counters);
 }
 
-void Hierarchy::ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect, int face,
-                            int depth, const ListView* list, uint32_t& slot,
-                            std::vector<rc_uint>& missed) {
+void PinholeSubdivision::ProcessRect(Worker& w, const Camera& cam, const PixelRect& rect, int face,
+                                     int depth, const ListView* list, RectOut& out) {
     const uint32_t nRays = cam.Count(rect);
     if (nRays == 0) return;
     const ArenaMark release(w.stack);
     auto halves = [&](int childFace, const ListView* childList) {
         PixelRect half[2];
-        Pinhole::Halve(rect, half);
+        Camera::Halve(rect, half);
         for (const PixelRect& h : half) {
-            ProcessRect(w, cam, h, childFace, depth + 1, childList, slot, missed);
+            ProcessRect(w, cam, h, childFace, depth + 1, childList, out);
         }
     };
     Bounds6 tight;
@@ -316,64 +314,70 @@ void Hierarchy::ProcessRect(Worker& w, const Pinhole& cam, const PixelRect& rect
             return;
         }
         face = centre;
-        const FaceList& all = (*faceLists_)[face];
-        faceList = View(all, all.Size(), &listFrame_[face]);
+        faceList = core_.faceLists->Whole(face);
         list = &faceList;
     } else {
         // Within its parent's frame: its corners' slopes lie within the parent's.
         cam.Bounds(rect, face, false, tight);
     }
     const bool filtered = !KeepsMost(tight, *list);
-    ListView own = filtered ? Filter(w, tight, *list, false) : CutAtEnd(tight, *list);
+    ListView own = filtered ? w.Filter(tight, *list, false) : CutAtEnd(tight, *list);
     Node node;
     node.box = tight.ToBox5();
     node.face = uint8_t(face);
     node.depth = uint8_t(depth);
     int dim = 0;
-    if (ChooseSplit(node, tight, nRays, own, dim)) {
+    if (core_.cost.ChooseSplit(node, tight, nRays, own, dim)) {
         halves(face, &own);
         return;
     }
-    if (!filtered) own = Filter(w, tight, *list, false);
+    if (!filtered) own = w.Filter(tight, *list, false);
     // Rays that cannot reach a primitive get no leaf and are answered "no hit": all of a leaf
     // whose list is empty and, from a camera outside the scene box, those of a leaf on the
     // box's outline that miss it.
-    const bool reachNothing = CountUpTo(own, tight.hi[kDims]) == 0;
-    const bool clip = !reachNothing && cam.outside && !cam.AllReach(rect);
-    if (clip && uint64_t(rect.x1 - rect.x0) * (rect.y1 - rect.y0) > kClipPixels) {
+    const Reach reach = CountUpTo(own, tight.hi[kDims]) == 0
+                            ? Reach::kNone
+                            : (cam.outside && !cam.AllReach(rect) ? Reach::kSome : Reach::kAll);
+    if (reach == Reach::kSome && uint64_t(rect.x1 - rect.x0) * (rect.y1 - rect.y0) > kClipPixels) {
         // On the outline: halves, so that only pixels near it are tested one by one.
         halves(face, &own);
         return;
     }
+    EmitRect(w, cam, rect, node, own, tight.hi[kDims], reach, out);
+}
+
+void PinholeSubdivision::EmitRect(Worker& w, const Camera& cam, const PixelRect& rect,
+                                  const Node& node, const ListView& own, float endHi, Reach reach,
+                                  RectOut& out) {
     RcLeaf leaf{};
-    leaf.rayBegin = slot;
-    rc_uint* out = rayOut_ + slot;
+    leaf.rayBegin = out.slot;
+    rc_uint* to = rayOut_ + out.slot;
     for (uint32_t y = rect.y0; y < rect.y1; ++y) {
         uint64_t lo, hi;
         cam.RowSpan(rect, y, lo, hi);
         if (hi <= lo) continue;
         // A row's rays are consecutive (a loop the compiler vectorises).
         const uint32_t base = uint32_t(lo - cam.first), len = uint32_t(hi - lo);
-        if (reachNothing) {
-            for (uint32_t k = 0; k < len; ++k) missed.push_back(base + k);
-        } else if (clip) {
+        if (reach == Reach::kNone) {
+            for (uint32_t k = 0; k < len; ++k) out.missed.push_back(base + k);
+        } else if (reach == Reach::kSome) {
             const uint32_t x0 = uint32_t(lo - uint64_t(y) * cam.width);
             for (uint32_t k = 0; k < len; ++k) {
                 if (cam.Reaches(x0 + k, y)) {
-                    *out++ = base + k;
+                    *to++ = base + k;
                 } else {
-                    missed.push_back(base + k);
+                    out.missed.push_back(base + k);
                 }
             }
         } else {
-            for (uint32_t k = 0; k < len; ++k) out[k] = base + k;
-            out += len;
+            for (uint32_t k = 0; k < len; ++k) to[k] = base + k;
+            to += len;
         }
     }
-    leaf.rayCount = uint32_t(out - (rayOut_ + slot));
+    leaf.rayCount = uint32_t(to - (rayOut_ + out.slot));
     if (leaf.rayCount == 0) return;
-    slot += leaf.rayCount;
-    PushLeaf(w, leaf, NewNode(w, node.box, face, depth, false), own, tight.hi[kDims]);
+    out.slot += leaf.rayCount;
+    w.PushLeaf(leaf, w.NewNode(node.box, node.face, node.depth, false), own, endHi);
 }
 
 }  // namespace rayclass::classify

@@ -1,19 +1,15 @@
-// Helpers the classify module's files share: threads, scratch growth and Bounds6 arithmetic.
+// Helpers the classify module's files share: threads, scratch growth and a node's tight bounds.
 // Private to the module.
 #pragma once
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <condition_variable>
 #include <cstddef>
-#include <deque>
 #include <future>
 #include <limits>
-#include <mutex>
 #include <vector>
 
-#include "rayclass/classify/hierarchy.h"
+#include "rayclass/classify/ray5d.h"
 
 namespace rayclass::classify {
 
@@ -33,7 +29,7 @@ void OnThreads(int n, const F& f) {
 // Scratch is resized without keeping its contents: growing then copies nothing, so the
 // uninitialised tail of the old buffer is never read. (Reading it maps the zero page, and writing
 // that memory after malloc hands it out again costs a copy-on-write fault and a TLB shootdown
-// on every core: Conference renders were 20 % slower for it.)
+// on every core.)
 template <typename V>
 void Regrow(V& v, size_t n) {
     if (n > v.capacity()) {
@@ -45,31 +41,17 @@ void Regrow(V& v, size_t n) {
     v.resize(n);
 }
 
-// The task queue of one Subdivide, and the output room its leaves claim for their lists.
-struct Hierarchy::Schedule {
-    std::mutex mutex;
-    std::condition_variable changed;
-    std::deque<Task> queue;
-    int threads = 1;
-    int busy = 0;  // threads inside a task
-    uint32_t cut;  // nodes with more rays hand their later children to the queue
-    // The output's lists: room for `listRoom` entries, of which [0, listsEnd) are claimed.
-    RcCandidate* lists = nullptr;
-    size_t listRoom = 0;
-    std::atomic<size_t> listsEnd{0};
-};
-
-// Releases, when it goes out of scope, the lists pushed onto `arena` since it was made: a node's
-// lists, once its subtree is built.
-struct ArenaMark {
-    Hierarchy::ListArena& arena;
-    const size_t chunk, used;
-    explicit ArenaMark(Hierarchy::ListArena& a) : arena(a), chunk(a.chunk), used(a.used) {}
-    ArenaMark(const ArenaMark&) = delete;
-    ArenaMark& operator=(const ArenaMark&) = delete;
-    ~ArenaMark() {
-        arena.chunk = chunk;
-        arena.used = used;
+// A node's tight bounds: X, Y, Z, u, v and the end X of its rays (index kDims).
+struct Bounds6 {
+    float lo[kCoords];
+    float hi[kCoords];
+    Box5 ToBox5() const {
+        Box5 b;
+        for (int k = 0; k < kDims; ++k) {
+            b.lo[k] = lo[k];
+            b.hi[k] = hi[k];
+        }
+        return b;
     }
 };
 

@@ -43,7 +43,7 @@ bool ExactMayReach(const Box5& beam, double reach, const WorldBox& b) {
 
 struct QuantizedList {
     ListFrame frame;
-    Hierarchy::FaceList list;
+    FaceList list;
     std::vector<WorldBox> world;  // in list order (sorted by near X)
 };
 
@@ -141,7 +141,7 @@ TEST(Filter, KeepsEveryBoxTheBeamMeetsAndMatchesTheScalarTest) {
                                     : GrazingBeam(rng, q.world[size_t(trial) % n], (trial / 2) % 5);
         const float reach = std::uniform_real_distribution<float>(0.01f, 12.0f)(rng);
         const BeamTest t = MakeBeamTest(q.frame, beam, reach);
-        Hierarchy::FaceList out;
+        FaceList out;
         out.Resize(n);
         const size_t k = FilterList(t, View(q.list, n, &q.frame), Out(out, 0));
         // The kept boxes, in order: exactly those the scalar test keeps.
@@ -241,7 +241,7 @@ TEST(Filter, FaceListFillEqualsTheScalarStepsOnEveryFace) {
     for (int face = 0; face < kFaceCount; ++face) {
         const float lo[3] = {-2.0f, -2.5f, -1.0f}, hi[3] = {4.0f, 3.0f, 4.5f};
         const ListFrame frame = MakeListFrame(lo, hi);
-        Hierarchy::FaceList l;
+        FaceList l;
         l.Resize(n);
         FillFaceList(face, frame, boxes.data(), order.data(), n, Out(l, 0));
         const uint16_t* const got[6] = {l.x0.data(), l.x1.data(), l.y0.data(),

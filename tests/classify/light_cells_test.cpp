@@ -1,5 +1,5 @@
 // Shadow rays to point lights sorted into cells of their direction from the light
-// (Hierarchy::SubdivideFromEnds): every ray lands once, inside its leaf's interval, and the
+// (src/classify/light_cells.h): every ray lands once, inside its leaf's interval, and the
 // queries answer exactly as brute force, for any grid and thread count; other generations take
 // the general path.
 #include <gtest/gtest.h>

@@ -83,7 +83,7 @@ struct CommonEnds {
     // moves it by no more than that, and the padding keeps the rest for the beam test.
     float tolerance = 0.0f;
     // Whether every live segment of the sample FindCommonEnds read ended at one of the points:
-    // then a generation is likely to hold no other (SubdivideFromEnds tries it).
+    // then a generation is likely to hold no other (the light-cell strategy tries it).
     bool coverSample = false;
 
     // The point `ray` ends at, or -1.

@@ -1,6 +1,6 @@
 // Statistics of the ray classification for one generation of rays: what `rayclass classify-stats`
 // and bench/classify/classify_bench print. Also the two standard workloads they measure: the eye rays of
-// the anchor camera (design/notes/measured-anchors.md), one generation of mirror rays and one of
+// the anchor camera (scenes/bench/README.md), one generation of mirror rays and one of
 // shadow rays.
 #pragma once
 

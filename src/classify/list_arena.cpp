@@ -1,0 +1,50 @@
+#include "list_arena.h"
+
+#include <algorithm>
+
+#include "filter.h"
+
+namespace rayclass::classify {
+
+namespace {
+
+// Entries per chunk (a longer list gets a chunk of its own).
+constexpr size_t kListChunk = size_t(1) << 18;
+
+// Room for n entries at the end of `arena`: in its current chunk, else in the next one.
+ListOut Take(ListArena& arena, size_t n) {
+    if (arena.chunk < arena.chunks.size() && arena.used + n > arena.chunks[arena.chunk].Size()) {
+        ++arena.chunk;
+        arena.used = 0;
+    }
+    if (arena.chunk == arena.chunks.size()) arena.chunks.emplace_back();
+    FaceList& c = arena.chunks[arena.chunk];
+    // Only an empty chunk is too small here, and nothing points into an empty chunk.
+    if (c.Size() < arena.used + n) c.Resize(std::max(n, kListChunk));
+    return Out(c, arena.used);
+}
+
+}  // namespace
+
+size_t ListArena::Bytes() const {
+    size_t bytes = 0;
+    for (const FaceList& l : chunks) bytes += l.Bytes();
+    return bytes;
+}
+
+ListView FilterOnto(ListArena& arena, const Bounds6& tight, const ListView& list,
+                    uint64_t& boxTests) {
+    // No ray of the node gets past X = end, and the list is sorted by near X: cut it there first.
+    const float endHi = tight.hi[kDims];
+    ListView in = list;
+    in.n = CountUpTo(list, endHi);
+    const ListOut out = Take(arena, in.n);
+    // Every ray's reach is its end minus its start X, so the node's is at most endHi - lo X.
+    const float reach = endHi - tight.lo[0];
+    const size_t kept = FilterList(MakeBeamTest(*list.frame, tight.ToBox5(), reach), in, out);
+    boxTests += in.n;
+    arena.used += kept;
+    return {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1, out.prim, kept, list.frame};
+}
+
+}  // namespace rayclass::classify

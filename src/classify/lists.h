@@ -1,0 +1,85 @@
+// Candidate lists: the primitives' padded boxes in a face's frame, as structure of arrays in
+// 16-bit steps, sorted by their near X. Each face presorts the whole scene once (FaceLists); a
+// node's list is filtered from its parent's and keeps that order. Private to the classify module.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+#include "rayclass/classify/params.h"
+#include "rayclass/classify/ray5d.h"
+#include "rayclass/core/scratch_vector.h"
+#include "rayclass/scene/scene.h"
+
+namespace rayclass::classify {
+
+// The fixed-point frame of a face's candidate boxes: coordinate c on axis k (X, Y, Z of the face)
+// is kept as (c - base[k]) / step in 16 bits, lower bounds rounded down and upper ones up, so a
+// stored box contains the padded box. The step is one for all three axes, so beam slopes hold in
+// steps as they do in world units. Lists hold 16 bytes a box instead of 28: the filter, which
+// mostly copies, then moves less memory.
+struct ListFrame {
+    float base[3] = {0.0f, 0.0f, 0.0f};
+    float step = 1.0f;  // world units per step: the largest extent / 65534, rounded up
+};
+
+// The first n entries of a candidate list (in `frame`'s steps, sorted by x0).
+struct ListView {
+    const uint16_t* x0;
+    const uint16_t* x1;
+    const uint16_t* y0;
+    const uint16_t* y1;
+    const uint16_t* z0;
+    const uint16_t* z1;
+    const uint32_t* prim;
+    size_t n;
+    const ListFrame* frame;
+};
+
+// Storage of a list.
+struct FaceList {
+    ScratchVector<uint16_t> x0, x1, y0, y1, z0, z1;
+    ScratchVector<uint32_t> prim;
+    size_t Size() const { return prim.size(); }
+    size_t Bytes() const { return prim.capacity() * 4 + x0.capacity() * 12; }
+    void Resize(size_t n);
+};
+
+// Where a filter writes its kept boxes: n entries from these pointers on.
+struct ListOut {
+    uint16_t* x0;
+    uint16_t* x1;
+    uint16_t* y0;
+    uint16_t* y1;
+    uint16_t* z0;
+    uint16_t* z1;
+    uint32_t* prim;
+};
+
+inline ListView View(const FaceList& l, size_t n, const ListFrame* frame) {
+    return {l.x0.data(), l.x1.data(),   l.y0.data(), l.y1.data(), l.z0.data(),
+            l.z1.data(), l.prim.data(), n,           frame};
+}
+
+// Entries [at, ...) of `l`.
+inline ListOut Out(FaceList& l, size_t at) {
+    return {l.x0.data() + at, l.x1.data() + at, l.y0.data() + at,  l.y1.data() + at,
+            l.z0.data() + at, l.z1.data() + at, l.prim.data() + at};
+}
+
+// Every primitive of the scene, presorted per face: the roots' lists. Read-only once built, so
+// copies of a hierarchy share them.
+struct FaceLists {
+    std::array<FaceList, kFaceCount> list;
+    ListFrame frame[kFaceCount];
+
+    ListView Whole(int face) const { return View(list[face], list[face].Size(), &frame[face]); }
+    size_t Bytes() const;
+};
+
+// The face lists of `scene`'s primitives, each box padded by params.padding.
+std::shared_ptr<const FaceLists> BuildFaceLists(const scene::Scene& scene, const Params& params);
+
+}  // namespace rayclass::classify
