@@ -10,7 +10,7 @@
 #pragma OPENCL FP_CONTRACT OFF
 
 /* The shading helpers are forced inline: PoCL left them as calls, and each work-group loop then
- * ran them one work-item at a time (Sibenik with mirror rays: rc_shade_ids 0.17-0.24 s -> 0.11 s). */
+ * ran them one work-item at a time instead of across the work-group's lanes. */
 #define RC_SHADE_INLINE __attribute__((always_inline)) inline
 
 typedef struct RcSurface {
@@ -39,9 +39,8 @@ RC_SHADE_INLINE RcSurface rc_surface(float3 o, float3 d, RcHit hit, __global con
         s.ng = n;
         __global const RcTriangleShading* sh = triShading + id;
         /* Only an interpolated normal needs normalizing; every other one is unit already, and a
-         * second normalize cost its sqrt and division per hit (raybench shade_s, the shading
-         * kernels of 786,432 Sibenik rays, 6 alternating runs: eye 20.1-27.6 -> 18.2-23.7 ms,
-         * mirror 26.0-33.0 -> 20.4-25.6 ms). */
+         * second normalize costs a sqrt and a division per hit, a share of the shading kernels'
+         * time that raybench's shade_s shows. */
         s.ns = sh->hasNormals ? normalize(w * sh->n0.xyz + hit.u * sh->n1.xyz + hit.v * sh->n2.xyz)
                               : n;
         s.material = sh->material;

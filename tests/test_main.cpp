@@ -8,7 +8,6 @@ int main(int argc, char** argv) {
     setenv("POCL_CACHE_DIR", RAYCLASS_TEST_POCL_CACHE, 0);
     setenv("RAYCLASS_CACHE_DIR", RAYCLASS_TEST_PROGRAM_CACHE, 0);
     setenv("RAYCLASS_SOURCE_DIR", RAYCLASS_TEST_SOURCE_DIR, 0);
-    setenv("RAYCLASS_SHARED_SCENES", RAYCLASS_TEST_SHARED_SCENES, 0);
     setenv("RAYCLASS_BINARY", RAYCLASS_TEST_BINARY, 0);
     testing::InitGoogleTest(&argc, argv);
     return RUN_ALL_TESTS();

@@ -1,5 +1,5 @@
 // classify_bench SCENE [options]: ray-classification statistics for the anchor camera's eye rays
-// (design/notes/measured-anchors.md), one generation of mirror rays and one of shadow rays from
+// (bench/common/raysets.h), one generation of mirror rays and one of shadow rays from
 // the eye hits to the anchor light (any-hit query), each in a fresh hierarchy, and the mirror
 // generation inserted into the eye rays' hierarchy. Times are the calling thread's (wall and CPU);
 // the classification runs on every core, the host query on one. SCENE is anything

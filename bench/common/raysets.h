@@ -39,8 +39,8 @@ struct RaySets {
 };
 
 // Named cameras: "scene" (the scene's own; a bare OBJ's framing camera), "orbit" (the scene
-// camera turned 40 degrees about its look-at point around +y), "anchor" (design notes'
-// measured-anchors.md: eye = box centre - 0.25 size_x (1,0,0), along +x, up +y, 60 degrees) and
+// camera turned 40 degrees about its look-at point around +y), "anchor" (the benchmark camera of
+// scenes/bench: eye = box centre - 0.25 size_x (1,0,0), along +x, up +y, 60 degrees) and
 // "reverse" (anchor mirrored: eye = centre + 0.25 size_x (1,0,0) + 0.1 size_y (0,1,0), along -x).
 // Throws std::invalid_argument for an unknown name.
 scene::Camera NamedCamera(const scene::Scene& scene, const std::string& name, uint32_t width,

@@ -2,9 +2,9 @@
 // rays from the same hits) shot through Embree's BVH with 1 and 2 application threads, one ray
 // per call (rtcIntersect1/rtcOccluded1) and 16-ray packets of consecutive rays
 // (rtcIntersect16/rtcOccluded16), traced in Embree's coherent mode
-// (RTC_INTERSECT_CONTEXT_FLAG_COHERENT) except for diffuse rays, as for measured-anchors.md's
-// "best" figures. Without the flag, eye-ray packets ran at 8-13 instead of 43-44 Mrays/s on two
-// threads (Sibenik, 2026-12-02), which had made Embree look 3x slower than it is.
+// (RTC_INTERSECT_CONTEXT_FLAG_COHERENT) except for diffuse rays, as Embree's best figures are
+// measured. Without the flag coherent packets run several times slower, which would make Embree
+// look slower than it is.
 // CSV on stdout, one row per ray kind x API x thread count:
 //   kind,api,threads,rays,median_s,min_s,max_s,mrays_s,hits
 // Usage: embree_bench SCENE RAYS.bin [--runs N] [--warmup N] [--threads 1,2]

@@ -3,7 +3,7 @@
 //
 //   build/bench/raster_bench [WIDTH HEIGHT] [SCENE...]
 // SCENE: a scene file, or spheres:N for N random spheres. Default: scenes/cornell.json,
-// spheres:1000, spheres:10000, spheres:100000, ../shared/scenes/conference.obj (when present).
+// spheres:1000, spheres:10000, spheres:100000, scenes/bench/conference.obj.
 // Environment as in the tests: POCL_MAX_PTHREAD_COUNT=2 is set unless given.
 //
 //   build/bench/raster_bench --experiments [--width W] [--height H] [--runs N]
@@ -283,9 +283,7 @@ int main(int argc, char** argv) {
     if (scenes.empty()) {
         const std::filesystem::path root = std::filesystem::path(RAYCLASS_BENCH_SOURCE_DIR);
         scenes = {(root / "scenes/cornell.json").string(), "spheres:1000", "spheres:10000",
-                  "spheres:100000"};
-        const auto conf = root / "../shared/scenes/conference.obj";
-        if (std::filesystem::exists(conf)) scenes.push_back(conf.string());
+                  "spheres:100000", (root / "scenes/bench/conference.obj").string()};
     }
     try {
         std::string why;

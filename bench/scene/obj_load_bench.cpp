@@ -1,24 +1,15 @@
-// Load time of the shared OBJ meshes (../shared/scenes, or RAYCLASS_SHARED_SCENES).
+// Load time of the benchmark meshes (scenes/bench).
 #include <benchmark/benchmark.h>
 
-#include <cstdlib>
 #include <filesystem>
-#include <string>
 
 #include "rayclass/scene/obj.h"
 
 namespace {
 
-std::filesystem::path SharedScene(const char* name) {
-    const char* shared = std::getenv("RAYCLASS_SHARED_SCENES");
-    const std::filesystem::path dir = shared ? std::filesystem::path(shared)
-                                             : std::filesystem::path(__FILE__).parent_path() /
-                                                   ".." / ".." / ".." / "shared" / "scenes";
-    return dir / name;
-}
-
 void LoadObjFile(benchmark::State& state, const char* name) {
-    const std::filesystem::path file = SharedScene(name);
+    const std::filesystem::path file =
+        std::filesystem::path(RAYCLASS_BENCH_SOURCE_DIR) / "scenes" / "bench" / name;
     size_t triangles = 0;
     for (auto _ : state) {
         const rayclass::scene::ObjMesh mesh = rayclass::scene::LoadObj(file);

@@ -96,8 +96,8 @@ typedef struct RcCamera {
 /* A ray of a generation is split over two arrays with one index: RcRay holds what every
  * intersection query and the host's ray classification read, RcRayInfo what only ray
  * generation and shading touch, so a query or the classification pays for 32 bytes a ray, not
- * for a whole 64-byte cache line (the host classification of Sibenik's eye rays read them 17 %
- * slower at a 64-byte stride than at 32). */
+ * for a whole 64-byte cache line (the host classification streams through the rays, and reads
+ * them measurably slower at a 64-byte stride than at 32). */
 
 /* origin.w = tmin (0 for spawned rays: their origin is already offset), direction.w = tmax (unit
  * direction). The layout of classify::Ray. 32 bytes. */

@@ -52,8 +52,8 @@ bool HasChannel(const Imf::ChannelList& channels, const char* name) {
     return channel && channel->xSampling == 1 && channel->ySampling == 1;
 }
 
-// ZIP compression of a 1024x768 image with its AOV layers takes 0.3-0.4 s on one thread, as
-// long as a shallow render of Sibenik; OpenEXR compresses and decompresses blocks of lines on
+// ZIP compression of a full-size image with its AOV layers takes about as long on one thread as
+// a shallow render of a large scene; OpenEXR compresses and decompresses blocks of lines on
 // the threads of its global pool. A file's thread count only sets how many blocks it keeps in
 // flight: the pool starts with no threads, and every block then runs on the caller's. So each
 // read or write sizes the pool to one thread per core and empties it again when done: no

@@ -319,11 +319,9 @@ class ObjParser {
 };
 
 // Text is cut into pieces of at least this size, one a core. Smaller files gained nothing in a
-// render on 2 cores, whose other core starts OpenCL meanwhile (Sibenik's 2.4 MB, split in two:
-// 173 -> 183 ms, medians of 20 alternating runs).
+// render on 2 cores, whose other core starts OpenCL meanwhile (a split Sibenik loaded no faster).
 constexpr size_t kPieceBytesMin = size_t(4) << 20;
-// Count's time over a parse's, per byte: Conference's text took 5 ms to count and 50 ms to
-// parse in one piece.
+// Count's time over a parse's, per byte, as measured on Conference's text in one piece.
 constexpr double kCountShare = 0.1;
 
 // `pieces` pieces of the text, each starting at a logical line. Piece 0 is larger by the share

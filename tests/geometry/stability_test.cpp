@@ -1,4 +1,4 @@
-// Stability where the methods fail (issue 7): floating-point scale and self-intersection, grazing
+// Stability where the methods fail: floating-point scale and self-intersection, grazing
 // and degenerate triangles, watertightness of the triangle tests on a closed mesh, and the limits
 // of ray classification. Each test asserts a measured bound against double precision or brute
 // force, and prints what it measured (grep "[stability]") for docs/reliability.md.
@@ -435,12 +435,12 @@ size_t PeakRssBytes() {
 // 10^7 incoherent rays in one generation, through a scene small enough (32 primitives) that brute
 // force can check every ray on the host: the hierarchy's scratch then grows with the rays alone.
 // The primitives are large, so that many rays hit and the lists are long. Then the same rays
-// through leaves whose lists are the whole scene (a cost function that never splits).
-// Measured 24-26 s in Release on the shared 2-core machine at load 1.5-4.
+// through leaves whose lists are the whole scene (a cost function that never splits). The
+// suite's longest test.
 TEST(Stability, ClassificationStaysExactAndBoundedForTenMillionIncoherentRays) {
 #ifdef RC_UNDER_ASAN
-    // Measured under scripts/sanitize: 117 s (Release: 26 s) and 1.47 GiB peak RSS, tripling
-    // the sanitizer run; the 10^5-ray test above runs the same code under ASan.
+    // Under scripts/sanitize it runs several times slower and needs more memory, and would take
+    // most of the sanitizer run; the 10^5-ray test above runs the same code under ASan.
     GTEST_SKIP() << "10^7 rays take 2 minutes under AddressSanitizer";
 #endif
     using Clock = std::chrono::steady_clock;
@@ -496,8 +496,8 @@ TEST(Stability, ClassificationStaysExactAndBoundedForTenMillionIncoherentRays) {
     EXPECT_GT(hitCount, rays.size() / 5) << "the rays should hit the scene often";
     // Bound: per ray, two ping-pong buffers of six coordinates and an id (56 bytes), a
     // destination (4), the leaves' ids at their buffer positions (4) and the leaves' ray index
-    // (4) dominate; measured 66.2 bytes per ray. 80 bytes keeps a 20 % margin and fails if
-    // anything else starts to grow per ray.
+    // (4) dominate. 80 bytes leaves a margin over the figure printed above and fails if anything
+    // else starts to grow per ray.
     EXPECT_LE(memory, rays.size() * 80);
 
     classify::Params never = classify::Params::ForScene(s);
@@ -511,8 +511,8 @@ TEST(Stability, ClassificationStaysExactAndBoundedForTenMillionIncoherentRays) {
     }
     EXPECT_EQ(bad, 0u) << "whole-scene leaves differ from the checked answers";
 
-    // Rays 32 bytes, two hit arrays of 16 bytes and the classification per ray: 1.2 GiB
-    // measured.
+    // Rays 32 bytes, two hit arrays of 16 bytes and the classification per ray, with a margin
+    // over the peak printed here.
     std::printf("[stability] classify 1e7: peak RSS %zu MiB\n", PeakRssBytes() >> 20);
     EXPECT_LE(PeakRssBytes(), size_t(3) << 29) << "1.5 GiB";
 }

@@ -12,7 +12,7 @@ namespace rayclass::scene {
 namespace {
 
 using testing::ErrorOf;
-using testing::SharedScenes;
+using testing::ScenesDir;
 using testing::TempDir;
 
 void ExpectNear(const glm::vec3& a, const glm::vec3& b) {
@@ -217,7 +217,8 @@ TEST(BareObj, FramesTheMeshAndLightsItFromTheCamera) {
 
 TEST(BareObj, CornellBox) {
     TempDir dir;
-    std::filesystem::copy_file(SharedScenes() / "cornell_box.obj", dir.path() / "cornell_box.obj");
+    std::filesystem::copy_file(ScenesDir() / "tests" / "cornell_box_embree.obj",
+                               dir.path() / "cornell_box.obj");
     dir.Write("cornell_box.mtl",
               "newmtl white\nKd 0.73\nnewmtl red\nKd 0.65 0.05 0.05\n"
               "newmtl green\nKd 0.12 0.45 0.15\nnewmtl blue\nKd 0.1 0.1 0.7\n"

@@ -12,7 +12,7 @@ namespace rayclass::scene {
 namespace {
 
 using testing::ErrorOf;
-using testing::SharedScenes;
+using testing::ScenesDir;
 using testing::TempDir;
 
 // Loads `text` as x.obj in a fresh directory; returns the error message, or "" when it loads.
@@ -342,11 +342,11 @@ TEST(ObjErrors, MtlProblemsNameTheMtlFile) {
               mtl.string() + ":3: malformed number 'x' in 'Kd' statement");
 }
 
-TEST(ObjShared, CornellBoxCounts) {
-    // The shared copy names cornell_box.mtl without shipping it: load a copy beside our own.
+TEST(ObjThirdParty, CornellBoxCounts) {
+    // Embree's copy names cornell_box.mtl without shipping it: load a copy beside our own.
     TempDir dir;
     const auto obj = dir.path() / "cornell_box.obj";
-    std::filesystem::copy_file(SharedScenes() / "cornell_box.obj", obj);
+    std::filesystem::copy_file(ScenesDir() / "tests" / "cornell_box_embree.obj", obj);
     dir.Write("cornell_box.mtl",
               "newmtl white\nKd 0.73 0.73 0.73\n"
               "newmtl red\nKd 0.65 0.05 0.05\n"
@@ -365,8 +365,8 @@ TEST(ObjShared, CornellBoxCounts) {
     EXPECT_EQ(m.triangles[6].position, (std::array<uint32_t, 3>{12, 13, 14}));
 }
 
-TEST(ObjShared, BunnyCounts) {
-    const ObjMesh m = LoadObj(SharedScenes() / "bunny.obj");
+TEST(ObjThirdParty, BunnyCounts) {
+    const ObjMesh m = LoadObj(ScenesDir() / "bench" / "bunny.obj");
     EXPECT_EQ(m.positions.size(), 37706u);
     EXPECT_EQ(m.triangles.size(), 75408u);
     EXPECT_TRUE(m.materials.empty());

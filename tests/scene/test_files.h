@@ -1,4 +1,4 @@
-// Fixture files for the scene tests: a private temporary directory and the shared scenes.
+// Fixture files for the scene tests: a private temporary directory and the repository's scenes.
 #pragma once
 
 #include <unistd.h>
@@ -48,14 +48,13 @@ class TempDir {
     std::filesystem::path path_;
 };
 
-// ../shared/scenes: RAYCLASS_SHARED_SCENES (set by CTest), else next to RAYCLASS_SOURCE_DIR,
-// else next to the source tree this file lives in (tests/scene/ -> project root).
-inline std::filesystem::path SharedScenes() {
-    if (const char* shared = std::getenv("RAYCLASS_SHARED_SCENES")) return shared;
+// The repository's scenes/: under RAYCLASS_SOURCE_DIR (set by every suite's main), else under the
+// source tree this file lives in (tests/scene/ -> project root).
+inline std::filesystem::path ScenesDir() {
     if (const char* source = std::getenv("RAYCLASS_SOURCE_DIR")) {
-        return std::filesystem::path(source) / ".." / "shared" / "scenes";
+        return std::filesystem::path(source) / "scenes";
     }
-    return std::filesystem::path(__FILE__).parent_path() / ".." / ".." / ".." / "shared" / "scenes";
+    return std::filesystem::path(__FILE__).parent_path() / ".." / ".." / "scenes";
 }
 
 // what() of the SceneError that `f` throws, or a note that it threw none.

@@ -50,8 +50,8 @@ Bvh Build(const scene::Scene& scene, const BuildParams& params = {});
 constexpr uint32_t kMaxDepth = 60;
 
 // The traversal kernels' stack (RC_BVH_STACK in cl/bvh.cl). Eight children everywhere needed 89
-// entries on Conference (binary depth 34); 64 made Collapse narrow 16,882 of its nodes and cost
-// 15-25 % of its eye and shadow rays' speed.
+// entries on Conference (binary depth 34); a smaller stack makes Collapse narrow nodes, and
+// narrower nodes slow the traversal of eye and shadow rays.
 constexpr uint32_t kStackEntries = 128;
 
 // The binary tree collapsed to nodes of up to eight children, nodes[0] the root, over the same

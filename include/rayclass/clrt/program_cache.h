@@ -1,6 +1,6 @@
-// Program binaries kept between processes. A build from source costs about 50 ms on PoCL even
-// when PoCL's own cache holds the result (it preprocesses the source with Clang to find its
-// entry), a build from the binary about 15 ms: a third of the default scene's render time.
+// Program binaries kept between processes. A build from source is slow on PoCL even when PoCL's
+// own cache holds the result (it preprocesses the source with Clang to find its entry); a build
+// from the binary skips that, a noticeable share of a small scene's render time.
 // Entries are keyed by everything a binary depends on (platform, device, driver, options and the
 // whole source), stored whole in the entry and compared on load, so a stale or colliding entry
 // is never used; a damaged one is rebuilt from source.

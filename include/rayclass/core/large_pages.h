@@ -1,7 +1,7 @@
 // Large host arrays in pages of their own, advised for transparent huge pages (Linux's
 // MADV_HUGEPAGE; Debian's default THP mode honours only advised memory). A one-frame render
-// first-touches most of its memory: scenes/bench/sibenik.json at 1024 x 768 took 52.7k page
-// faults (205 MB) on 4 KiB pages; with its device buffers and leaf arrays on huge pages, 27k.
+// first-touches most of its memory, so on 4 KiB pages its page faults are a large part of its
+// time; with its device buffers and leaf arrays on huge pages about half of them go.
 #pragma once
 
 #include <cstddef>

@@ -1,7 +1,7 @@
 // Stable sorting of ids by a float key in three least-significant-digit radix passes over the
 // keys' bits made orderable as unsigned integers: linear in n, and no comparison reads a key
-// through an index (std::sort with such a comparator took a quarter of a second for Conference's
-// six presorted face lists).
+// through an index (std::sort with such a comparator is slow on large meshes: a random read per
+// comparison).
 #pragma once
 
 #include <array>

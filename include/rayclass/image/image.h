@@ -31,15 +31,13 @@ struct Image {
     size_t PixelCount() const { return size_t(width) * height; }
 };
 
-// Lossless OpenEXR compressions. Float radiance compresses poorly: a 1024x768 RGB render of
-// Sibenik is 9.4 MB raw, 8.4 MB as ZIP written in 0.3-0.6 s on two threads, 7.3 MB as PIZ in
-// 0.4-0.7 s, and written uncompressed in 0.02 s; cornell.json's 5.8 MB become 3.2 as ZIP (0.13 s).
+// Lossless OpenEXR compressions. Float radiance compresses poorly: ZIP and PIZ save a little
+// space for a write that can take longer than a small render, and kNone writes at memory speed.
 enum class ExrCompression { kZip, kPiz, kNone };
 
-// PNG's zlib settings. Sibenik's 1024x768 render took 74 ms to write at libpng's defaults
-// (level 6, each row's filter chosen among all five): 236 KB. kFast, run-length deflate of
-// up-filtered rows, took 12 ms for 293 KB (cornell.json: 43 ms, 124 KB -> 7 ms, 167 KB);
-// kNone stores the rows.
+// PNG's zlib settings. kSmall is libpng's defaults (level 6, each row's filter chosen among all
+// five): the smallest file, and the slowest to write. kFast, run-length deflate of up-filtered
+// rows, writes several times faster for a file about a quarter larger; kNone stores the rows.
 enum class PngCompression { kFast, kSmall, kNone };
 
 struct WriteOptions {
