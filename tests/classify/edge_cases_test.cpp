@@ -1,5 +1,5 @@
-// The edge cases of issue 3: every one must classify every ray exactly once and answer exactly
-// what brute force answers.
+// The classification's edge cases: every one must classify every ray exactly once and answer
+// exactly what brute force answers.
 #include <gtest/gtest.h>
 
 #include <cmath>
