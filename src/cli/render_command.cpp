@@ -324,8 +324,9 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
     std::optional<PendingTextFile> statsFile;
     if (!r.statsFile.empty()) statsFile.emplace(r.statsFile);
 
-    // The OpenCL platform starts (PoCL: 30-40 ms of a one-frame render here) while the scene
-    // loads on one core. Errors keep their order: a bad scene is reported before a bad device.
+    // The OpenCL platform starts (a visible part of a one-frame render with PoCL) while the
+    // scene loads on one core. Errors keep their order: a bad scene is reported before a bad
+    // device.
     std::future<std::unique_ptr<clrt::Context>> device;
     if (!r.reference) {
         device = std::async(std::launch::async, [spec = r.options.device] {

@@ -73,8 +73,8 @@ namespace {
 // A read-only buffer of convert(item) for each of `items` (one zeroed element when there are
 // none), written in place through a mapping. On a device that shares host memory (PoCL on the
 // CPU) each element is written once: converting into host arrays and creating the buffers from
-// them (CL_MEM_COPY_HOST_PTR) wrote Conference's 37 MB of triangles twice (its one-frame
-// render's transfer_and_other: 40-47 ms that way, 24-33 this way).
+// them (CL_MEM_COPY_HOST_PTR) wrote every primitive twice, a visible share of a one-frame
+// render's time on large meshes.
 template <typename Items, typename F>
 cl::Buffer ConvertedBuffer(clrt::Context& ctx, const Items& items, F&& convert) {
     using T = decltype(convert(items[0]));
@@ -434,8 +434,8 @@ image::Image ClRenderer::Render(RenderStats& stats) {
             const rc_float4* hostContribution = shadowContribution.data();
             stats.intersectionTests +=
                 query->Occluded(shadow.rays, shadowRays.span(), blocked, timer);
-            // The batch's outputs are read in place too: copies into host arrays cost their
-            // page faults in every one-frame render (25 MB for 1024 x 768 without AOVs).
+            // The batch's outputs are read in place too: copies into host arrays would fault in
+            // their pages again in every one-frame render.
             clrt::MappedRead<rc_float4> hostRadiance(q, radiance, n);
             clrt::MappedRead<uint8_t> hostBlocked(q, blocked, nShadow);
             clrt::MappedRead<uint8_t> hostSpawned(q, spawned, 2 * size_t(n));

@@ -28,15 +28,13 @@ struct ClassifiedBatch final : PreparedBatch {
 
 // Auto's choice per leaf: the style of less work in units of a fragment packet's test of one
 // candidate. A vertex-style leaf costs kVertexIteration per ray and block of 16 candidates
-// (chart 1 of docs/bench: at equal tests per ray the vertex style ran 1.9-3.5x slower) plus
+// (chart 1 of docs/bench: at equal tests per ray the vertex style ran several times slower) plus
 // Params::vertexGatherCost per block, for rc_gather_blocks's copy of the block's triangles.
-// On PoCL on these 2-core Xeons that copy cost 148 ns a block against 11.7 ns a fragment
-// iteration (sibenik_mirror), hence kCpuGatherCost. Without it auto sent 2.2 million blocks of
-// sibenik_mirror's deep generations to the vertex style; with it no leaf is cheaper as vertex
-// style (that needs more iterations per block than the 16 candidates a block holds), and the
-// render's query, gather and shading kernels took 1.02-1.11 s instead of 1.37-1.55 s
-// (conference_mirror 0.85-1.03 against 1.18-1.48 s; 3 alternating runs). Other devices keep
-// the rule without the gather until measured.
+// On PoCL on a CPU that copy costs about as much as kCpuGatherCost fragment iterations. Without
+// it auto sent millions of blocks of deep mirror generations to the vertex style; with it no leaf
+// is cheaper as vertex style (that needs more iterations per block than the 16 candidates a
+// block holds), and the render's query, gather and shading kernels ran faster. Other devices
+// keep the rule without the gather until measured.
 constexpr uint64_t kVertexIteration = 3;
 constexpr float kCpuGatherCost = 13.0f;
 
@@ -87,8 +85,8 @@ class ClassifiedQuery final : public RayQuery {
             }
         }
         if (!out) out = std::make_unique<ClassifiedBatch>();
-        // A camera's eye rays are classified from the camera, unread (Sibenik's 2.5-3x faster,
-        // for lists as long), unless it lies more than three box sizes from the scene.
+        // A camera's eye rays are classified from the camera, unread (several times faster, for
+        // lists as long), unless it lies more than three box sizes from the scene.
         if (source.camera) {
             const auto t0 = Clock::now();
             const bool classified =
@@ -118,12 +116,9 @@ class ClassifiedQuery final : public RayQuery {
     // Each generation's rays get hierarchies of their own; later batches of the generation land
     // in the remainders of earlier ones. Routing a generation through the splits an earlier one
     // made cost more than rebuilding: those splits fit other rays, and their nodes filtered their
-    // lists again for the newcomers. Deep mirror renders (--accel classify, default options),
-    // 3 alternating runs: sibenik_mirror 5.6-6.0 -> 4.5-5.0 s (host classification 3.0-3.3 ->
-    // 1.9-2.3 s), conference_mirror 9.5-10.1 -> 6.1-7.1 s (6.6-7.1 -> 3.5-4.1 s), for 2-3 % more
-    // intersection tests and the same image; sibenik_mirror at 2048 x 1536 (three batches a
-    // generation, depth 4) 6.8-8.3 -> 6.4-7.3 s. Shadow rays toward a point light are classified
-    // from the light, where old and new splits come out the same.
+    // lists again for the newcomers: deep mirror renders spend much less host time this way,
+    // for a few more intersection tests and the same image. Shadow rays toward a point light are
+    // classified from the light, where old and new splits come out the same.
     void BeginGeneration(uint32_t, const cl::Buffer&, uint32_t, KernelTimer&) override { Reset(); }
 
     void Reset() override {
@@ -144,9 +139,8 @@ class ClassifiedQuery final : public RayQuery {
         const auto& batch = static_cast<const ClassifiedBatch&>(*prepared);
         // Every kernel style writes the hit of each ray in a leaf: only the rays that reach
         // nothing need the miss written (none, usually, but for eye rays from a camera outside
-        // the scene box: 30 % of Cornell's). A kernel writes theirs: filling the whole buffer
-        // instead made raybench's copy time 1.6-2.0 ms, against 0.3-0.5 ms now, for kernels
-        // as fast within the noise.
+        // the scene box: many of Cornell's). A kernel writes theirs: filling the whole buffer
+        // instead cost several times raybench's copy time, for kernels as fast within the noise.
         if (!batch.batch.missed.empty()) {
             const auto t0 = Clock::now();
             const cl::Buffer& ids = missedBuf_.Share(ctx_, batch.batch.missed);
@@ -176,8 +170,7 @@ class ClassifiedQuery final : public RayQuery {
   private:
     // Shadow rays' leaves all take one style; auto takes packets. Any-hit queries let each
     // vertex-style ray stop at its first blocker, yet on PoCL lockstep packets were as fast or
-    // faster (raybench, query kernels for 786,432 anchor shadow rays: Sibenik 15.3 ms as packets
-    // against 29.3 ms vertex style, Conference 23.4 against 22.6 ms).
+    // faster (raybench's shadow-ray query kernels).
     KernelStyle ShadowStyle() const {
         return style_ == KernelStyle::kAuto ? KernelStyle::kFragment : style_;
     }
@@ -327,9 +320,9 @@ class ClassifiedQuery final : public RayQuery {
         }
         if (!fragmentLeaves.empty()) {
             const auto t1 = Clock::now();
-            // Sized first and written by index (a push_back loop took 0.11 ms for Sibenik's 49k
-            // eye-ray packets). The arrays stay unchanged until SumTests below has waited for
-            // the kernel, so a CPU device reads them in place.
+            // Sized first and written by index: a push_back loop cost measurably more. The
+            // arrays stay unchanged until SumTests below has waited for the kernel, so a CPU
+            // device reads them in place.
             uint32_t nPackets = 0;
             for (uint32_t l : fragmentLeaves) nPackets += (cb.batch.leaves[l].rayCount + 15) / 16;
             packetLeaf_.resize(nPackets);
@@ -416,7 +409,7 @@ class ClassifiedQuery final : public RayQuery {
     // A generation's eye, reflection and refraction rays share one hierarchy (classified on the
     // worker thread); its shadow rays have their own (classified on the calling thread). One
     // thread each: a hierarchy per thread repeats the filtering of the long top-level lists,
-    // which cost more than the thread saved (Conference eye rays 8.5 -> 2.4-5.4 Mrays/s).
+    // which cost more than the thread saved.
     classify::Hierarchy hierarchy_;
     classify::Hierarchy shadowHierarchy_;
     KernelStyle style_;

@@ -34,8 +34,8 @@ cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags, Wr
         return clrt::Check("clCreateBuffer",
                            [&] { return cl::Buffer(ctx.context(), flags, bytes); });
     }
-    // PoCL's own allocations are malloc's, on 4 KiB pages: the kernels' first writes to a
-    // render's ray and shading buffers took 24k of sibenik.json's 53k page faults. Over memory
+    // PoCL's own allocations are malloc's, on small pages: the kernels' first writes to a
+    // render's ray and shading buffers took nearly half of a render's page faults. Over memory
     // of our own the device works in place, and the buffer frees it when it goes.
     // (Declared before the buffer: should the callback fail, the buffer goes first.)
     auto pages = std::make_unique<LargePages>(bytes);

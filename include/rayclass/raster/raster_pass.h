@@ -1,4 +1,4 @@
-// The eye rays' first hits by rasterization (Lessig 2004, sec. 4.2; design notes sec. 4): every
+// The eye rays' first hits by rasterization (Lessig 2004, sec. 4.2; docs/design.md): every
 // primitive is drawn as a hull that covers every pixel whose eye ray can hit it, and the fragment
 // shader tests that pixel's eye ray exactly against the primitive (the formulas of
 // geometry/intersect.h and cl/intersect.cl, in float), writes the hit distance as depth and keeps,

@@ -55,8 +55,8 @@ struct ShadeBuffers {
     cl::Buffer rayInfo;  // the batch's, set for each batch (null for eye rays: rc_types.h)
     cl::Buffer radiance, normals;
     // Whether the batch's shading normals are wanted (the renderer: for the normal AOV). Without
-    // them a kernel gets no normals buffer and writes none (12.5 MB at 1024 x 768), unless a
-    // later pass of its own reads them.
+    // them a kernel gets no normals buffer and writes none, sparing a buffer's worth of memory
+    // traffic, unless a later pass of its own reads them.
     bool writeNormals = true;
 
     // The normals buffer a shading kernel gets: none unless the normals are wanted or a later

@@ -77,9 +77,8 @@ class GrowingBuffer {
     }
 
     // The same for arrays that stay unchanged until the kernels that read them have finished:
-    // on a CPU device a buffer over `data` itself, which PoCL reads in place (sibenik_mirror's
-    // deep generations copied 180 MB of leaf lists a batch, and faulted in the pages of a second
-    // copy of them).
+    // on a CPU device a buffer over `data` itself, which PoCL reads in place (a copy of a deep
+    // generation's leaf lists is large, and faults in the pages of a second copy of them).
     template <typename T, typename Allocator>
     const cl::Buffer& Share(clrt::Context& ctx, const std::vector<T, Allocator>& data) {
         if (ctx.info().type != "cpu" || data.empty()) return Upload(ctx, data);

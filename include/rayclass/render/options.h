@@ -15,13 +15,10 @@ struct RenderOptions {
     // Rays per batch: bounds the device buffers (launch.h's BatchRays also keeps them within
     // one device allocation); a generation of several batches lets the host classify one while
     // the device answers another. Yet each batch descends the hierarchy anew and filters the
-    // lists of every node it visits: a 1024x768 generation in one batch filtered 43 % fewer
-    // boxes than in three of 2^18 on sibenik_mirror (3.1 against 5.4 billion), and with
-    // --accel classify rendered in 5.7-6.0 s against 7.0-8.1 s (conference_mirror 8.6-10.3
-    // against 12.0-12.4 s; auto within the noise or faster, bvh up to 10 % slower), for 50 %
-    // more memory (1.77 against 1.20 GB). Where classifying is cheap, the larger buffers'
-    // page faults cost more than it saves: cornell.json at 4096x4096 took 6.7-8.0 s in batches
-    // of 2^18 and 7.7-8.4 s in batches of 2^20, which fault in 0.6 GB more.
+    // lists of every node it visits, so a whole 1024x768 generation in one batch filters far
+    // fewer boxes and renders deep mirror scenes faster with --accel classify, for more memory.
+    // Where classifying is cheap, the larger buffers' page faults cost more than it saves (very
+    // large images of simple scenes).
     uint32_t batchRays = 1u << 20;
     std::string device = "auto";    // OpenCL device: auto, cpu, gpu or an index
     // Ray query: classify (ray classification), bvh, auto (auto_query.h) or brute.
