@@ -33,7 +33,7 @@
 #include "rayclass/clrt/context.h"
 #include "rayclass/raster/raster_pass.h"
 #include "rayclass/render/bvh_query.h"
-#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/brute_query.h"
 #include "rayclass/scene/loader.h"
 
 using namespace rayclass;

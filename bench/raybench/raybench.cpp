@@ -42,6 +42,7 @@
 #include "micro_kernels.h"
 #include "rayclass/classify/params.h"
 #include "rayclass/clrt/context.h"
+#include "rayclass/render/brute_query.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/device_scene.h"
@@ -414,7 +415,7 @@ int main(int argc, char** argv) try {
                     q->Reset();
                 }
                 render::KernelTimer timer;
-                const double host0 = q->HostSeconds();
+                const double host0 = q->Stats().hostSeconds;
                 const auto tq = Clock::now();
                 if (shadow) {
                     tests = q->Occluded(raysBuf, rays, out, timer);
@@ -433,7 +434,7 @@ int main(int argc, char** argv) try {
                 for (const auto& [name, s] : timer.Seconds()) {
                     (name == "rc_shade_ids" || name == "rc_shade_lights" ? ss : ks) += s;
                 }
-                const double hs = q->HostSeconds() - host0;
+                const double hs = q->Stats().hostSeconds - host0;
                 if (r < warmup) continue;
                 wall.push_back(w - ss);
                 host.push_back(hs);

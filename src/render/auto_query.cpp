@@ -49,10 +49,7 @@ class AutoQuery final : public RayQuery {
         : ctx_(ctx), classified_(std::move(classified)), makeBvh_(std::move(makeBvh)) {}
 
     std::string Name() const override { return "auto"; }
-    double HostSeconds() const override { return classified_->HostSeconds(); }
-    uint64_t ShadowRaysFromLight() const override { return classified_->ShadowRaysFromLight(); }
-    uint64_t ShadowRaysInCells() const override { return classified_->ShadowRaysInCells(); }
-    uint64_t EyeRaysFromCamera() const override { return classified_->EyeRaysFromCamera(); }
+    QueryStats Stats() const override { return classified_->Stats(); }
 
     void Reset() override {
         classified_->Reset();

@@ -7,6 +7,7 @@
 #include "rayclass/classify/params.h"
 #include "rayclass/clrt/mapped.h"
 #include "rayclass/render/auto_query.h"
+#include "rayclass/render/brute_query.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/launch.h"
@@ -20,104 +21,6 @@ using Clock = std::chrono::steady_clock;
 double SecondsSince(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
-
-class BruteForceQuery final : public RayQuery {
-  public:
-    BruteForceQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene)
-        : ctx_(ctx),
-          scene_(scene),
-          intersect_(program, "rc_intersect_brute"),
-          occluded_(program, "rc_occluded_brute") {}
-
-    std::string Name() const override { return "brute"; }
-
-    QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch*,
-                          const cl::Buffer& hits, const ShadeBuffers&,
-                          KernelTimer& timer) override {
-        SetArgs(intersect_, rays, n, scene_.triangles, scene_.spheres, scene_.quadrics,
-                scene_.params, hits);
-        Launch(ctx_, intersect_, n, timer);
-        const auto& p = scene_.hostParams;
-        return {uint64_t(n) * (p.nTriangles + p.nSpheres + p.nQuadrics), false};
-    }
-
-    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
-                      const cl::Buffer& blocked, KernelTimer& timer) override {
-        const uint32_t n = uint32_t(hostRays.size());
-        const cl::Buffer& tests = testsBuffer_.Reserve(ctx_, n * sizeof(uint32_t));
-        SetArgs(occluded_, shadowRays, n, scene_.triangles, scene_.spheres, scene_.quadrics,
-                scene_.params, blocked, tests);
-        Launch(ctx_, occluded_, n, timer);
-        return SumCounters(ctx_, tests, n, tests_);
-    }
-
-  private:
-    clrt::Context& ctx_;
-    const SceneBuffers& scene_;
-    cl::Kernel intersect_, occluded_;
-    GrowingBuffer testsBuffer_;
-    std::vector<uint32_t> tests_;
-};
-
-}  // namespace
-
-void KernelTimer::Record(const std::string& kernel, const cl::Event& event) {
-    event.wait();
-    const auto start = event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
-    const auto end = event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
-    seconds_[kernel] += double(end - start) * 1e-9;
-}
-
-namespace {
-
-// A read-only buffer of convert(item) for each of `items` (one zeroed element when there are
-// none), written in place through a mapping. On a device that shares host memory (PoCL on the
-// CPU) each element is written once: converting into host arrays and creating the buffers from
-// them (CL_MEM_COPY_HOST_PTR) wrote every primitive twice, a visible share of a one-frame
-// render's time on large meshes.
-template <typename Items, typename F>
-cl::Buffer ConvertedBuffer(clrt::Context& ctx, const Items& items, F&& convert) {
-    using T = decltype(convert(items[0]));
-    const size_t n = std::max<size_t>(items.size(), 1);
-    cl::Buffer buffer = DeviceBuffer(ctx, n * sizeof(T), CL_MEM_READ_ONLY | CL_MEM_ALLOC_HOST_PTR);
-    T* out = static_cast<T*>(clrt::Check("clEnqueueMapBuffer", [&] {
-        return ctx.queue().enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0,
-                                            n * sizeof(T));
-    }));
-    if (items.empty()) out[0] = T{};
-    for (size_t i = 0; i < items.size(); ++i) out[i] = convert(items[i]);
-    clrt::Check("clEnqueueUnmapMemObject", [&] { ctx.queue().enqueueUnmapMemObject(buffer, out); });
-    return buffer;
-}
-
-}  // namespace
-
-SceneBuffers::SceneBuffers(clrt::Context& ctx, const scene::Scene& scene,
-                           const RcRenderParams& renderParams)
-    : triangles(ConvertedBuffer(ctx, scene.triangles, kToDevice)),
-      triangleShading(ConvertedBuffer(ctx, scene.triangles, ShadingOf)),
-      spheres(ConvertedBuffer(ctx, scene.spheres, kToDevice)),
-      quadrics(ConvertedBuffer(ctx, scene.quadrics, kToDevice)),
-      materials(ConvertedBuffer(ctx, scene.materials, kToDevice)),
-      lights(ConvertedBuffer(ctx, scene.lights, kToDevice)),
-      params(UploadVector(ctx, std::vector<RcRenderParams>{renderParams})),
-      hostParams(renderParams) {}
-
-std::unique_ptr<RayQuery> MakeBruteForceQuery(clrt::Context& ctx, const cl::Program& program,
-                                              const SceneBuffers& scene) {
-    return std::make_unique<BruteForceQuery>(ctx, program, scene);
-}
-
-cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions,
-                               bool* fromCache) {
-    const std::string options = "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
-                                (extraOptions.empty() ? "" : " " + extraOptions);
-    return ctx.BuildProgram({"camera.cl", "intersect.cl", "encoding.cl", "shade.cl",
-                             "generation.cl", "brute.cl", "classified.cl", "bvh.cl"},
-                            options, fromCache);
-}
-
-namespace {
 
 std::string KernelBuildOptions(const RenderOptions& options) {
     std::string out;
@@ -172,32 +75,16 @@ std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& progr
     return query;
 }
 
-}  // namespace
-
-ShadeBuffers MakeShadeBuffers(clrt::Context& ctx, size_t rays, uint32_t nLights) {
-    ShadeBuffers shade;
-    shade.radiance = DeviceBuffer(ctx, rays * sizeof(rc_float4));
-    shade.normals = DeviceBuffer(ctx, rays * sizeof(rc_float4));
-    shade.shadow = {DeviceBuffer(ctx, rays * nLights * sizeof(RcRay)),
-                    DeviceBuffer(ctx, rays * nLights * sizeof(rc_float4))};
-    shade.secondary = {
-        DeviceBuffer(ctx, 2 * rays * sizeof(RcRay), CL_MEM_READ_WRITE, Writes::kSome),
-        DeviceBuffer(ctx, 2 * rays * sizeof(RcRayInfo), CL_MEM_READ_WRITE, Writes::kSome)};
-    shade.spawned = DeviceBuffer(ctx, 2 * rays);
-    return shade;
-}
-
-namespace {
-
 // Kernel times, query time and what no timer covers, once the render is done.
 void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& query,
                  double hostSeconds, Clock::time_point tStart) {
     const auto& ks = timer.Seconds();
     for (const auto& [name, s] : ks) stats.timeS["kernel_" + name] = s;
-    stats.queryTimeS = query.HostSeconds();
-    stats.shadowRaysFromLight = query.ShadowRaysFromLight();
-    stats.shadowRaysInCells = query.ShadowRaysInCells();
-    stats.eyeRaysFromCamera = query.EyeRaysFromCamera();
+    const QueryStats q = query.Stats();
+    stats.queryTimeS = q.hostSeconds;
+    stats.shadowRaysFromLight = q.shadowRaysFromLight;
+    stats.shadowRaysInCells = q.shadowRaysInCells;
+    stats.eyeRaysFromCamera = q.eyeRaysFromCamera;
     for (const auto& [name, seconds] : ks) {
         if (name.starts_with("rc_query") || name.starts_with("rc_occluded") ||
             name.starts_with("rc_intersect") || name == "rc_gather_blocks") {
@@ -206,12 +93,12 @@ void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& q
     }
     stats.timeS["host"] = hostSeconds;
     if (stats.accel.starts_with("classify") || stats.accel == "auto") {
-        stats.timeS["host_classify"] = query.HostSeconds();
+        stats.timeS["host_classify"] = q.hostSeconds;
     }
     stats.timeS["render"] = SecondsSince(tStart);
     // What neither the kernels' profiling nor the host timers cover: copies between host and
     // device, buffer allocation, launch overhead and waiting.
-    double accounted = hostSeconds + query.HostSeconds();
+    double accounted = hostSeconds + q.hostSeconds;
     for (const auto& [key, seconds] : stats.timeS) {
         if (key == "program_build" || key == "classify_setup" || key == "bvh_build" ||
             key.starts_with("eye_hits_")) {
@@ -378,7 +265,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         // device queries and shades batch k.
         clrt::Check("clFinish", [&] { q.finish(); });
         const auto tGeneration = Clock::now();
-        const double hostBefore = query->HostSeconds();
+        const double hostBefore = query->Stats().hostSeconds;
         const uint64_t testsBefore = stats.intersectionTests;
         if (!(generation == 0 && eyeHits_)) {
             query->BeginGeneration(generation, pages[0].rays, uint32_t(std::min(batch, nRays)),
@@ -504,7 +391,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         stats.raysByKind["refraction"] += nRefraction;
         gen.spawned = nextPixels.size();
         gen.seconds = SecondsSince(tGeneration);
-        gen.hostClassifySeconds = query->HostSeconds() - hostBefore;
+        gen.hostClassifySeconds = query->Stats().hostSeconds - hostBefore;
         gen.intersectionTests = stats.intersectionTests - testsBefore;
         query->DescribeGeneration(gen);
         if (generation == 0 && eyeHits_) gen.query = eyeHits_->Name();

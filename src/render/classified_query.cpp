@@ -62,15 +62,9 @@ class ClassifiedQuery final : public RayQuery {
           writeMisses_(program, "rc_write_misses") {}
 
     std::string Name() const override { return std::string("classify/") + KernelStyleName(style_); }
-    double HostSeconds() const override {
+    QueryStats Stats() const override {
         std::lock_guard<std::mutex> lock(mutex_);
-        return hostSeconds_;
-    }
-    uint64_t ShadowRaysFromLight() const override { return shadowFromLight_; }
-    uint64_t ShadowRaysInCells() const override { return shadowInCells_; }
-    uint64_t EyeRaysFromCamera() const override {
-        std::lock_guard<std::mutex> lock(mutex_);
-        return eyeFromCamera_;
+        return stats_;
     }
 
     std::unique_ptr<PreparedBatch> Prepare(const cl::Buffer& rays, uint32_t n,
@@ -95,7 +89,7 @@ class ClassifiedQuery final : public RayQuery {
             if (classified) {
                 {
                     std::lock_guard<std::mutex> lock(mutex_);
-                    eyeFromCamera_ += n;
+                    stats_.eyeRaysFromCamera += n;
                 }
                 SortLeaves(*out, style_);
                 return out;
@@ -162,8 +156,11 @@ class ClassifiedQuery final : public RayQuery {
         Classify(shadowHierarchy_, classify::RayView(hostRays.data(), n, sizeof(RcRay)),
                  classify::RayUse::kAnyHit, shadowBatch_, ShadowStyle());
         const classify::BuildCounters& built = shadowHierarchy_.Counters();
-        shadowFromLight_ += built.fromEnd;
-        shadowInCells_ += built.cellsPerSide > 0 ? built.fromEnd : 0;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            stats_.shadowRaysFromLight += built.fromEnd;
+            stats_.shadowRaysInCells += built.cellsPerSide > 0 ? built.fromEnd : 0;
+        }
         return Query(shadowBatch_, shadowRays, blocked, nullptr, timer).tests;
     }
 
@@ -212,7 +209,7 @@ class ClassifiedQuery final : public RayQuery {
 
     void AddHostSeconds(double s) {
         std::lock_guard<std::mutex> lock(mutex_);
-        hostSeconds_ += s;
+        stats_.hostSeconds += s;
     }
 
     // Nearest hits (shade != nullptr: also shades every ray) or occlusion (shade == nullptr).
@@ -423,11 +420,8 @@ class ClassifiedQuery final : public RayQuery {
     GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,
         blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_, packetFirstBuf_,
         fragmentTestsBuf_, unshadedBuf_, surfacesBuf_, missedBuf_;
-    mutable std::mutex mutex_;  // guards hostSeconds_, eyeFromCamera_ and pool_
-    double hostSeconds_ = 0;
-    uint64_t eyeFromCamera_ = 0;    // Prepare's, which runs on a worker thread
-    uint64_t shadowFromLight_ = 0;  // Occluded's, which runs on the render thread only
-    uint64_t shadowInCells_ = 0;    // of them, sorted into direction cells
+    mutable std::mutex mutex_;  // guards stats_ (Prepare runs on a worker thread) and pool_
+    QueryStats stats_;
     std::vector<std::unique_ptr<ClassifiedBatch>> pool_;  // recycled batches
 };
 

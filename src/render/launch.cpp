@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "rayclass/core/large_pages.h"
+#include "rc_types.h"
 
 namespace rayclass::render {
 
@@ -27,6 +28,22 @@ class LargePages {
 void CL_CALLBACK FreePages(cl_mem, void* pages) { delete static_cast<LargePages*>(pages); }
 
 }  // namespace
+
+cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions,
+                               bool* fromCache) {
+    const std::string options = "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
+                                (extraOptions.empty() ? "" : " " + extraOptions);
+    return ctx.BuildProgram({"camera.cl", "intersect.cl", "encoding.cl", "shade.cl",
+                             "generation.cl", "brute.cl", "classified.cl", "bvh.cl"},
+                            options, fromCache);
+}
+
+void KernelTimer::Record(const std::string& kernel, const cl::Event& event) {
+    event.wait();
+    const auto start = event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
+    const auto end = event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
+    seconds_[kernel] += double(end - start) * 1e-9;
+}
 
 cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags, Writes writes) {
     bytes = std::max<size_t>(1, bytes);

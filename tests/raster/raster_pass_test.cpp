@@ -4,6 +4,7 @@
 
 #include "raster_support.h"
 #include "rayclass/image/compare.h"
+#include "rayclass/render/cl_renderer.h"
 #include "rayclass/render/reference.h"
 #include "rayclass/scene/loader.h"
 

@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "rayclass/raster/gl.h"
-#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/eye_hits.h"
 #include "rayclass/render/device_scene.h"
 #include "rayclass/scene/scene.h"
 #include "rc_types.h"

@@ -13,7 +13,7 @@
 #include <functional>
 #include <memory>
 
-#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/ray_query.h"
 
 namespace rayclass::render {
 

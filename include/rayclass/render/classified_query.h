@@ -9,7 +9,7 @@
 #include <string>
 
 #include "rayclass/classify/params.h"
-#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/ray_query.h"
 
 namespace rayclass::render {
 
