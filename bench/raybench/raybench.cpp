@@ -120,10 +120,10 @@ struct Bench {
     std::unique_ptr<render::RayQuery> Make(const std::string& method) {
         if (method == "brute") return render::MakeBruteForceQuery(ctx, program, buffers);
         if (method == "bvh") return render::MakeBvhQuery(ctx, program, buffers, scene);
-        if (method.rfind("classify/", 0) == 0) {
-            return render::MakeClassifiedQuery(ctx, program, buffers, scene, params,
-                                               render::ParseKernelStyle(method.substr(9)));
-        }
+        const auto style = method.starts_with("classify/")
+                               ? render::FindChoice(render::kKernelStyles, method.substr(9))
+                               : std::nullopt;
+        if (style) return render::MakeClassifiedQuery(ctx, program, buffers, scene, params, *style);
         throw std::invalid_argument("unknown method '" + method + "'");
     }
 };

@@ -121,25 +121,11 @@ std::vector<std::string> DepthWarnings(const scene::Scene& scene, const glm::vec
 }
 
 Hull ParseHull(const std::string& name) {
-    if (name == "sphere") return Hull::Sphere;
-    if (name == "box") return Hull::Box;
-    if (name == "billboard") return Hull::Billboard;
-    if (name == "auto") return Hull::Auto;
+    if (const auto hull = render::FindChoice(kHulls, name)) return *hull;
     throw UsageError("unknown hull '" + name + "' (use sphere, box, billboard or auto)");
 }
 
-const char* HullName(Hull hull) {
-    switch (hull) {
-        case Hull::Sphere:
-            return "sphere";
-        case Hull::Box:
-            return "box";
-        case Hull::Billboard:
-            return "billboard";
-        default:
-            return "auto";
-    }
-}
+const char* HullName(Hull hull) { return render::NameOf(kHulls, hull).data(); }
 
 RasterPass::RasterPass(GlContext& gl, const scene::Scene& scene, const RasterOptions& options)
     : gl_(gl), options_(options) {

@@ -25,8 +25,8 @@ double SecondsSince(Clock::time_point t0) {
 std::string KernelBuildOptions(const RenderOptions& options) {
     std::string out;
     for (const std::string& option :
-         {std::string(options.triangleTest == "watertight" ? "-DRC_WATERTIGHT=1" : ""),
-          std::string(options.rayEncoding == "polar16" ? "-DRC_POLAR16" : ""),
+         {std::string(options.triangleTest == TriangleTest::kWatertight ? "-DRC_WATERTIGHT=1" : ""),
+          std::string(options.rayEncoding == RayEncoding::kPolar16 ? "-DRC_POLAR16" : ""),
           options.buildOptions}) {
         if (option.empty()) continue;
         out += (out.empty() ? "" : " ") + option;
@@ -51,7 +51,7 @@ RcRenderParams MakeRenderParams(const scene::Scene& scene, const RenderOptions& 
 std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& program,
                                     const SceneBuffers& buffers, const scene::Scene& scene,
                                     const RenderOptions& options, RenderStats& stats) {
-    if (options.accel == "brute") return MakeBruteForceQuery(ctx, program, buffers);
+    if (options.accel == Accel::kBrute) return MakeBruteForceQuery(ctx, program, buffers);
     // The caller keeps ctx, program, buffers, scene and stats alive longer than the query.
     auto makeBvh = [&ctx, &program, &buffers, &scene, &stats] {
         const auto t0 = Clock::now();
@@ -59,24 +59,21 @@ std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& progr
         stats.timeS["bvh_build"] = SecondsSince(t0);
         return query;
     };
-    if (options.accel == "bvh") return makeBvh();
+    if (options.accel == Accel::kBvh) return makeBvh();
     const auto t0 = Clock::now();
     classify::Params params = classify::Params::ForScene(scene);
-    for (const auto& [name, value] : options.classifyParams) {
-        classify::SetParam(params, name, value);
-    }
+    for (const classify::ParamSetting& setting : options.classifyParams) setting.ApplyTo(params);
     // The 16-lane kernels are Moeller-Trumbore only: the watertight test runs the scalar style.
-    const KernelStyle style = options.triangleTest == "watertight"
-                                  ? KernelStyle::kScalar
-                                  : ParseKernelStyle(options.kernel);
+    const KernelStyle style =
+        options.triangleTest == TriangleTest::kWatertight ? KernelStyle::kScalar : options.kernel;
     auto query = MakeClassifiedQuery(ctx, program, buffers, scene, params, style);
     stats.timeS["classify_setup"] = SecondsSince(t0);
-    if (options.accel == "auto") return MakeAutoQuery(ctx, std::move(query), makeBvh);
+    if (options.accel == Accel::kAuto) return MakeAutoQuery(ctx, std::move(query), makeBvh);
     return query;
 }
 
 // Kernel times, query time and what no timer covers, once the render is done.
-void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& query,
+void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& query, Accel accel,
                  double hostSeconds, Clock::time_point tStart) {
     const auto& ks = timer.Seconds();
     for (const auto& [name, s] : ks) stats.timeS["kernel_" + name] = s;
@@ -92,7 +89,7 @@ void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& q
         }
     }
     stats.timeS["host"] = hostSeconds;
-    if (stats.accel.starts_with("classify") || stats.accel == "auto") {
+    if (accel == Accel::kClassify || accel == Accel::kAuto) {
         stats.timeS["host_classify"] = q.hostSeconds;
     }
     stats.timeS["render"] = SecondsSince(tStart);
@@ -165,15 +162,7 @@ void AppendToPages(clrt::Context& ctx, cl::Kernel& compact, const RayBuffers& se
 
 ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
                        EyeHitSource* eyeHits)
-    : ctx_(ctx), scene_(scene), options_(options), eyeHits_(eyeHits) {
-    if (options_.eyeRays != "kernel" && options_.eyeRays != "raster") {
-        throw Error("unknown eye-ray path '" + options_.eyeRays + "' (use raster or kernel)");
-    }
-    if (options_.eyeRays == "kernel") eyeHits_ = nullptr;
-    if (options_.eyeRays == "raster" && !eyeHits_) {
-        throw Error("eye rays 'raster' need a raster pass (no OpenGL context was made)");
-    }
-}
+    : ctx_(ctx), scene_(scene), options_(options), eyeHits_(eyeHits) {}
 
 image::Image ClRenderer::Render(RenderStats& stats) {
     const auto tStart = Clock::now();
@@ -274,7 +263,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
         auto prepare = [&](size_t page) -> std::unique_ptr<PreparedBatch> {
             if (generation == 0 && eyeHits_) return nullptr;
             RaySource source;
-            if (generation == 0 && options_.rayEncoding != "polar16") {
+            if (generation == 0 && options_.rayEncoding != RayEncoding::kPolar16) {
                 source.camera = &cam;
                 source.firstPixel = uint32_t(page * batch);
             }
@@ -402,7 +391,7 @@ image::Image ClRenderer::Render(RenderStats& stats) {
     }
     if (printedProgress) std::fprintf(stderr, "\n");
 
-    FinishStats(stats, timer, *query, hostSeconds, tStart);
+    FinishStats(stats, timer, *query, options_.accel, hostSeconds, tStart);
     return img;
 }
 

@@ -8,7 +8,6 @@
 
 #include "rayclass/classify/hierarchy.h"
 #include "rayclass/clrt/mapped.h"
-#include "rayclass/core/error.h"
 #include "rayclass/render/launch.h"
 
 namespace rayclass::render {
@@ -61,7 +60,9 @@ class ClassifiedQuery final : public RayQuery {
           shadeLights_(program, "rc_shade_lights"),
           writeMisses_(program, "rc_write_misses") {}
 
-    std::string Name() const override { return std::string("classify/") + KernelStyleName(style_); }
+    std::string Name() const override {
+        return "classify/" + std::string(NameOf(kKernelStyles, style_));
+    }
     QueryStats Stats() const override {
         std::lock_guard<std::mutex> lock(mutex_);
         return stats_;
@@ -426,27 +427,6 @@ class ClassifiedQuery final : public RayQuery {
 };
 
 }  // namespace
-
-KernelStyle ParseKernelStyle(const std::string& name) {
-    if (name == "scalar") return KernelStyle::kScalar;
-    if (name == "vertex") return KernelStyle::kVertex;
-    if (name == "fragment") return KernelStyle::kFragment;
-    if (name == "auto") return KernelStyle::kAuto;
-    throw UsageError("--kernel must be scalar, vertex, fragment or auto, not '" + name + "'");
-}
-
-const char* KernelStyleName(KernelStyle style) {
-    switch (style) {
-        case KernelStyle::kScalar:
-            return "scalar";
-        case KernelStyle::kVertex:
-            return "vertex";
-        case KernelStyle::kFragment:
-            return "fragment";
-        default:
-            return "auto";
-    }
-}
 
 std::unique_ptr<RayQuery> MakeClassifiedQuery(clrt::Context& ctx, const cl::Program& program,
                                               const SceneBuffers& buffers,

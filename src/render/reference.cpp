@@ -41,15 +41,12 @@ double FresnelDielectric(double cosi, double eta) {
 class Tracer {
   public:
     Tracer(const scene::Scene& scene, const RenderOptions& options)
-        : scene_(scene),
-          options_(options),
-          test_(options.triangleTest == "watertight" ? geometry::TriangleTest::kWatertight
-                                                     : geometry::TriangleTest::kMoller) {}
+        : scene_(scene), options_(options) {}
 
     // Adds the radiance along the ray, times `weight`, to `color`. For eye rays fills the AOVs.
     void Trace(const Ray& ray, const V& weight, uint32_t depth, V& color, Counters& counters,
                image::Image* aovImage, size_t pixel) const {
-        const auto hit = geometry::IntersectBruteForce(scene_, ray, test_);
+        const auto hit = geometry::IntersectBruteForce(scene_, ray, options_.triangleTest);
         counters.tests += scene_.PrimitiveCount();
         if (!hit.Valid()) {
             color += weight * V(scene_.background);
@@ -83,7 +80,8 @@ class Tracer {
             const double dist = glm::length(toLightFromOrigin);
             ++counters.shadow;
             counters.tests += scene_.PrimitiveCount();
-            if (!geometry::Occluded(scene_, Ray{above, toLightFromOrigin / dist, 0.0, dist}, test_)) {
+            const Ray shadow{above, toLightFromOrigin / dist, 0.0, dist};
+            if (!geometry::Occluded(scene_, shadow, options_.triangleTest)) {
                 color += c;
             }
         }
@@ -170,7 +168,6 @@ class Tracer {
 
     const scene::Scene& scene_;
     const RenderOptions& options_;
-    geometry::TriangleTest test_;
 };
 
 }  // namespace

@@ -27,14 +27,19 @@
 #include <vector>
 
 #include "rayclass/raster/gl.h"
-#include "rayclass/render/eye_hits.h"
 #include "rayclass/render/device_scene.h"
+#include "rayclass/render/eye_hits.h"
+#include "rayclass/render/options.h"
 #include "rayclass/scene/scene.h"
 #include "rc_types.h"
 
 namespace rayclass::raster {
 
 enum class Hull { Sphere, Box, Billboard, Auto };
+inline constexpr render::Named<Hull> kHulls[] = {{"sphere", Hull::Sphere},
+                                                 {"box", Hull::Box},
+                                                 {"billboard", Hull::Billboard},
+                                                 {"auto", Hull::Auto}};
 
 // "sphere", "box", "billboard", "auto"; throws rayclass::UsageError on anything else.
 Hull ParseHull(const std::string& name);

@@ -15,8 +15,8 @@ namespace rayclass::render {
 
 class ClRenderer {
   public:
-    // With options.eyeRays == "raster", `eyeHits` (required then) answers generation 0; the eye
-    // rays themselves still come from the kernel.
+    // `eyeHits` (null: the ray query) answers generation 0; the eye rays themselves come from
+    // the kernel either way.
     ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
                EyeHitSource* eyeHits = nullptr);
     image::Image Render(RenderStats& stats);
