@@ -1,7 +1,10 @@
-// The OpenCL Whitted renderer: eye rays from a kernel, then generation by generation a ray query
-// (behind RayQuery, so accelerations swap in locally), a shading kernel that spawns shadow,
-// reflection and refraction rays, and a shadow query. Contributions are accumulated per pixel on
-// the host in ray order, so a render is reproducible bit for bit.
+// The OpenCL Whitted renderer. Each generation of rays goes through the same stages, batch by
+// batch: generate (eye rays, by a kernel) -> prepare (the query's host work, e.g. classification,
+// on a worker thread one batch ahead) -> intersect (the ray query, behind RayQuery, so
+// accelerations swap in locally) -> shade (a kernel that spawns shadow, reflection and refraction
+// rays) -> occlude (the shadow query) -> accumulate -> compact (the spawned rays into the next
+// generation's pages). Contributions are accumulated per pixel on the host in ray order, so a
+// render is reproducible bit for bit.
 #pragma once
 
 #include "rayclass/clrt/context.h"
