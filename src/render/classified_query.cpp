@@ -213,30 +213,30 @@ class ClassifiedQuery final : public RayQuery {
         stats_.hostSeconds += s;
     }
 
+    // The batch's arrays every kernel style reads. They are not written again before its
+    // kernels are done: SumTests waits for the query kernels, the last to read them.
+    struct BatchArrays {
+        const cl::Buffer &leaves, &rayIndex, &candidates;
+    };
+
+    // The slots a vertex-style launch answers and the leaf of each.
+    struct VertexSlots {
+        const cl::Buffer &slots, &slotLeaf;
+        uint32_t n;
+    };
+
     // Nearest hits (shade != nullptr: also shades every ray) or occlusion (shade == nullptr).
     QueryResult Query(const ClassifiedBatch& cb, const cl::Buffer& rays, const cl::Buffer& out,
                       const ShadeBuffers* shade, KernelTimer& timer) {
         const bool shadow = shade == nullptr;
         const auto t0 = Clock::now();
-        // The batch's arrays are not written again before its kernels are done: SumTests below
-        // waits for the query kernels, the last to read them.
-        const cl::Buffer& leaves = leavesBuf_.Share(ctx_, cb.batch.leaves);
-        const cl::Buffer& rayIndex = rayIndexBuf_.Share(ctx_, cb.batch.rayIndex);
-        const cl::Buffer& candidates = candidatesBuf_.Share(ctx_, cb.batch.candidates);
-        uint64_t tests = 0;
+        const BatchArrays arrays{leavesBuf_.Share(ctx_, cb.batch.leaves),
+                                 rayIndexBuf_.Share(ctx_, cb.batch.rayIndex),
+                                 candidatesBuf_.Share(ctx_, cb.batch.candidates)};
         if (style_ == KernelStyle::kScalar) {
-            const cl::Buffer& rayLeaf = rayLeafBuf_.Upload(ctx_, cb.rayLeaf);
-            const uint32_t nSlots = uint32_t(cb.batch.rayIndex.size());
-            const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
-            cl::Kernel& k = shadow ? occludedScalar_ : queryScalar_;
-            SetArgs(k, rays, rayIndex, rayLeaf, nSlots, leaves, candidates, scene_.triangles,
-                    scene_.spheres, scene_.quadrics, scene_.params, out, testsBuf);
-            AddHostSeconds(Seconds(t0));
-            Launch(ctx_, k, nSlots, timer);
-            return {SumTests(testsBuf, nSlots), false};
+            return {QueryScalar(cb, arrays, rays, out, shadow, t0, timer), false};
         }
-        // Vertex-style leaves: their rays as slots, their candidates as blocks of 16. Every leaf
-        // of a shadow batch takes ShadowStyle().
+        // Every leaf of a shadow batch takes ShadowStyle().
         std::span<const uint32_t> vertexLeaves = cb.vertexLeaves;
         std::span<const uint32_t> fragmentLeaves = cb.fragmentLeaves;
         if (shadow) {
@@ -246,110 +246,162 @@ class ClassifiedQuery final : public RayQuery {
             vertexLeaves = packets ? std::span<const uint32_t>() : allLeaves_;
             fragmentLeaves = packets ? allLeaves_ : std::span<const uint32_t>();
         }
-        // Incoherent rays can have long lists in many leaves: launch the leaves in chunks whose
-        // blocks fit one device allocation.
-        const size_t maxBlocks = std::min<size_t>(ctx_.info().maxAllocBytes, size_t(256) << 20) /
-                                 sizeof(RcTriangleBlock16);
-        for (size_t next = 0; next < vertexLeaves.size();) {
-            const auto t1 = Clock::now();
-            const size_t firstLeaf = next;
-            blockLeaf_.clear();
-            blockFirst_.clear();
-            leafFirstBlock_.assign(cb.batch.leaves.size(), 0);
-            for (; next < vertexLeaves.size(); ++next) {
-                const uint32_t l = vertexLeaves[next];
-                const RcLeaf& leaf = cb.batch.leaves[l];
-                const size_t leafBlocks = (leaf.candCount + 15) / 16;
-                if (!blockLeaf_.empty() && blockLeaf_.size() + leafBlocks > maxBlocks) break;
-                leafFirstBlock_[l] = uint32_t(blockLeaf_.size());
-                for (uint32_t c = 0; c < leaf.candCount; c += 16) {
-                    blockLeaf_.push_back(l);
-                    blockFirst_.push_back(c);
-                }
-            }
-            const bool wholeBatch =
-                firstLeaf == 0 && next == cb.batch.leaves.size() && !cb.rayLeaf.empty();
-            const cl::Buffer* slots = &rayIndex;
-            const cl::Buffer* slotLeaf = nullptr;
-            uint32_t nSlots = uint32_t(cb.batch.rayIndex.size());
-            if (wholeBatch) {
-                slotLeaf = &rayLeafBuf_.Upload(ctx_, cb.rayLeaf);
-            } else {
-                vertexSlots_.clear();
-                vertexRayLeaf_.clear();
-                for (size_t i = firstLeaf; i < next; ++i) {
-                    const uint32_t l = vertexLeaves[i];
-                    const RcLeaf& leaf = cb.batch.leaves[l];
-                    for (uint32_t r = 0; r < leaf.rayCount; ++r) {
-                        vertexSlots_.push_back(cb.batch.rayIndex[leaf.rayBegin + r]);
-                        vertexRayLeaf_.push_back(l);
-                    }
-                }
-                nSlots = uint32_t(vertexSlots_.size());
-                slots = &slotsBuf_.Upload(ctx_, vertexSlots_);
-                slotLeaf = &rayLeafBuf_.Upload(ctx_, vertexRayLeaf_);
-            }
-            const uint32_t nBlocks = uint32_t(blockLeaf_.size());
-            const cl::Buffer& blockLeaf = blockLeafBuf_.Upload(ctx_, blockLeaf_);
-            const cl::Buffer& blockFirst = blockFirstBuf_.Upload(ctx_, blockFirst_);
-            const cl::Buffer& leafFirstBlock = leafFirstBlockBuf_.Upload(ctx_, leafFirstBlock_);
-            const cl::Buffer& blocks =
-                blocksBuf_.Reserve(ctx_, size_t(nBlocks) * sizeof(RcTriangleBlock16));
-            const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
-            SetArgs(gather_, blockLeaf, blockFirst, nBlocks, leaves, candidates, scene_.triangles,
-                    scene_.params, blocks);
-            cl::Kernel& k = shadow ? occludedVertex_ : queryVertexShade_;
-            if (shadow) {
-                SetArgs(k, rays, *slots, *slotLeaf, nSlots, leaves, leafFirstBlock, blocks,
-                        scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
-                        testsBuf);
-            } else {
-                SetArgs(k, rays, shade->rayInfo, *slots, *slotLeaf, nSlots, leaves, leafFirstBlock,
-                        blocks, out, testsBuf, scene_.triangles, scene_.triangleShading,
-                        scene_.spheres, scene_.quadrics, scene_.materials, scene_.lights,
-                        scene_.params, shade->radiance, shade->NormalsOut(), shade->shadow.rays,
-                        shade->shadow.contribution, shade->secondary.rays, shade->secondary.info,
-                        shade->spawned);
-            }
-            AddHostSeconds(Seconds(t1));
-            Launch(ctx_, gather_, nBlocks, timer);
-            Launch(ctx_, k, nSlots, timer);
-            tests += SumTests(testsBuf, nSlots);
-        }
+        uint64_t tests = QueryVertex(cb, arrays, vertexLeaves, rays, out, shade, timer);
         if (!fragmentLeaves.empty()) {
-            const auto t1 = Clock::now();
-            // Sized first and written by index: a push_back loop cost measurably more. The
-            // arrays stay unchanged until SumTests below has waited for the kernel, so a CPU
-            // device reads them in place.
-            uint32_t nPackets = 0;
-            for (uint32_t l : fragmentLeaves) nPackets += (cb.batch.leaves[l].rayCount + 15) / 16;
-            packetLeaf_.resize(nPackets);
-            packetFirst_.resize(nPackets);
-            uint32_t* packetLeafAt = packetLeaf_.data();
-            uint32_t* packetFirstAt = packetFirst_.data();
-            for (uint32_t l : fragmentLeaves) {
-                const uint32_t count = cb.batch.leaves[l].rayCount;
-                for (uint32_t r = 0; r < count; r += 16) {
-                    *packetLeafAt++ = l;
-                    *packetFirstAt++ = r;
-                }
-            }
-            const cl::Buffer& packetLeaf = packetLeafBuf_.Share(ctx_, packetLeaf_);
-            const cl::Buffer& packetFirst = packetFirstBuf_.Share(ctx_, packetFirst_);
-            const cl::Buffer& testsBuf =
-                fragmentTestsBuf_.Reserve(ctx_, nPackets * sizeof(uint32_t));
-            cl::Kernel& k = shadow ? occludedFragment_ : queryFragment_;
-            SetArgs(k, rays, rayIndex, packetLeaf, packetFirst, nPackets, leaves, candidates,
-                    scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
-                    testsBuf);
-            AddHostSeconds(Seconds(t1));
-            Launch(ctx_, k, nPackets, timer);
-            tests += SumTests(testsBuf, nPackets);
+            tests += QueryFragment(cb, arrays, fragmentLeaves, rays, out, shadow, timer);
         }
         if (shadow) return {tests, false};
-        // The rays the vertex kernel did not shade (fragment leaves' rays and the misses), in
-        // slot order: shading then walks the batch's arrays in order, not leaf by leaf.
-        const auto tUnshaded = Clock::now();
+        ShadeUnshaded(cb, rays, out, *shade, timer);
+        return {tests, true};
+    }
+
+    // Every slot by the scalar kernel (host time counted from `t0`).
+    uint64_t QueryScalar(const ClassifiedBatch& cb, const BatchArrays& arrays,
+                         const cl::Buffer& rays, const cl::Buffer& out, bool shadow,
+                         Clock::time_point t0, KernelTimer& timer) {
+        const cl::Buffer& rayLeaf = rayLeafBuf_.Upload(ctx_, cb.rayLeaf);
+        const uint32_t nSlots = uint32_t(cb.batch.rayIndex.size());
+        const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
+        cl::Kernel& k = shadow ? occludedScalar_ : queryScalar_;
+        SetArgs(k, rays, arrays.rayIndex, rayLeaf, nSlots, arrays.leaves, arrays.candidates,
+                scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out, testsBuf);
+        AddHostSeconds(Seconds(t0));
+        Launch(ctx_, k, nSlots, timer);
+        return SumTests(testsBuf, nSlots);
+    }
+
+    // Vertex-style leaves: their rays as slots, their candidates as blocks of 16, launched in
+    // chunks whose blocks fit one device allocation (incoherent rays can have long lists in many
+    // leaves).
+    uint64_t QueryVertex(const ClassifiedBatch& cb, const BatchArrays& arrays,
+                         std::span<const uint32_t> leaves, const cl::Buffer& rays,
+                         const cl::Buffer& out, const ShadeBuffers* shade, KernelTimer& timer) {
+        const size_t maxBlocks = std::min<size_t>(ctx_.info().maxAllocBytes, size_t(256) << 20) /
+                                 sizeof(RcTriangleBlock16);
+        uint64_t tests = 0;
+        for (size_t next = 0; next < leaves.size();) {
+            const auto t0 = Clock::now();
+            const size_t first = next;
+            next = ListBlocks(cb, leaves, first, maxBlocks);
+            const bool wholeBatch =
+                first == 0 && next == cb.batch.leaves.size() && !cb.rayLeaf.empty();
+            const VertexSlots slots =
+                wholeBatch ? VertexSlots{arrays.rayIndex, rayLeafBuf_.Upload(ctx_, cb.rayLeaf),
+                                         uint32_t(cb.batch.rayIndex.size())}
+                           : ListSlots(cb, leaves.subspan(first, next - first));
+            tests += LaunchVertex(arrays, slots, rays, out, shade, t0, timer);
+        }
+        return tests;
+    }
+
+    // Lists the candidate blocks of leaves[first, end) in blockLeaf_ and blockFirst_, and each
+    // leaf's first block in leafFirstBlock_, up to `maxBlocks` blocks (one leaf at least);
+    // returns `end`.
+    size_t ListBlocks(const ClassifiedBatch& cb, std::span<const uint32_t> leaves, size_t first,
+                      size_t maxBlocks) {
+        blockLeaf_.clear();
+        blockFirst_.clear();
+        leafFirstBlock_.assign(cb.batch.leaves.size(), 0);
+        size_t next = first;
+        for (; next < leaves.size(); ++next) {
+            const uint32_t l = leaves[next];
+            const RcLeaf& leaf = cb.batch.leaves[l];
+            const size_t leafBlocks = (leaf.candCount + 15) / 16;
+            if (!blockLeaf_.empty() && blockLeaf_.size() + leafBlocks > maxBlocks) break;
+            leafFirstBlock_[l] = uint32_t(blockLeaf_.size());
+            for (uint32_t c = 0; c < leaf.candCount; c += 16) {
+                blockLeaf_.push_back(l);
+                blockFirst_.push_back(c);
+            }
+        }
+        return next;
+    }
+
+    // The rays of `leaves` as slots, uploaded with their leaves.
+    VertexSlots ListSlots(const ClassifiedBatch& cb, std::span<const uint32_t> leaves) {
+        vertexSlots_.clear();
+        vertexRayLeaf_.clear();
+        for (const uint32_t l : leaves) {
+            const RcLeaf& leaf = cb.batch.leaves[l];
+            for (uint32_t r = 0; r < leaf.rayCount; ++r) {
+                vertexSlots_.push_back(cb.batch.rayIndex[leaf.rayBegin + r]);
+                vertexRayLeaf_.push_back(l);
+            }
+        }
+        const cl::Buffer& slots = slotsBuf_.Upload(ctx_, vertexSlots_);
+        return {slots, rayLeafBuf_.Upload(ctx_, vertexRayLeaf_), uint32_t(vertexSlots_.size())};
+    }
+
+    // The gather of the listed blocks, then the vertex-style kernel over `s` (host time counted
+    // from `t0`).
+    uint64_t LaunchVertex(const BatchArrays& arrays, const VertexSlots& s, const cl::Buffer& rays,
+                          const cl::Buffer& out, const ShadeBuffers* shade, Clock::time_point t0,
+                          KernelTimer& timer) {
+        const uint32_t nBlocks = uint32_t(blockLeaf_.size());
+        const cl::Buffer& blockLeaf = blockLeafBuf_.Upload(ctx_, blockLeaf_);
+        const cl::Buffer& blockFirst = blockFirstBuf_.Upload(ctx_, blockFirst_);
+        const cl::Buffer& leafFirstBlock = leafFirstBlockBuf_.Upload(ctx_, leafFirstBlock_);
+        const cl::Buffer& blocks =
+            blocksBuf_.Reserve(ctx_, size_t(nBlocks) * sizeof(RcTriangleBlock16));
+        const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, s.n * sizeof(uint32_t));
+        SetArgs(gather_, blockLeaf, blockFirst, nBlocks, arrays.leaves, arrays.candidates,
+                scene_.triangles, scene_.params, blocks);
+        cl::Kernel& k = shade ? queryVertexShade_ : occludedVertex_;
+        if (!shade) {
+            SetArgs(k, rays, s.slots, s.slotLeaf, s.n, arrays.leaves, leafFirstBlock, blocks,
+                    scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
+                    testsBuf);
+        } else {
+            SetArgs(k, rays, shade->rayInfo, s.slots, s.slotLeaf, s.n, arrays.leaves,
+                    leafFirstBlock, blocks, out, testsBuf, scene_.triangles, scene_.triangleShading,
+                    scene_.spheres, scene_.quadrics, scene_.materials, scene_.lights, scene_.params,
+                    shade->radiance, shade->NormalsOut(), shade->shadow.rays,
+                    shade->shadow.contribution, shade->secondary.rays, shade->secondary.info,
+                    shade->spawned);
+        }
+        AddHostSeconds(Seconds(t0));
+        Launch(ctx_, gather_, nBlocks, timer);
+        Launch(ctx_, k, s.n, timer);
+        return SumTests(testsBuf, s.n);
+    }
+
+    // Fragment-style leaves: packets of 16 of a leaf's rays, in lockstep over its candidates.
+    uint64_t QueryFragment(const ClassifiedBatch& cb, const BatchArrays& arrays,
+                           std::span<const uint32_t> leaves, const cl::Buffer& rays,
+                           const cl::Buffer& out, bool shadow, KernelTimer& timer) {
+        const auto t0 = Clock::now();
+        // Sized first and written by index: a push_back loop cost measurably more. The arrays
+        // stay unchanged until SumTests below has waited for the kernel, so a CPU device reads
+        // them in place.
+        uint32_t nPackets = 0;
+        for (uint32_t l : leaves) nPackets += (cb.batch.leaves[l].rayCount + 15) / 16;
+        packetLeaf_.resize(nPackets);
+        packetFirst_.resize(nPackets);
+        uint32_t* packetLeafAt = packetLeaf_.data();
+        uint32_t* packetFirstAt = packetFirst_.data();
+        for (uint32_t l : leaves) {
+            const uint32_t count = cb.batch.leaves[l].rayCount;
+            for (uint32_t r = 0; r < count; r += 16) {
+                *packetLeafAt++ = l;
+                *packetFirstAt++ = r;
+            }
+        }
+        const cl::Buffer& packetLeaf = packetLeafBuf_.Share(ctx_, packetLeaf_);
+        const cl::Buffer& packetFirst = packetFirstBuf_.Share(ctx_, packetFirst_);
+        const cl::Buffer& testsBuf = fragmentTestsBuf_.Reserve(ctx_, nPackets * sizeof(uint32_t));
+        cl::Kernel& k = shadow ? occludedFragment_ : queryFragment_;
+        SetArgs(k, rays, arrays.rayIndex, packetLeaf, packetFirst, nPackets, arrays.leaves,
+                arrays.candidates, scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params,
+                out, testsBuf);
+        AddHostSeconds(Seconds(t0));
+        Launch(ctx_, k, nPackets, timer);
+        return SumTests(testsBuf, nPackets);
+    }
+
+    // The rays the vertex kernel did not shade (fragment leaves' rays and the misses), in slot
+    // order: shading then walks the batch's arrays in order, not leaf by leaf.
+    void ListUnshaded(const ClassifiedBatch& cb) {
+        const auto t0 = Clock::now();
         unshaded_.clear();
         if (!cb.vertexLeaves.empty()) {
             shadedByVertex_.assign(cb.batch.nRays, 0);
@@ -363,35 +415,37 @@ class ClassifiedQuery final : public RayQuery {
                 if (!shadedByVertex_[i]) unshaded_.push_back(i);
             }
         }
-        AddHostSeconds(Seconds(tUnshaded));
+        AddHostSeconds(Seconds(t0));
+    }
+
+    // Shades the rays the vertex kernel left, in the thesis's fragment pass 2: per ray (radiance,
+    // secondary rays), then per (ray, light) pair (shadow rays).
+    void ShadeUnshaded(const ClassifiedBatch& cb, const cl::Buffer& rays, const cl::Buffer& hits,
+                       const ShadeBuffers& shade, KernelTimer& timer) {
+        ListUnshaded(cb);
         // Without vertex-style leaves every ray is left: the kernels take a null id list.
         const bool allRays = cb.vertexLeaves.empty();
-        if (allRays || !unshaded_.empty()) {
-            // The thesis's fragment pass 2: per ray (radiance, secondary rays), then per
-            // (ray, light) pair (shadow rays).
-            const uint32_t nIds = allRays ? cb.batch.nRays : uint32_t(unshaded_.size());
-            const cl::Buffer ids = allRays ? cl::Buffer() : unshadedBuf_.Upload(ctx_, unshaded_);
-            // Below two lights the per-pair pass has nothing to spread over lanes: rc_shade_ids
-            // shades the light itself, and the saved surfaces' round trip through memory is saved.
-            const bool split = scene_.hostParams.nLights > 1;
-            const cl::Buffer surfaces =
-                split ? surfacesBuf_.Reserve(ctx_, size_t(cb.batch.nRays) * 2 * sizeof(rc_float4))
-                      : cl::Buffer();
-            SetArgs(shadeIds_, rays, shade->rayInfo, out, ids, nIds, surfaces, scene_.triangles,
-                    scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
-                    scene_.lights, scene_.params, shade->radiance, shade->NormalsOut(split),
-                    shade->shadow.rays, shade->shadow.contribution, shade->secondary.rays,
-                    shade->secondary.info, shade->spawned);
-            Launch(ctx_, shadeIds_, nIds, timer);
-            if (split) {
-                SetArgs(shadeLights_, rays, shade->rayInfo, out, ids, nIds, surfaces,
-                        shade->normals, scene_.triangles, scene_.triangleShading, scene_.spheres,
-                        scene_.quadrics, scene_.materials, scene_.lights, scene_.params,
-                        shade->shadow.rays, shade->shadow.contribution);
-                Launch(ctx_, shadeLights_, size_t(nIds) * scene_.hostParams.nLights, timer);
-            }
-        }
-        return {tests, true};
+        if (!allRays && unshaded_.empty()) return;
+        const uint32_t nIds = allRays ? cb.batch.nRays : uint32_t(unshaded_.size());
+        const cl::Buffer ids = allRays ? cl::Buffer() : unshadedBuf_.Upload(ctx_, unshaded_);
+        // Below two lights the per-pair pass has nothing to spread over lanes: rc_shade_ids
+        // shades the light itself, and the saved surfaces' round trip through memory is saved.
+        const bool split = scene_.hostParams.nLights > 1;
+        const cl::Buffer surfaces =
+            split ? surfacesBuf_.Reserve(ctx_, size_t(cb.batch.nRays) * 2 * sizeof(rc_float4))
+                  : cl::Buffer();
+        SetArgs(shadeIds_, rays, shade.rayInfo, hits, ids, nIds, surfaces, scene_.triangles,
+                scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
+                scene_.lights, scene_.params, shade.radiance, shade.NormalsOut(split),
+                shade.shadow.rays, shade.shadow.contribution, shade.secondary.rays,
+                shade.secondary.info, shade.spawned);
+        Launch(ctx_, shadeIds_, nIds, timer);
+        if (!split) return;
+        SetArgs(shadeLights_, rays, shade.rayInfo, hits, ids, nIds, surfaces, shade.normals,
+                scene_.triangles, scene_.triangleShading, scene_.spheres, scene_.quadrics,
+                scene_.materials, scene_.lights, scene_.params, shade.shadow.rays,
+                shade.shadow.contribution);
+        Launch(ctx_, shadeLights_, size_t(nIds) * scene_.hostParams.nLights, timer);
     }
 
     static double Seconds(Clock::time_point t0) {

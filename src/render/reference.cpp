@@ -62,6 +62,14 @@ class Tracer {
         color += weight * (V(m.emission) + V(m.kd) * V(scene_.ambient));
 
         const V above = geometry::OffsetRayOrigin(s.p, s.ng);
+        AddLights(ray, s, m, above, weight, color, counters);
+        Spawn(ray, s, m, above, weight, depth + 1, color, counters);
+    }
+
+  private:
+    // Adds every light's direct contribution at `s` that no primitive blocks.
+    void AddLights(const Ray& ray, const Surface& s, const scene::Material& m, const V& above,
+                   const V& weight, V& color, Counters& counters) const {
         for (const auto& light : scene_.lights) {
             const V toLight = V(light.position) - s.p;
             const double dist2 = glm::dot(toLight, toLight);
@@ -85,7 +93,11 @@ class Tracer {
                 color += c;
             }
         }
+    }
 
+    // Traces the reflection and refraction rays of depth `next` that `s` spawns.
+    void Spawn(const Ray& ray, const Surface& s, const scene::Material& m, const V& above,
+               const V& weight, uint32_t next, V& color, Counters& counters) const {
         const V kr(m.kr), kt(m.kt);
         if (std::max(MaxComponent(kr), MaxComponent(kt)) <= 0.0) return;
         const double cosi = std::clamp(-glm::dot(ray.d, s.ns), 0.0, 1.0);
@@ -101,7 +113,6 @@ class Tracer {
             krEff = kr + kt;
             ktEff = V(0.0);
         }
-        const uint32_t next = depth + 1;
         const V wr = weight * krEff;
         if (WorthSpawning(wr, next)) {
             V rdir = ray.d + 2.0 * cosi * s.ns;
@@ -120,7 +131,6 @@ class Tracer {
         }
     }
 
-  private:
     bool WorthSpawning(const V& w, uint32_t depth) const {
         return depth <= options_.maxDepth && MaxComponent(w) >= double(options_.minWeight);
     }

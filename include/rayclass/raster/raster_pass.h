@@ -20,6 +20,7 @@
 // - Ids are full 32-bit global primitive ids (triangles, spheres, quadrics; RC_NO_HIT on a miss).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -107,9 +108,16 @@ class RasterPass {
 
   private:
     enum Kind { kTriangles = 0, kSpheres = 1, kQuadrics = 2 };
+    using Programs = std::array<GLuint, 3>;  // per kind; 0: no primitive of the kind
     GLuint Program(Kind kind, Hull hull, bool slabPass);
     void EnsureFramebuffer(uint32_t width, uint32_t height);
     void PrepareSlabs(const RcCamera& camera);
+    // The stages of Render: the programs with the camera's uniforms, cleared targets, the draw
+    // calls, and the hits read back.
+    Programs SetUpPrograms(const RcCamera& camera);
+    void ClearTargets();
+    void Draw(const Programs& programs);
+    std::vector<RcHit> ReadHits();
 
     GlContext& gl_;
     RasterOptions options_;
