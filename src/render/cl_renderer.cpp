@@ -235,7 +235,6 @@ class Frame {
     void EndGeneration(uint32_t generation, GenerationTally& tally);
 
     clrt::Context& ctx_;
-    const scene::Scene& scene_;
     const RenderOptions& options_;
     EyeHitSource* eyeHitSource_;
     RenderStats& stats_;
@@ -269,7 +268,6 @@ class Frame {
 Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
              EyeHitSource* eyeHitSource, RenderStats& stats)
     : ctx_(ctx),
-      scene_(scene),
       options_(options),
       eyeHitSource_(eyeHitSource),
       stats_(stats),
