@@ -34,6 +34,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <functional>
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -175,6 +177,21 @@ std::vector<float> MicroSoa(const scene::Scene& s, uint32_t n) {
     return soa;
 }
 
+// Applies the OPTION VALUE pairs of argv[2...] through `options`; an unknown option is an
+// error that names it (and its value, when `namesValue`).
+void ParsePairs(int argc, char** argv,
+                const std::map<std::string, std::function<void(const std::string&)>>& options,
+                bool namesValue) {
+    for (int i = 2; i + 1 < argc; i += 2) {
+        const std::string o = argv[i], v = argv[i + 1];
+        const auto option = options.find(o);
+        if (option == options.end()) {
+            throw std::invalid_argument("unknown option " + o + (namesValue ? " " + v : ""));
+        }
+        option->second(v);
+    }
+}
+
 // The micro benchmark's random numbers: one stream for a kind's primitives and then its rays.
 struct MicroRandom {
     std::mt19937 rng{3};
@@ -306,19 +323,12 @@ cl::Program BuildMicro(const clrt::Context& ctx) {
 int Micro(int argc, char** argv) {
     MicroCase c{"", 1u << 18, 256, 5};
     std::string device = "auto";
-    for (int i = 2; i + 1 < argc; i += 2) {
-        const std::string a = argv[i], v = argv[i + 1];
-        if (a == "--rays")
-            c.nRays = uint32_t(std::stoul(v));
-        else if (a == "--prims")
-            c.nPrims = uint32_t(std::stoul(v));
-        else if (a == "--runs")
-            c.runs = std::max(1, std::stoi(v));
-        else if (a == "--device")
-            device = v;
-        else
-            throw std::invalid_argument("unknown option " + a);
-    }
+    ParsePairs(argc, argv,
+               {{"--rays", [&c](const std::string& v) { c.nRays = uint32_t(std::stoul(v)); }},
+                {"--prims", [&c](const std::string& v) { c.nPrims = uint32_t(std::stoul(v)); }},
+                {"--runs", [&c](const std::string& v) { c.runs = std::max(1, std::stoi(v)); }},
+                {"--device", [&device](const std::string& v) { device = v; }}},
+               /*namesValue=*/false);
     if (c.nPrims % 16 != 0) throw std::invalid_argument("--prims must be a multiple of 16");
     clrt::Context ctx(device);
     const cl::Program micro = BuildMicro(ctx);
@@ -348,41 +358,34 @@ struct Args {
 Args ParseArgs(int argc, char** argv) {
     Args a;
     a.scene = argv[1];
-    for (int i = 2; i + 1 < argc; i += 2) {
-        const std::string o = argv[i], v = argv[i + 1];
-        if (o == "--camera")
-            a.camera = v;
-        else if (o == "--light")
-            a.light = v;
-        else if (o == "--width")
-            a.width = uint32_t(std::stoul(v));
-        else if (o == "--height")
-            a.height = uint32_t(std::stoul(v));
-        else if (o == "--runs")
-            a.runs = std::max(1, std::stoi(v));
-        else if (o == "--warmup")
-            a.warmup = std::max(0, std::stoi(v));
-        else if (o == "--methods")
-            a.methods = Split(v);
-        else if (o == "--kinds")
-            a.kinds = Split(v);
-        else if (o == "--brute-max-prims")
-            a.bruteMaxPrims = uint32_t(std::stoul(v));
-        else if (o == "--save-rays")
-            a.saveRays = v;
-        else if (o == "--cl-options")
-            a.clOptions = v;
-        else if (o == "--device")
-            a.device = v;
-        else if (o == "--seed")
-            a.seed = uint32_t(std::stoul(v));
-        else if (o == "--warm")
-            a.warm = v == "1";
-        else if (o == "--classify" && v.find('=') != std::string::npos)
-            a.classifyParams.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
-        else
-            throw std::invalid_argument("unknown option " + o + " " + v);
-    }
+    auto count = [](uint32_t& field) {
+        return [&field](const std::string& v) { field = uint32_t(std::stoul(v)); };
+    };
+    auto text = [](std::string& field) { return [&field](const std::string& v) { field = v; }; };
+    ParsePairs(argc, argv,
+               {{"--camera", text(a.camera)},
+                {"--light", text(a.light)},
+                {"--width", count(a.width)},
+                {"--height", count(a.height)},
+                {"--runs", [&a](const std::string& v) { a.runs = std::max(1, std::stoi(v)); }},
+                {"--warmup", [&a](const std::string& v) { a.warmup = std::max(0, std::stoi(v)); }},
+                {"--methods", [&a](const std::string& v) { a.methods = Split(v); }},
+                {"--kinds", [&a](const std::string& v) { a.kinds = Split(v); }},
+                {"--brute-max-prims", count(a.bruteMaxPrims)},
+                {"--save-rays", text(a.saveRays)},
+                {"--cl-options", text(a.clOptions)},
+                {"--device", text(a.device)},
+                {"--seed", count(a.seed)},
+                {"--warm", [&a](const std::string& v) { a.warm = v == "1"; }},
+                {"--classify",
+                 [&a](const std::string& v) {
+                     if (v.find('=') == std::string::npos) {
+                         throw std::invalid_argument("unknown option --classify " + v);
+                     }
+                     a.classifyParams.emplace_back(v.substr(0, v.find('=')),
+                                                   v.substr(v.find('=') + 1));
+                 }}},
+               /*namesValue=*/true);
     return a;
 }
 
