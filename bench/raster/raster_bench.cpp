@@ -33,7 +33,7 @@
 #include "rayclass/clrt/context.h"
 #include "rayclass/raster/raster_pass.h"
 #include "rayclass/render/bvh_query.h"
-#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/brute_query.h"
 #include "rayclass/scene/loader.h"
 
 using namespace rayclass;
@@ -133,11 +133,12 @@ scene::Scene Layers(uint32_t n) {
 
 struct Measured {
     raster::RasterStats best, counted;
-    double mismatch = 0;
+    size_t mismatchPixels = 0;
+    double mismatch = 0;  // of the pixels
 };
 
-// Best of `runs` frames after a warm-up, the counters from a separate counting pass, and the
-// fraction of pixels whose id differs from `reference`.
+// Best of `runs` frames after a warm-up (shader compile), the counters from a separate counting
+// pass, and the pixels whose id differs from `reference`.
 Measured Measure(raster::GlContext& gl, const scene::Scene& scene, raster::RasterOptions options,
                  const std::vector<RcHit>& reference, int runs) {
     Measured m;
@@ -151,16 +152,94 @@ Measured Measure(raster::GlContext& gl, const scene::Scene& scene, raster::Raste
         hits = pass.Render(cam, &st);
         if (st.totalS < m.best.totalS) m.best = st;
     }
-    size_t mismatch = 0;
-    for (size_t i = 0; i < hits.size(); ++i) mismatch += hits[i].prim != reference[i].prim;
-    m.mismatch = double(mismatch) / double(std::max<size_t>(1, hits.size()));
+    for (size_t i = 0; i < hits.size(); ++i) m.mismatchPixels += hits[i].prim != reference[i].prim;
+    m.mismatch = double(m.mismatchPixels) / double(std::max<size_t>(1, hits.size()));
     options.countFragments = true;
     raster::RasterPass counting(gl, scene, options);
     counting.Render(cam, &m.counted);
     return m;
 }
 
-int Experiments(int argc, char** argv) {
+// The --experiments runs: one CSV row per scene and setting, against the BVH query's hits.
+class Experiments {
+  public:
+    Experiments(raster::GlContext& gl, uint32_t width, uint32_t height, int runs)
+        : gl_(gl),
+          ctx_("cpu"),
+          program_(render::BuildRenderProgram(ctx_)),
+          width_(width),
+          height_(height),
+          runs_(runs) {}
+
+    // Depth bits 16/24/32 and multiples of the derived depth scale on the scene of `file`.
+    void Depth(const std::string& file) {
+        scene::Scene scene = scene::LoadScene(file);
+        const std::vector<RcHit> ref = Prepare(scene);
+        raster::RasterPass probe(gl_, scene);
+        probe.Render(render::CameraBasis(scene.camera).ToDevice());
+        const double derived = probe.DepthScale();
+        const std::string label = std::filesystem::path(file).stem().string();
+        for (int bits : {16, 24, 32}) {
+            for (double factor : {1.0 / 256, 1.0 / 16, 1.0, 2.0, 4.0}) {
+                raster::RasterOptions options;
+                options.depthBits = bits;
+                options.depthScale = derived * factor;
+                Row("depth", label, scene, options, factor, ref);
+            }
+        }
+    }
+
+    // One row per hull type for `scene`, against one reference query.
+    void EveryHull(const char* experiment, const char* label, scene::Scene scene, double x) {
+        const std::vector<RcHit> ref = Prepare(scene);
+        for (raster::Hull hull :
+             {raster::Hull::Sphere, raster::Hull::Box, raster::Hull::Billboard}) {
+            raster::RasterOptions options;
+            options.hull = hull;
+            Row(experiment, label, scene, options, x, ref);
+        }
+    }
+
+    // `n` layers of squares, without and with slabs.
+    void Layered(uint32_t n) {
+        scene::Scene scene = Layers(n);
+        const std::vector<RcHit> ref = Prepare(scene);
+        for (uint32_t slabs : {1u, 4u}) {
+            raster::RasterOptions options;
+            options.slabs = slabs;
+            Row("layers", "squares", scene, options, n, ref);
+        }
+    }
+
+  private:
+    // The scene at the experiments' size, and its reference hits (their time in refS_).
+    std::vector<RcHit> Prepare(scene::Scene& scene) {
+        scene.camera.width = width_;
+        scene.camera.height = height_;
+        return KernelHits(ctx_, program_, scene, refS_, true);
+    }
+
+    void Row(const char* experiment, const std::string& label, const scene::Scene& scene,
+             const raster::RasterOptions& options, double x, const std::vector<RcHit>& ref) {
+        const double pixels = double(width_) * height_;
+        const Measured m = Measure(gl_, scene, options, ref, runs_);
+        std::printf("%s,%s,%u,%s,%u,%d,%g,%.4g,%.4g,%.4g,%.4g,%.6g,%.4g\n", experiment,
+                    label.c_str(), scene.PrimitiveCount(), raster::HullName(options.hull),
+                    options.slabs, options.depthBits, x, m.best.totalS * 1e3, m.best.drawS * 1e3,
+                    double(m.counted.fragments) / pixels, double(m.counted.tested) / pixels,
+                    m.mismatch, refS_ * 1e3);
+        std::fflush(stdout);
+    }
+
+    raster::GlContext& gl_;
+    clrt::Context ctx_;
+    const cl::Program program_;
+    uint32_t width_, height_;
+    int runs_;
+    double refS_ = 0;  // the last reference query's kernel time
+};
+
+int RunExperiments(int argc, char** argv) {
     uint32_t width = 400, height = 300;
     int runs = 3;
     std::vector<uint32_t> hullCounts{1000, 10000, 100000};
@@ -193,85 +272,73 @@ int Experiments(int argc, char** argv) {
         std::fprintf(stderr, "raster_bench: no OpenGL context: %s\n", why.c_str());
         return 3;  // scripts/bench reports the experiments as skipped
     }
-    clrt::Context ctx("cpu");
-    const cl::Program program = render::BuildRenderProgram(ctx);
+    Experiments e(*gl, width, height, runs);
     std::printf(
         "experiment,scene,prims,hull,slabs,depth_bits,x,pass_ms,draw_ms,frags_per_px,"
         "tested_per_px,id_mismatch_fraction,reference_ms\n");
-    const double pixels = double(width) * height;
-    auto row = [&](const char* experiment, const std::string& label, scene::Scene& scene,
-                   const raster::RasterOptions& options, double x, const std::vector<RcHit>& ref,
-                   double refS) {
-        const Measured m = Measure(*gl, scene, options, ref, runs);
-        std::printf("%s,%s,%u,%s,%u,%d,%g,%.4g,%.4g,%.4g,%.4g,%.6g,%.4g\n", experiment,
-                    label.c_str(), scene.PrimitiveCount(), raster::HullName(options.hull),
-                    options.slabs, options.depthBits, x, m.best.totalS * 1e3, m.best.drawS * 1e3,
-                    double(m.counted.fragments) / pixels, double(m.counted.tested) / pixels,
-                    m.mismatch, refS * 1e3);
-        std::fflush(stdout);
-    };
-    auto prepare = [&](scene::Scene& scene, double& refS) {
-        scene.camera.width = width;
-        scene.camera.height = height;
-        return KernelHits(ctx, program, scene, refS, true);
-    };
-    for (const std::string& file : depthScenes) {
-        scene::Scene scene = scene::LoadScene(file);
-        double refS = 0;
-        const std::vector<RcHit> ref = prepare(scene, refS);
-        raster::RasterPass probe(*gl, scene);
-        probe.Render(render::CameraBasis(scene.camera).ToDevice());
-        const double derived = probe.DepthScale();
-        const std::string label = std::filesystem::path(file).stem().string();
-        for (int bits : {16, 24, 32}) {
-            for (double factor : {1.0 / 256, 1.0 / 16, 1.0, 2.0, 4.0}) {
-                raster::RasterOptions options;
-                options.depthBits = bits;
-                options.depthScale = derived * factor;
-                row("depth", label, scene, options, factor, ref, refS);
-            }
-        }
-    }
-    // One row per hull type for `scene`, against one reference query.
-    auto everyHull = [&](const char* experiment, const char* label, scene::Scene scene, double x) {
-        double refS = 0;
-        const std::vector<RcHit> ref = prepare(scene, refS);
-        for (raster::Hull hull :
-             {raster::Hull::Sphere, raster::Hull::Box, raster::Hull::Billboard}) {
-            raster::RasterOptions options;
-            options.hull = hull;
-            row(experiment, label, scene, options, x, ref, refS);
-        }
-    };
-    for (uint32_t n : hullCounts) everyHull("hulls", "spheres", RandomSpheres(n), n);
+    for (const std::string& file : depthScenes) e.Depth(file);
+    for (uint32_t n : hullCounts) e.EveryHull("hulls", "spheres", RandomSpheres(n), n);
     for (float degrees : {0.0f, 15.0f, 30.0f, 45.0f, 60.0f, 75.0f, 90.0f}) {
-        everyHull("rotation", "ellipsoids", RotatedEllipsoids(2000, degrees), degrees);
+        e.EveryHull("rotation", "ellipsoids", RotatedEllipsoids(2000, degrees), degrees);
     }
-    for (uint32_t n : {1u, 2u, 4u, 8u, 16u, 32u, 64u}) {
-        scene::Scene scene = Layers(n);
-        double refS = 0;
-        const std::vector<RcHit> ref = prepare(scene, refS);
-        for (uint32_t slabs : {1u, 4u}) {
-            raster::RasterOptions options;
-            options.slabs = slabs;
-            row("layers", "squares", scene, options, n, ref, refS);
-        }
-    }
+    for (uint32_t n : {1u, 2u, 4u, 8u, 16u, 32u, 64u}) e.Layered(n);
     return 0;
 }
 
-}  // namespace
+struct Method {
+    const char* name;
+    raster::Hull hull;
+    uint32_t slabs;
+};
 
-int main(int argc, char** argv) {
-    setenv("POCL_MAX_PTHREAD_COUNT", "2", 0);
-    if (argc >= 2 && std::string(argv[1]) == "--experiments") {
-        try {
-            return Experiments(argc, argv);
-        } catch (const std::exception& e) {
-            std::fprintf(stderr, "raster_bench: %s\n", e.what());
-            return 1;
-        }
+// The raster methods worth comparing on `scene`: every hull only where it has spheres or
+// quadrics.
+std::vector<Method> MethodsFor(const scene::Scene& scene) {
+    std::vector<Method> methods = {{"raster-auto", raster::Hull::Auto, 1}};
+    if (!scene.spheres.empty() || !scene.quadrics.empty()) {
+        methods.push_back({"raster-sphere", raster::Hull::Sphere, 1});
+        methods.push_back({"raster-box", raster::Hull::Box, 1});
+        methods.push_back({"raster-billboard", raster::Hull::Billboard, 1});
     }
+    methods.push_back({"raster-auto-4slab", raster::Hull::Auto, 4});
+    methods.push_back({"raster-auto-16slab", raster::Hull::Auto, 16});
+    return methods;
+}
+
+// One line for the brute-force kernel on the scene `name`, then one per raster method.
+void CompareMethods(raster::GlContext& gl, clrt::Context& ctx, const cl::Program& program,
+                    const std::string& name, uint32_t width, uint32_t height) {
+    scene::Scene scene = name.rfind("spheres:", 0) == 0
+                             ? RandomSpheres(uint32_t(std::stoul(name.substr(8))))
+                             : scene::LoadScene(name);
+    scene.camera.width = width;
+    scene.camera.height = height;
+    const std::string label = std::filesystem::path(name).filename().string();
+    double kernelS = 0;
+    const std::vector<RcHit> kernel = KernelHits(ctx, program, scene, kernelS);
+    std::printf("%-16s %8u %-16s %10.1f %10s %10s %12s %12s %10s\n", label.c_str(),
+                scene.PrimitiveCount(), "cl-brute", kernelS * 1e3, "-", "-", "-", "-", "-");
+    const double pixels = double(width) * height;
+    for (const Method& method : MethodsFor(scene)) {
+        raster::RasterOptions options;
+        options.hull = method.hull;
+        options.slabs = method.slabs;
+        const Measured m = Measure(gl, scene, options, kernel, 3);
+        std::printf("%-16s %8u %-16s %10.1f %10.1f %10.1f %12.2f %12.2f %10zu\n", label.c_str(),
+                    scene.PrimitiveCount(), method.name, m.best.totalS * 1e3, m.best.drawS * 1e3,
+                    m.best.readbackS * 1e3, double(m.counted.fragments) / pixels,
+                    double(m.counted.tested) / pixels, m.mismatchPixels);
+        std::fflush(stdout);
+    }
+}
+
+std::vector<std::string> DefaultScenes() {
+    const std::filesystem::path root = std::filesystem::path(RAYCLASS_BENCH_SOURCE_DIR);
+    return {(root / "scenes/cornell.json").string(), "spheres:1000", "spheres:10000",
+            "spheres:100000", (root / "scenes/bench/conference.obj").string()};
+}
+
+int Compare(int argc, char** argv) {
     uint32_t width = 400, height = 300;
     int a = 1;
     if (argc >= 3 && std::isdigit(static_cast<unsigned char>(argv[1][0]))) {
@@ -280,83 +347,34 @@ int main(int argc, char** argv) {
         a = 3;
     }
     std::vector<std::string> scenes(argv + a, argv + argc);
-    if (scenes.empty()) {
-        const std::filesystem::path root = std::filesystem::path(RAYCLASS_BENCH_SOURCE_DIR);
-        scenes = {(root / "scenes/cornell.json").string(), "spheres:1000", "spheres:10000",
-                  "spheres:100000", (root / "scenes/bench/conference.obj").string()};
+    if (scenes.empty()) scenes = DefaultScenes();
+    std::string why;
+    raster::GlContext* gl = raster::GlContext::Shared(&why);
+    if (!gl) {
+        std::fprintf(stderr, "raster_bench: %s\n", why.c_str());
+        return 1;
     }
+    clrt::Context ctx("cpu");
+    const cl::Program program = render::BuildRenderProgram(ctx);
+    std::printf("# %ux%u, GL: %s, CL: %s\n", width, height, gl->Renderer().c_str(),
+                ctx.info().name.c_str());
+    std::printf("%-16s %8s %-16s %10s %10s %10s %12s %12s %10s\n", "scene", "prims", "method",
+                "pass_ms", "draw_ms", "read_ms", "frags/px", "tested/px", "id_mism");
+    for (const std::string& name : scenes) CompareMethods(*gl, ctx, program, name, width, height);
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    setenv("POCL_MAX_PTHREAD_COUNT", "2", 0);
     try {
-        std::string why;
-        raster::GlContext* gl = raster::GlContext::Shared(&why);
-        if (!gl) {
-            std::fprintf(stderr, "raster_bench: %s\n", why.c_str());
-            return 1;
+        if (argc >= 2 && std::string(argv[1]) == "--experiments") {
+            return RunExperiments(argc, argv);
         }
-        clrt::Context ctx("cpu");
-        const cl::Program program = render::BuildRenderProgram(ctx);
-        std::printf("# %ux%u, GL: %s, CL: %s\n", width, height, gl->Renderer().c_str(),
-                    ctx.info().name.c_str());
-        std::printf("%-16s %8s %-16s %10s %10s %10s %12s %12s %10s\n", "scene", "prims", "method",
-                    "pass_ms", "draw_ms", "read_ms", "frags/px", "tested/px", "id_mism");
-        for (const std::string& name : scenes) {
-            scene::Scene scene = name.rfind("spheres:", 0) == 0
-                                     ? RandomSpheres(uint32_t(std::stoul(name.substr(8))))
-                                     : scene::LoadScene(name);
-            scene.camera.width = width;
-            scene.camera.height = height;
-            const std::string label = std::filesystem::path(name).filename().string();
-            double kernelS = 0;
-            const std::vector<RcHit> kernel = KernelHits(ctx, program, scene, kernelS);
-            std::printf("%-16s %8u %-16s %10.1f %10s %10s %12s %12s %10s\n", label.c_str(),
-                        scene.PrimitiveCount(), "cl-brute", kernelS * 1e3, "-", "-", "-", "-", "-");
-            const double pixels = double(width) * height;
-            struct Method {
-                const char* name;
-                raster::Hull hull;
-                uint32_t slabs;
-            };
-            const bool hasHulls = !scene.spheres.empty() || !scene.quadrics.empty();
-            std::vector<Method> methods = {{"raster-auto", raster::Hull::Auto, 1}};
-            if (hasHulls) {
-                methods.push_back({"raster-sphere", raster::Hull::Sphere, 1});
-                methods.push_back({"raster-box", raster::Hull::Box, 1});
-                methods.push_back({"raster-billboard", raster::Hull::Billboard, 1});
-            }
-            methods.push_back({"raster-auto-4slab", raster::Hull::Auto, 4});
-            methods.push_back({"raster-auto-16slab", raster::Hull::Auto, 16});
-            for (const Method& m : methods) {
-                raster::RasterOptions options;
-                options.hull = m.hull;
-                options.slabs = m.slabs;
-                // Timing without counters: best of 3 after a warm-up frame (shader compile).
-                raster::RasterPass pass(*gl, scene, options);
-                const RcCamera cam = render::CameraBasis(scene.camera).ToDevice();
-                pass.Render(cam);
-                raster::RasterStats best;
-                best.totalS = 1e30;
-                std::vector<RcHit> hits;
-                for (int rep = 0; rep < 3; ++rep) {
-                    raster::RasterStats st;
-                    hits = pass.Render(cam, &st);
-                    if (st.totalS < best.totalS) best = st;
-                }
-                size_t mismatch = 0;
-                for (size_t i = 0; i < hits.size(); ++i) mismatch += hits[i].prim != kernel[i].prim;
-                options.countFragments = true;
-                raster::RasterPass counting(*gl, scene, options);
-                raster::RasterStats counted;
-                counting.Render(cam, &counted);
-                std::printf("%-16s %8u %-16s %10.1f %10.1f %10.1f %12.2f %12.2f %10zu\n",
-                            label.c_str(), scene.PrimitiveCount(), m.name, best.totalS * 1e3,
-                            best.drawS * 1e3, best.readbackS * 1e3,
-                            double(counted.fragments) / pixels, double(counted.tested) / pixels,
-                            mismatch);
-                std::fflush(stdout);
-            }
-        }
+        return Compare(argc, argv);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "raster_bench: %s\n", e.what());
         return 1;
     }
-    return 0;
 }

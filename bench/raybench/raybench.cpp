@@ -34,6 +34,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <functional>
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -42,6 +44,7 @@
 #include "micro_kernels.h"
 #include "rayclass/classify/params.h"
 #include "rayclass/clrt/context.h"
+#include "rayclass/render/brute_query.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/device_scene.h"
@@ -119,10 +122,10 @@ struct Bench {
     std::unique_ptr<render::RayQuery> Make(const std::string& method) {
         if (method == "brute") return render::MakeBruteForceQuery(ctx, program, buffers);
         if (method == "bvh") return render::MakeBvhQuery(ctx, program, buffers, scene);
-        if (method.rfind("classify/", 0) == 0) {
-            return render::MakeClassifiedQuery(ctx, program, buffers, scene, params,
-                                               render::ParseKernelStyle(method.substr(9)));
-        }
+        const auto style = method.starts_with("classify/")
+                               ? render::FindChoice(render::kKernelStyles, method.substr(9))
+                               : std::nullopt;
+        if (style) return render::MakeClassifiedQuery(ctx, program, buffers, scene, params, *style);
         throw std::invalid_argument("unknown method '" + method + "'");
     }
 };
@@ -174,20 +177,139 @@ std::vector<float> MicroSoa(const scene::Scene& s, uint32_t n) {
     return soa;
 }
 
-int Micro(int argc, char** argv) {
-    uint32_t nRays = 1u << 18, nPrims = 256;
-    int runs = 5;
-    std::string device = "auto";
+// Applies the OPTION VALUE pairs of argv[2...] through `options`; an unknown option is an
+// error that names it (and its value, when `namesValue`).
+void ParsePairs(int argc, char** argv,
+                const std::map<std::string, std::function<void(const std::string&)>>& options,
+                bool namesValue) {
     for (int i = 2; i + 1 < argc; i += 2) {
-        const std::string a = argv[i], v = argv[i + 1];
-        if (a == "--rays") nRays = uint32_t(std::stoul(v));
-        else if (a == "--prims") nPrims = uint32_t(std::stoul(v));
-        else if (a == "--runs") runs = std::max(1, std::stoi(v));
-        else if (a == "--device") device = v;
-        else throw std::invalid_argument("unknown option " + a);
+        const std::string o = argv[i], v = argv[i + 1];
+        const auto option = options.find(o);
+        if (option == options.end()) {
+            throw std::invalid_argument("unknown option " + o + (namesValue ? " " + v : ""));
+        }
+        option->second(v);
     }
-    if (nPrims % 16 != 0) throw std::invalid_argument("--prims must be a multiple of 16");
-    clrt::Context ctx(device);
+}
+
+// The micro benchmark's random numbers: one stream for a kind's primitives and then its rays.
+struct MicroRandom {
+    std::mt19937 rng{3};
+    std::uniform_real_distribution<float> pos{-1.0f, 1.0f}, off{-0.1f, 0.1f}, rad{0.02f, 0.08f};
+    // Parenthesised, as the benchmark always drew them: the order in which a call's arguments
+    // are evaluated is the compiler's, and braces would fix another.
+    glm::vec3 Point() { return glm::vec3(pos(rng), pos(rng), pos(rng)); }
+};
+
+// `n` primitives of `kind` scattered in [-1,1]^3, small enough that most rays miss most of them.
+scene::Scene MicroScene(const std::string& kind, uint32_t n, MicroRandom& random) {
+    scene::Scene s;
+    s.lights.push_back({glm::vec3(0, 5, 0), glm::vec3(1)});
+    for (uint32_t p = 0; p < n; ++p) {
+        const glm::vec3 c = random.Point();
+        if (kind == "sphere") {
+            s.spheres.push_back({c, random.rad(random.rng), 0, 0});
+        } else if (kind == "quadric") {
+            scene::Quadric q;  // an ellipsoid x^2/a + y^2/b + z^2/c about c, clipped
+            const float r = random.rad(random.rng);
+            q.c = {1, 1,        1,        0,        0,
+                   0, -2 * c.x, -2 * c.y, -2 * c.z, c.x * c.x + c.y * c.y + c.z * c.z - r * r};
+            q.boxMin = c - glm::vec3(r);
+            q.boxMax = c + glm::vec3(r);
+            s.quadrics.push_back(q);
+        } else {
+            auto offset = [&random] {
+                return glm::vec3(random.off(random.rng), random.off(random.rng),
+                                 random.off(random.rng));
+            };
+            scene::Triangle t;
+            const glm::vec3 b = c + offset();
+            t.p = {c, b, c + offset()};
+            s.triangles.push_back(t);
+        }
+    }
+    return s;
+}
+
+// `n` rays from z = -4 towards random points of the box.
+std::vector<RcRay> MicroRays(uint32_t n, MicroRandom& random) {
+    std::vector<RcRay> rays(n);
+    for (uint32_t i = 0; i < n; ++i) {
+        bench::BenchRay r;
+        r.origin = glm::vec3(0, 0, -4);
+        r.direction = glm::normalize(random.Point() - r.origin);
+        r.tMax = INFINITY;
+        rays[i] = ToRc(r);
+    }
+    return rays;
+}
+
+struct MicroCase {
+    std::string kind;
+    uint32_t nRays, nPrims;
+    int runs;
+
+    void Report(std::string method, std::vector<double> times, uint64_t hits) const {
+        const double med = Median(times);
+        std::sort(times.begin(), times.end());
+        std::replace(method.begin(), method.end(), '_', '-');
+        std::printf("%s,%s,%u,%.6g,%.6g,%.6g,%.4g,%.4g,%llu\n", kind.c_str(), method.c_str(), nRays,
+                    med, times.front(), times.back(), nRays / med * 1e-6,
+                    double(nRays) * nPrims / med, (unsigned long long)hits);
+        std::fflush(stdout);
+    }
+};
+
+// The renderer's brute-force kernel on `rays` (run 0 is the warm-up).
+void MicroBrute(clrt::Context& ctx, const scene::Scene& s, const std::vector<RcRay>& rays,
+                const MicroCase& c) {
+    Bench b(ctx, s, "");
+    const cl::Buffer raysBuf = Upload(ctx, rays);
+    const cl::Buffer hits = Device(ctx, c.nRays * sizeof(RcHit));
+    auto q = b.Make("brute");
+    std::vector<double> times;
+    for (int r = 0; r <= c.runs; ++r) {
+        render::KernelTimer timer;
+        q->Intersect(raysBuf, c.nRays, nullptr, hits, {}, timer);
+        if (r > 0) times.push_back(timer.Seconds().begin()->second);
+    }
+    std::vector<RcHit> h(c.nRays);
+    ctx.queue().enqueueReadBuffer(hits, CL_TRUE, 0, c.nRays * sizeof(RcHit), h.data());
+    c.Report("brute-scalar", times,
+             std::count_if(h.begin(), h.end(), [](const RcHit& x) { return x.prim != RC_NO_HIT; }));
+}
+
+// The same primitives in SoA for the variants of micro_kernels.h (run 0 is the warm-up).
+void MicroVariants(clrt::Context& ctx, const cl::Program& micro, const scene::Scene& s,
+                   const std::vector<RcRay>& rays, const MicroCase& c) {
+    std::vector<rc_float4> orig(c.nRays), dir(c.nRays);
+    for (uint32_t i = 0; i < c.nRays; ++i) {
+        orig[i] = rays[i].origin;
+        dir[i] = rays[i].direction;
+    }
+    const cl::Buffer primsBuf = Upload(ctx, MicroSoa(s, c.nPrims)), origBuf = Upload(ctx, orig),
+                     dirBuf = Upload(ctx, dir);
+    const cl::Buffer outT = Device(ctx, c.nRays * sizeof(float)),
+                     outId = Device(ctx, c.nRays * sizeof(uint32_t));
+    for (const char* variant : {"scalar_branch", "scalar_select", "vec16_branch", "vec16_select"}) {
+        cl::Kernel k(micro, (c.kind + "_" + variant).c_str());
+        render::SetArgs(k, origBuf, dirBuf, c.nRays, primsBuf, c.nPrims, outT, outId);
+        std::vector<double> times;
+        for (int r = 0; r <= c.runs; ++r) {
+            const auto t0 = Clock::now();
+            ctx.queue().enqueueNDRangeKernel(
+                k, cl::NullRange, cl::NDRange(clrt::RoundUp(c.nRays, 64)), cl::NDRange(64));
+            ctx.queue().finish();
+            if (r > 0) times.push_back(Since(t0));
+        }
+        std::vector<uint32_t> ids(c.nRays);
+        ctx.queue().enqueueReadBuffer(outId, CL_TRUE, 0, c.nRays * sizeof(uint32_t), ids.data());
+        c.Report(variant, times,
+                 std::count_if(ids.begin(), ids.end(), [](uint32_t x) { return x != ~0u; }));
+    }
+}
+
+cl::Program BuildMicro(const clrt::Context& ctx) {
     cl::Program micro(ctx.context(), bench::kMicroSource);
     try {
         micro.build("-cl-std=CL1.2");
@@ -195,102 +317,206 @@ int Micro(int argc, char** argv) {
         throw std::runtime_error("micro kernels: " +
                                  micro.getBuildInfo<CL_PROGRAM_BUILD_LOG>(ctx.device()));
     }
+    return micro;
+}
+
+int Micro(int argc, char** argv) {
+    MicroCase c{"", 1u << 18, 256, 5};
+    std::string device = "auto";
+    ParsePairs(argc, argv,
+               {{"--rays", [&c](const std::string& v) { c.nRays = uint32_t(std::stoul(v)); }},
+                {"--prims", [&c](const std::string& v) { c.nPrims = uint32_t(std::stoul(v)); }},
+                {"--runs", [&c](const std::string& v) { c.runs = std::max(1, std::stoi(v)); }},
+                {"--device", [&device](const std::string& v) { device = v; }}},
+               /*namesValue=*/false);
+    if (c.nPrims % 16 != 0) throw std::invalid_argument("--prims must be a multiple of 16");
+    clrt::Context ctx(device);
+    const cl::Program micro = BuildMicro(ctx);
     std::printf("kind,method,rays,median_s,min_s,max_s,mrays_s,tests_per_s,hits\n");
     for (const char* kind : {"sphere", "quadric", "triangle"}) {
-        // Primitives scattered in [-1,1]^3, small enough that most rays miss most of them; rays
-        // from z = -4 towards random points of the box.
-        std::mt19937 rng(3);
-        std::uniform_real_distribution<float> pos(-1.0f, 1.0f), off(-0.1f, 0.1f),
-            rad(0.02f, 0.08f);
-        scene::Scene s;
-        s.lights.push_back({glm::vec3(0, 5, 0), glm::vec3(1)});
-        for (uint32_t p = 0; p < nPrims; ++p) {
-            const glm::vec3 c(pos(rng), pos(rng), pos(rng));
-            if (kind[0] == 's') {
-                s.spheres.push_back({c, rad(rng), 0, 0});
-            } else if (kind[0] == 'q') {
-                scene::Quadric q;  // an ellipsoid x^2/a + y^2/b + z^2/c about c, clipped
-                const float r = rad(rng);
-                q.c = {1, 1, 1, 0, 0, 0, -2 * c.x, -2 * c.y, -2 * c.z,
-                       c.x * c.x + c.y * c.y + c.z * c.z - r * r};
-                q.boxMin = c - glm::vec3(r);
-                q.boxMax = c + glm::vec3(r);
-                s.quadrics.push_back(q);
-            } else {
-                scene::Triangle t;
-                t.p = {c, c + glm::vec3(off(rng), off(rng), off(rng)),
-                       c + glm::vec3(off(rng), off(rng), off(rng))};
-                s.triangles.push_back(t);
-            }
-        }
-        Bench b(ctx, s, "");
-        std::vector<RcRay> rays(nRays);
-        std::vector<rc_float4> orig(nRays), dir(nRays);
-        for (uint32_t i = 0; i < nRays; ++i) {
-            bench::BenchRay r;
-            r.origin = glm::vec3(0, 0, -4);
-            r.direction = glm::normalize(glm::vec3(pos(rng), pos(rng), pos(rng)) - r.origin);
-            r.tMax = INFINITY;
-            rays[i] = ToRc(r);
-            orig[i] = rays[i].origin;
-            dir[i] = rays[i].direction;
-        }
-        auto report = [&](const std::string& method, std::vector<double> times, uint64_t hits) {
-            const double med = Median(times);
-            std::sort(times.begin(), times.end());
-            std::printf("%s,%s,%u,%.6g,%.6g,%.6g,%.4g,%.4g,%llu\n", kind, method.c_str(), nRays,
-                        med, times.front(), times.back(), nRays / med * 1e-6,
-                        double(nRays) * nPrims / med, (unsigned long long)hits);
-            std::fflush(stdout);
-        };
-        const cl::Buffer raysBuf = Upload(ctx, rays);
-        const cl::Buffer hits = Device(ctx, nRays * sizeof(RcHit));
-        auto q = b.Make("brute");
-        std::vector<double> times;
-        for (int r = 0; r <= runs; ++r) {  // run 0 is the warm-up
-            render::KernelTimer timer;
-            q->Intersect(raysBuf, nRays, nullptr, hits, {}, timer);
-            if (r > 0) times.push_back(timer.Seconds().begin()->second);
-        }
-        std::vector<RcHit> h(nRays);
-        ctx.queue().enqueueReadBuffer(hits, CL_TRUE, 0, nRays * sizeof(RcHit), h.data());
-        report("brute-scalar", times, std::count_if(h.begin(), h.end(), [](const RcHit& x) {
-                   return x.prim != RC_NO_HIT;
-               }));
-
-        // The same primitives in SoA for the variants of micro_kernels.h.
-        const std::vector<float> soa = MicroSoa(s, nPrims);
-        const cl::Buffer primsBuf = Upload(ctx, soa), origBuf = Upload(ctx, orig),
-                         dirBuf = Upload(ctx, dir);
-        const cl::Buffer outT = Device(ctx, nRays * sizeof(float)),
-                         outId = Device(ctx, nRays * sizeof(uint32_t));
-        for (const char* variant :
-             {"scalar_branch", "scalar_select", "vec16_branch", "vec16_select"}) {
-            cl::Kernel k(micro, (std::string(kind) + "_" + variant).c_str());
-            k.setArg(0, origBuf);
-            k.setArg(1, dirBuf);
-            k.setArg(2, nRays);
-            k.setArg(3, primsBuf);
-            k.setArg(4, nPrims);
-            k.setArg(5, outT);
-            k.setArg(6, outId);
-            times.clear();
-            for (int r = 0; r <= runs; ++r) {
-                const auto t0 = Clock::now();
-                ctx.queue().enqueueNDRangeKernel(
-                    k, cl::NullRange, cl::NDRange(clrt::RoundUp(nRays, 64)), cl::NDRange(64));
-                ctx.queue().finish();
-                if (r > 0) times.push_back(Since(t0));
-            }
-            std::vector<uint32_t> ids(nRays);
-            ctx.queue().enqueueReadBuffer(outId, CL_TRUE, 0, nRays * sizeof(uint32_t), ids.data());
-            std::string method = variant;
-            std::replace(method.begin(), method.end(), '_', '-');
-            report(method, times,
-                   std::count_if(ids.begin(), ids.end(), [](uint32_t x) { return x != ~0u; }));
-        }
+        c.kind = kind;
+        MicroRandom random;
+        const scene::Scene s = MicroScene(kind, c.nPrims, random);
+        const std::vector<RcRay> rays = MicroRays(c.nRays, random);
+        MicroBrute(ctx, s, rays, c);
+        MicroVariants(ctx, micro, s, rays, c);
     }
     return 0;
+}
+
+struct Args {
+    std::string scene, camera = "scene", light = "scene", saveRays, clOptions, device = "auto";
+    uint32_t width = 1024, height = 768, seed = 1, bruteMaxPrims = 5000;
+    int runs = 5, warmup = 1;
+    bool warm = false;
+    std::vector<std::string> kinds{std::begin(bench::kKinds), std::end(bench::kKinds)};
+    std::vector<std::pair<std::string, std::string>> classifyParams;
+    std::vector<std::string> methods{"classify/scalar", "classify/vertex", "classify/fragment",
+                                     "classify/auto", "bvh", "brute"};
+};
+
+Args ParseArgs(int argc, char** argv) {
+    Args a;
+    a.scene = argv[1];
+    auto count = [](uint32_t& field) {
+        return [&field](const std::string& v) { field = uint32_t(std::stoul(v)); };
+    };
+    auto text = [](std::string& field) { return [&field](const std::string& v) { field = v; }; };
+    ParsePairs(argc, argv,
+               {{"--camera", text(a.camera)},
+                {"--light", text(a.light)},
+                {"--width", count(a.width)},
+                {"--height", count(a.height)},
+                {"--runs", [&a](const std::string& v) { a.runs = std::max(1, std::stoi(v)); }},
+                {"--warmup", [&a](const std::string& v) { a.warmup = std::max(0, std::stoi(v)); }},
+                {"--methods", [&a](const std::string& v) { a.methods = Split(v); }},
+                {"--kinds", [&a](const std::string& v) { a.kinds = Split(v); }},
+                {"--brute-max-prims", count(a.bruteMaxPrims)},
+                {"--save-rays", text(a.saveRays)},
+                {"--cl-options", text(a.clOptions)},
+                {"--device", text(a.device)},
+                {"--seed", count(a.seed)},
+                {"--warm", [&a](const std::string& v) { a.warm = v == "1"; }},
+                {"--classify",
+                 [&a](const std::string& v) {
+                     if (v.find('=') == std::string::npos) {
+                         throw std::invalid_argument("unknown option --classify " + v);
+                     }
+                     a.classifyParams.emplace_back(v.substr(0, v.find('=')),
+                                                   v.substr(v.find('=') + 1));
+                 }}},
+               /*namesValue=*/true);
+    return a;
+}
+
+// The eye rays' hits, by the BVH query (identical to brute force).
+std::vector<bench::BenchHit> EyeHits(Bench& b, const std::vector<bench::BenchRay>& eye) {
+    std::vector<RcRay> eyeRc(eye.size());
+    for (size_t i = 0; i < eye.size(); ++i) eyeRc[i] = ToRc(eye[i]);
+    const cl::Buffer raysBuf = Upload(b.ctx, eyeRc);
+    const cl::Buffer hits = Device(b.ctx, eye.size() * sizeof(RcHit));
+    render::KernelTimer timer;
+    b.Make("bvh")->Intersect(raysBuf, uint32_t(eye.size()), nullptr, hits, {}, timer);
+    std::vector<RcHit> h(eye.size());
+    clrt::Check("clEnqueueReadBuffer", [&] {
+        b.ctx.queue().enqueueReadBuffer(hits, CL_TRUE, 0, h.size() * sizeof(RcHit), h.data());
+    });
+    std::vector<bench::BenchHit> out(eye.size());
+    for (size_t i = 0; i < h.size(); ++i) out[i] = {h[i].t, h[i].prim};
+    return out;
+}
+
+// One kind's rays on the device, and what its queries write.
+struct KindRays {
+    int kind = 0;
+    bool shadow = false;
+    uint32_t n = 0;
+    std::vector<RcRay> rays;
+    render::ShadeBuffers shade;
+    cl::Buffer raysBuf, out;
+    const RcCamera* camera = nullptr;  // eye rays come with their camera, as in the renderer
+};
+
+KindRays UploadKind(clrt::Context& ctx, const std::vector<bench::BenchRay>& set, int k,
+                    uint32_t nLights, const RcCamera& eyeCamera) {
+    KindRays kr;
+    kr.kind = k;
+    kr.shadow = bench::IsShadowKind(k);
+    kr.n = uint32_t(set.size());
+    kr.shade = render::MakeShadeBuffers(ctx, kr.n, nLights);
+    for (const auto& r : set) kr.rays.push_back(ToRc(r));
+    kr.raysBuf = Upload(ctx, kr.rays);
+    if (k == 0) kr.camera = &eyeCamera;
+    // Eye rays have no infos, as in the renderer (rc_types.h).
+    if (!kr.shadow && k != 0) {
+        const uint32_t kind = k == 3 ? RC_RAY_REFRACTION : RC_RAY_REFLECTION;
+        kr.shade.rayInfo = Upload(ctx, std::vector<RcRayInfo>(kr.n, InfoOf(kind)));
+    }
+    kr.out = Device(ctx, size_t(kr.n) * (kr.shadow ? 1 : sizeof(RcHit)));
+    return kr;
+}
+
+// The query stage on the kind's rays: the primitive tests done.
+uint64_t Query(render::RayQuery& q, const KindRays& kr, cl::CommandQueue& queue,
+               render::KernelTimer& timer) {
+    if (kr.shadow) return q.Occluded(kr.raysBuf, kr.rays, kr.out, timer);
+    render::RaySource source;
+    source.camera = kr.camera;
+    std::unique_ptr<render::PreparedBatch> prepared = q.Prepare(kr.raysBuf, kr.n, queue, source);
+    const uint64_t tests =
+        q.Intersect(kr.raysBuf, kr.n, prepared.get(), kr.out, kr.shade, timer).tests;
+    q.Recycle(std::move(prepared));
+    return tests;
+}
+
+// Seconds per measured run: wall (without shading), host, copy, kernel, shading and setup.
+struct Timings {
+    std::vector<double> wall, host, copy, kern, shade, setup;
+    uint64_t tests = 0;
+};
+
+Timings Measure(Bench& b, const Args& a, const std::string& method, const KindRays& kr) {
+    Timings t;
+    std::unique_ptr<render::RayQuery> q;
+    double setupS = 0;
+    for (int r = 0; r < a.warmup + a.runs; ++r) {
+        const auto ts = Clock::now();
+        if (!a.warm || !q) {
+            q = b.Make(method);
+            setupS = Since(ts);
+        } else {
+            q->Reset();
+        }
+        render::KernelTimer timer;
+        const double host0 = q->Stats().hostSeconds;
+        const auto tq = Clock::now();
+        t.tests = Query(*q, kr, b.ctx.queue(), timer);
+        b.ctx.queue().finish();
+        const double w = Since(tq);
+        double ks = 0, ss = 0;
+        for (const auto& [name, s] : timer.Seconds()) {
+            (name == "rc_shade_ids" || name == "rc_shade_lights" ? ss : ks) += s;
+        }
+        const double hs = q->Stats().hostSeconds - host0;
+        if (r < a.warmup) continue;
+        t.wall.push_back(w - ss);
+        t.host.push_back(hs);
+        t.kern.push_back(ks);
+        t.shade.push_back(ss);
+        t.copy.push_back(std::max(0.0, w - ss - hs - ks));
+        t.setup.push_back(setupS);
+    }
+    return t;
+}
+
+// Rays that hit or are blocked (outside the timing): equal across methods.
+uint64_t CountHits(clrt::Context& ctx, const KindRays& kr) {
+    uint64_t hits = 0;
+    if (kr.shadow) {
+        std::vector<uint8_t> blocked(kr.n);
+        clrt::Check("clEnqueueReadBuffer", [&] {
+            ctx.queue().enqueueReadBuffer(kr.out, CL_TRUE, 0, kr.n, blocked.data());
+        });
+        for (uint8_t x : blocked) hits += x != 0;
+        return hits;
+    }
+    std::vector<RcHit> h(kr.n);
+    clrt::Check("clEnqueueReadBuffer", [&] {
+        ctx.queue().enqueueReadBuffer(kr.out, CL_TRUE, 0, kr.n * sizeof(RcHit), h.data());
+    });
+    for (const auto& x : h) hits += x.prim != RC_NO_HIT;
+    return hits;
+}
+
+void PrintRow(const KindRays& kr, const std::string& method, const Timings& t, uint64_t hits) {
+    const double med = Median(t.wall);
+    std::printf("%s,%s,%u,%.6g,%.6g,%.6g,%.4g,%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%llu\n",
+                bench::kKinds[kr.kind], method.c_str(), kr.n, med,
+                *std::min_element(t.wall.begin(), t.wall.end()),
+                *std::max_element(t.wall.begin(), t.wall.end()), kr.n / med * 1e-6, Median(t.host),
+                Median(t.copy), Median(t.kern), Median(t.shade), Median(t.setup),
+                double(t.tests) / kr.n, (unsigned long long)hits);
+    std::fflush(stdout);
 }
 
 }  // namespace
@@ -298,173 +524,48 @@ int Micro(int argc, char** argv) {
 int main(int argc, char** argv) try {
     if (argc >= 2 && std::string(argv[1]) == "--micro") return Micro(argc, argv);
     if (argc < 2 || argv[1][0] == '-') {
-        std::fprintf(stderr, "usage: raybench SCENE --camera NAME --light SPEC [options] | "
-                             "raybench --micro [options] (see bench/raybench/raybench.cpp)\n");
+        std::fprintf(stderr,
+                     "usage: raybench SCENE --camera NAME --light SPEC [options] | "
+                     "raybench --micro [options] (see bench/raybench/raybench.cpp)\n");
         return 2;
     }
-    std::string camera = "scene", light = "scene", saveRays, clOptions, device = "auto";
-    uint32_t width = 1024, height = 768, seed = 1, bruteMaxPrims = 5000;
-    int runs = 5, warmup = 1;
-    bool warm = false;
-    std::vector<std::string> kinds(std::begin(bench::kKinds), std::end(bench::kKinds));
-    std::vector<std::pair<std::string, std::string>> classifyParams;
-    std::vector<std::string> methods{"classify/scalar", "classify/vertex", "classify/fragment",
-                                     "classify/auto", "bvh", "brute"};
-    for (int i = 2; i + 1 < argc; i += 2) {
-        const std::string a = argv[i], v = argv[i + 1];
-        if (a == "--camera") camera = v;
-        else if (a == "--light") light = v;
-        else if (a == "--width") width = uint32_t(std::stoul(v));
-        else if (a == "--height") height = uint32_t(std::stoul(v));
-        else if (a == "--runs") runs = std::max(1, std::stoi(v));
-        else if (a == "--warmup") warmup = std::max(0, std::stoi(v));
-        else if (a == "--methods") methods = Split(v);
-        else if (a == "--kinds") kinds = Split(v);
-        else if (a == "--brute-max-prims") bruteMaxPrims = uint32_t(std::stoul(v));
-        else if (a == "--save-rays") saveRays = v;
-        else if (a == "--cl-options") clOptions = v;
-        else if (a == "--device") device = v;
-        else if (a == "--seed") seed = uint32_t(std::stoul(v));
-        else if (a == "--warm")
-            warm = v == "1";
-        else if (a == "--classify" && v.find('=') != std::string::npos)
-            classifyParams.emplace_back(v.substr(0, v.find('=')), v.substr(v.find('=') + 1));
-        else
-            throw std::invalid_argument("unknown option " + a + " " + v);
-    }
-
+    const Args a = ParseArgs(argc, argv);
     auto t0 = Clock::now();
-    const scene::Scene sc = scene::LoadScene(argv[1]);
+    const scene::Scene sc = scene::LoadScene(a.scene);
     const double loadS = Since(t0);
-    clrt::Context ctx(device);
+    clrt::Context ctx(a.device);
     t0 = Clock::now();
-    Bench b(ctx, sc, clOptions);
-    for (const auto& [name, value] : classifyParams) classify::SetParam(b.params, name, value);
+    Bench b(ctx, sc, a.clOptions);
+    for (const auto& [name, value] : a.classifyParams) classify::SetParam(b.params, name, value);
     const double buildS = Since(t0);
-    auto& queue = ctx.queue();
 
-    // Eye rays and their hits (BVH), then the secondary sets.
-    const scene::Camera cam = bench::NamedCamera(sc, camera, width, height);
-    const glm::vec3 lightPos = bench::NamedLight(sc, light);
+    // Eye rays and their hits, then the secondary sets.
+    const scene::Camera cam = bench::NamedCamera(sc, a.camera, a.width, a.height);
+    const glm::vec3 lightPos = bench::NamedLight(sc, a.light);
     const std::vector<bench::BenchRay> eye = bench::EyeRays(cam);
     const RcCamera eyeCamera = render::CameraBasis(cam).ToDevice();
-    std::vector<RcRay> eyeRc(eye.size());
-    for (size_t i = 0; i < eye.size(); ++i) eyeRc[i] = ToRc(eye[i]);
-    std::vector<bench::BenchHit> eyeHits(eye.size());
-    {
-        const cl::Buffer raysBuf = Upload(ctx, eyeRc);
-        const cl::Buffer hits = Device(ctx, eye.size() * sizeof(RcHit));
-        render::KernelTimer timer;
-        b.Make("bvh")->Intersect(raysBuf, uint32_t(eye.size()), nullptr, hits, {}, timer);
-        std::vector<RcHit> h(eye.size());
-        clrt::Check("clEnqueueReadBuffer", [&] {
-            queue.enqueueReadBuffer(hits, CL_TRUE, 0, h.size() * sizeof(RcHit), h.data());
-        });
-        for (size_t i = 0; i < h.size(); ++i) eyeHits[i] = {h[i].t, h[i].prim};
-    }
-    const bench::RaySets sets = bench::MakeRaySets(sc, eye, eyeHits, lightPos, seed);
-    if (!saveRays.empty()) bench::SaveRaySets(saveRays, sets);
+    const bench::RaySets sets = bench::MakeRaySets(sc, eye, EyeHits(b, eye), lightPos, a.seed);
+    if (!a.saveRays.empty()) bench::SaveRaySets(a.saveRays, sets);
     std::fprintf(stderr,
                  "raybench: %s, %u primitives, camera %s, load %.3f s, program build %.3f s; "
                  "rays eye %zu shadow %zu reflection %zu refraction %zu diffuse %zu\n",
-                 argv[1], sc.PrimitiveCount(), camera.c_str(), loadS, buildS,
-                 sets.sets[0].size(), sets.sets[1].size(), sets.sets[2].size(),
-                 sets.sets[3].size(), sets.sets[4].size());
+                 a.scene.c_str(), sc.PrimitiveCount(), a.camera.c_str(), loadS, buildS,
+                 sets.sets[0].size(), sets.sets[1].size(), sets.sets[2].size(), sets.sets[3].size(),
+                 sets.sets[4].size());
 
     std::printf("kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,"
                 "setup_s,tests_per_ray,hits\n");
     const uint32_t nLights = std::max<uint32_t>(1, uint32_t(sc.lights.size()));
     for (int k = 0; k < bench::kNumKinds; ++k) {
         const auto& set = sets.sets[k];
-        const uint32_t n = uint32_t(set.size());
-        if (n == 0 || std::find(kinds.begin(), kinds.end(), bench::kKinds[k]) == kinds.end())
+        if (set.empty() ||
+            std::find(a.kinds.begin(), a.kinds.end(), bench::kKinds[k]) == a.kinds.end())
             continue;
-        const bool shadow = bench::IsShadowKind(k);
-        std::vector<RcRay> rays;
-        std::vector<RcRayInfo> info;
-        cl::Buffer raysBuf;
-        render::ShadeBuffers shade = render::MakeShadeBuffers(ctx, n, nLights);
-        if (shadow) {
-            for (const auto& r : set) rays.push_back(ToRc(r));
-            raysBuf = Upload(ctx, rays);
-        } else {
-            const uint32_t kind = k == 0 ? RC_RAY_EYE : (k == 3 ? RC_RAY_REFRACTION : RC_RAY_REFLECTION);
-            for (uint32_t i = 0; i < n; ++i) {
-                rays.push_back(ToRc(set[i]));
-                if (kind != RC_RAY_EYE) info.push_back(InfoOf(kind));
-            }
-            raysBuf = Upload(ctx, rays);
-            // Eye rays have no infos, as in the renderer (rc_types.h).
-            if (kind != RC_RAY_EYE) shade.rayInfo = Upload(ctx, info);
-        }
-        const cl::Buffer out = Device(ctx, size_t(n) * (shadow ? 1 : sizeof(RcHit)));
-
-        for (const std::string& method : methods) {
-            if (method == "brute" && sc.PrimitiveCount() > bruteMaxPrims) continue;
-            std::vector<double> wall, host, copy, kern, shadeS, setup;
-            uint64_t tests = 0;
-            std::unique_ptr<render::RayQuery> q;
-            double setupS = 0;
-            for (int r = 0; r < warmup + runs; ++r) {
-                const auto ts = Clock::now();
-                if (!warm || !q) {
-                    q = b.Make(method);
-                    setupS = Since(ts);
-                } else {
-                    q->Reset();
-                }
-                render::KernelTimer timer;
-                const double host0 = q->HostSeconds();
-                const auto tq = Clock::now();
-                if (shadow) {
-                    tests = q->Occluded(raysBuf, rays, out, timer);
-                } else {
-                    // Eye rays come with their camera, as in the renderer.
-                    render::RaySource source;
-                    if (k == 0) source.camera = &eyeCamera;
-                    std::unique_ptr<render::PreparedBatch> prepared =
-                        q->Prepare(raysBuf, n, queue, source);
-                    tests = q->Intersect(raysBuf, n, prepared.get(), out, shade, timer).tests;
-                    q->Recycle(std::move(prepared));
-                }
-                queue.finish();
-                const double w = Since(tq);
-                double ks = 0, ss = 0;
-                for (const auto& [name, s] : timer.Seconds()) {
-                    (name == "rc_shade_ids" || name == "rc_shade_lights" ? ss : ks) += s;
-                }
-                const double hs = q->HostSeconds() - host0;
-                if (r < warmup) continue;
-                wall.push_back(w - ss);
-                host.push_back(hs);
-                kern.push_back(ks);
-                shadeS.push_back(ss);
-                copy.push_back(std::max(0.0, w - ss - hs - ks));
-                setup.push_back(setupS);
-            }
-            // Hits (outside the timing): equal across methods.
-            uint64_t hits = 0;
-            if (shadow) {
-                std::vector<uint8_t> blocked(n);
-                clrt::Check("clEnqueueReadBuffer", [&] {
-                    queue.enqueueReadBuffer(out, CL_TRUE, 0, n, blocked.data());
-                });
-                for (uint8_t x : blocked) hits += x != 0;
-            } else {
-                std::vector<RcHit> h(n);
-                clrt::Check("clEnqueueReadBuffer", [&] {
-                    queue.enqueueReadBuffer(out, CL_TRUE, 0, n * sizeof(RcHit), h.data());
-                });
-                for (const auto& x : h) hits += x.prim != RC_NO_HIT;
-            }
-            const double med = Median(wall);
-            std::printf("%s,%s,%u,%.6g,%.6g,%.6g,%.4g,%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%llu\n",
-                        bench::kKinds[k], method.c_str(), n, med,
-                        *std::min_element(wall.begin(), wall.end()),
-                        *std::max_element(wall.begin(), wall.end()), n / med * 1e-6,
-                        Median(host), Median(copy), Median(kern), Median(shadeS), Median(setup),
-                        double(tests) / n, (unsigned long long)hits);
-            std::fflush(stdout);
+        const KindRays kr = UploadKind(ctx, set, k, nLights, eyeCamera);
+        for (const std::string& method : a.methods) {
+            if (method == "brute" && sc.PrimitiveCount() > a.bruteMaxPrims) continue;
+            const Timings t = Measure(b, a, method, kr);
+            PrintRow(kr, method, t, CountHits(ctx, kr));
         }
     }
     return 0;

@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <utility>
 
 #include "rayclass/core/error.h"
 
@@ -55,63 +56,97 @@ float ParseFloat(const std::string& name, const std::string& value, float lo, fl
     return v;
 }
 
+SplitRule ParseSplitRule(const std::string& name, const std::string& value) {
+    if (value == "midpoint") return SplitRule::kMidpoint;
+    if (value == "median") return SplitRule::kMedian;
+    Bad(name, value, "midpoint or median");
+}
+
+int ParseLightCells(const std::string& name, const std::string& value) {
+    if (value == "auto") return -1;
+    if (value == "off") return 0;
+    const char* s = value.c_str();
+    char* end = nullptr;
+    const long v = std::strtol(s, &end, 10);
+    if (value.empty() || *end != '\0' || !std::isdigit(static_cast<unsigned char>(s[0])) || v < 4 ||
+        v > 256 || (v & (v - 1)) != 0) {
+        Bad(name, value, "auto, off or a power of two from 4 to 256");
+    }
+    return int(v);
+}
+
+template <typename T>
+ParamSetting Set(T Params::*member, T value) {
+    return {ParamSetting::Field<T>{member, value}};
+}
+
+template <uint32_t Params::*member, uint32_t min>
+ParamSetting Count(const std::string& name, const std::string& value) {
+    return Set(member, ParseCount(name, value, min));
+}
+
+template <float Params::*member>
+ParamSetting Fraction(const std::string& name, const std::string& value) {
+    return Set(member, ParseFloat(name, value, 0.0f, 1.0f, false, "a number in [0, 1]"));
+}
+
+using Parser = ParamSetting (*)(const std::string& name, const std::string& value);
+
+// Every parameter's name and parser, in the order ParamNames lists them.
+const std::pair<const char*, Parser> kParsers[] = {
+    {"min-rays", Count<&Params::minRays, 0>},
+    {"min-candidates", Count<&Params::minCandidates, 0>},
+    {"splits-per-list",
+     [](const std::string& n, const std::string& v) {
+         return Set(&Params::splitsPerList, int(std::min<uint32_t>(ParseCount(n, v, 1), 64)));
+     }},
+    {"split", [](const std::string& n,
+                 const std::string& v) { return Set(&Params::splitRule, ParseSplitRule(n, v)); }},
+    {"min-origin-fraction", Fraction<&Params::minOriginFraction>},
+    {"min-dir-fraction", Fraction<&Params::minDirFraction>},
+    {"dir-weight",
+     [](const std::string& n, const std::string& v) {
+         return Set(&Params::dirWeight, ParseFloat(n, v, 0.0f, 1e30f, true, "a number > 0"));
+     }},
+    {"threads",
+     [](const std::string& n, const std::string& v) {
+         return Set(&Params::threads, std::min<uint32_t>(ParseCount(n, v, 0), 256));
+     }},
+    {"task-rays", Count<&Params::taskRays, 0>},
+    {"plan-rays", Count<&Params::planRays, 0>},
+    {"light-cells",
+     [](const std::string& n, const std::string& v) {
+         return Set(&Params::lightCells, ParseLightCells(n, v));
+     }},
+    {"vertex-gather",
+     [](const std::string& n, const std::string& v) {
+         return Set(&Params::vertexGatherCost,
+                    ParseFloat(n, v, 0.0f, 1e30f, false, "a number >= 0"));
+     }},
+};
+
 }  // namespace
 
 const char* ParamNames() {
-    return "min-rays, min-candidates, splits-per-list, split, min-origin-fraction, "
-           "min-dir-fraction, dir-weight, threads, task-rays, plan-rays, light-cells, "
-           "vertex-gather";
+    static const std::string names = [] {
+        std::string list;
+        for (const auto& [name, parse] : kParsers)
+            list += (list.empty() ? "" : ", ") + std::string(name);
+        return list;
+    }();
+    return names.c_str();
+}
+
+ParamSetting ParseParam(const std::string& name, const std::string& value) {
+    for (const auto& [known, parse] : kParsers) {
+        if (name == known) return parse(name, value);
+    }
+    throw UsageError("unknown classify parameter '" + name +
+                     "'; valid names: " + std::string(ParamNames()));
 }
 
 void SetParam(Params& params, const std::string& name, const std::string& value) {
-    if (name == "min-rays") {
-        params.minRays = ParseCount(name, value, 0);
-    } else if (name == "min-candidates") {
-        params.minCandidates = ParseCount(name, value, 0);
-    } else if (name == "splits-per-list") {
-        params.splitsPerList = int(std::min<uint32_t>(ParseCount(name, value, 1), 64));
-    } else if (name == "split") {
-        if (value == "midpoint") {
-            params.splitRule = SplitRule::kMidpoint;
-        } else if (value == "median") {
-            params.splitRule = SplitRule::kMedian;
-        } else {
-            Bad(name, value, "midpoint or median");
-        }
-    } else if (name == "min-origin-fraction") {
-        params.minOriginFraction =
-            ParseFloat(name, value, 0.0f, 1.0f, false, "a number in [0, 1]");
-    } else if (name == "min-dir-fraction") {
-        params.minDirFraction = ParseFloat(name, value, 0.0f, 1.0f, false, "a number in [0, 1]");
-    } else if (name == "dir-weight") {
-        params.dirWeight = ParseFloat(name, value, 0.0f, 1e30f, true, "a number > 0");
-    } else if (name == "task-rays") {
-        params.taskRays = ParseCount(name, value, 0);
-    } else if (name == "plan-rays") {
-        params.planRays = ParseCount(name, value, 0);
-    } else if (name == "light-cells") {
-        if (value == "auto") {
-            params.lightCells = -1;
-        } else if (value == "off") {
-            params.lightCells = 0;
-        } else {
-            const char* s = value.c_str();
-            char* end = nullptr;
-            const long v = std::strtol(s, &end, 10);
-            if (value.empty() || *end != '\0' || !std::isdigit(static_cast<unsigned char>(s[0])) ||
-                v < 4 || v > 256 || (v & (v - 1)) != 0) {
-                Bad(name, value, "auto, off or a power of two from 4 to 256");
-            }
-            params.lightCells = int(v);
-        }
-    } else if (name == "vertex-gather") {
-        params.vertexGatherCost = ParseFloat(name, value, 0.0f, 1e30f, false, "a number >= 0");
-    } else if (name == "threads") {
-        params.threads = std::min<uint32_t>(ParseCount(name, value, 0), 256);
-    } else {
-        throw UsageError("unknown classify parameter '" + name + "'; valid names: " +
-                         std::string(ParamNames()));
-    }
+    ParseParam(name, value).ApplyTo(params);
 }
 
 }  // namespace rayclass::classify

@@ -6,6 +6,7 @@
 #include <string_view>
 #include <utility>
 
+#include "rayclass/cli/option_table.h"
 #include "rayclass/core/error.h"
 #include "rayclass/image/compare.h"
 #include "rayclass/image/image.h"
@@ -14,17 +15,15 @@ namespace rayclass::cli {
 
 namespace {
 
-constexpr std::string_view kUsage =
+constexpr std::string_view kUsageHead =
     "usage: rayclass compare A B [--max-rmse X] [--max-id-mismatch FRACTION] [--json]\n"
     "\n"
     "Compares two images (OpenEXR, or PNG decoded to linear) over their R, G and B values and\n"
     "prints mean_abs_error, rmse, psnr_db (peak 1.0, inf when identical) and max_abs_error, plus\n"
     "id_mismatch_pixels and id_mismatch_fraction when both images carry an id layer.\n"
-    "\n"
-    "  --max-rmse X                exit 1 when rmse exceeds X\n"
-    "  --max-id-mismatch FRACTION  exit 1 when a larger fraction of pixels have different ids\n"
-    "  --json                      print one JSON object instead (infinite values as null)\n"
-    "  --help                      print this help\n"
+    "\n";
+
+constexpr std::string_view kUsageTail =
     "\n"
     "Exit status: 0 within the bounds, 1 a bound exceeded or the sizes differ, 2 bad arguments\n"
     "or an unreadable image.\n";
@@ -54,28 +53,34 @@ double ParseBound(const std::string& option, const std::string& text) {
     return value;
 }
 
+OptionTable CompareOptionTable(Options& o) {
+    return OptionTable(
+        {
+            {{"--max-rmse"},
+             "X",
+             "exit 1 when rmse exceeds X",
+             [&o](const std::string& opt, const std::string& v) {
+                 o.maxRmse = ParseBound(opt, v);
+             }},
+            {{"--max-id-mismatch"},
+             "FRACTION",
+             "exit 1 when a larger fraction of pixels have different ids",
+             [&o](const std::string& opt, const std::string& v) {
+                 o.maxIdMismatch = ParseBound(opt, v);
+             }},
+            {{"--json"},
+             "",
+             "print one JSON object instead (infinite values as null)",
+             Flag(o.json)},
+            {{"--help"}, "", "print this help", Flag(o.help), {"-h"}},
+        },
+        "", /*dashIsOperand=*/true);
+}
+
 Options ParseArgs(const std::vector<std::string>& args) {
     Options options;
-    for (size_t i = 0; i < args.size(); ++i) {
-        const std::string& arg = args[i];
-        auto value = [&]() -> const std::string& {
-            if (i + 1 == args.size()) throw UsageError(arg + " needs a value");
-            return args[++i];
-        };
-        if (arg == "--help" || arg == "-h") {
-            options.help = true;
-        } else if (arg == "--json") {
-            options.json = true;
-        } else if (arg == "--max-rmse") {
-            options.maxRmse = ParseBound(arg, value());
-        } else if (arg == "--max-id-mismatch") {
-            options.maxIdMismatch = ParseBound(arg, value());
-        } else if (arg.size() > 1 && arg[0] == '-') {
-            throw UsageError("unknown option '" + arg + "'");
-        } else {
-            options.files.push_back(arg);
-        }
-    }
+    CompareOptionTable(options).Parse(
+        args, [&options](const std::string& file) { options.files.push_back(file); });
     if (!options.help && options.files.size() != 2) {
         throw UsageError("expected two image files, got " + std::to_string(options.files.size()));
     }
@@ -120,7 +125,8 @@ int CompareCommand(const std::vector<std::string>& args, std::ostream& out, std:
         return 2;
     }
     if (options.help) {
-        out << kUsage;
+        Options unused;
+        out << kUsageHead << CompareOptionTable(unused).Help(28) << kUsageTail;
         return 0;
     }
     image::Image a;

@@ -121,25 +121,11 @@ std::vector<std::string> DepthWarnings(const scene::Scene& scene, const glm::vec
 }
 
 Hull ParseHull(const std::string& name) {
-    if (name == "sphere") return Hull::Sphere;
-    if (name == "box") return Hull::Box;
-    if (name == "billboard") return Hull::Billboard;
-    if (name == "auto") return Hull::Auto;
+    if (const auto hull = render::FindChoice(kHulls, name)) return *hull;
     throw UsageError("unknown hull '" + name + "' (use sphere, box, billboard or auto)");
 }
 
-const char* HullName(Hull hull) {
-    switch (hull) {
-        case Hull::Sphere:
-            return "sphere";
-        case Hull::Box:
-            return "box";
-        case Hull::Billboard:
-            return "billboard";
-        default:
-            return "auto";
-    }
-}
+const char* HullName(Hull hull) { return render::NameOf(kHulls, hull).data(); }
 
 RasterPass::RasterPass(GlContext& gl, const scene::Scene& scene, const RasterOptions& options)
     : gl_(gl), options_(options) {
@@ -274,10 +260,36 @@ void RasterPass::PrepareSlabs(const RcCamera& camera) {
 std::vector<RcHit> RasterPass::Render(const RcCamera& camera, RasterStats* stats) {
     const auto tStart = Clock::now();
     gl_.MakeCurrent();
-    const uint32_t width = camera.width, height = camera.height;
-    EnsureFramebuffer(width, height);
-    const glm::dvec3 eye(camera.position.x, camera.position.y, camera.position.z);
+    EnsureFramebuffer(camera.width, camera.height);
+    const Programs programs = SetUpPrograms(camera);
+    ClearTargets();
+    const auto tDraw = Clock::now();
+    const double uploadS = SecondsSince(tStart);
+    Draw(programs);
+    const double drawS = SecondsSince(tDraw);
+    const auto tRead = Clock::now();
+    std::vector<RcHit> hits = ReadHits();
+    const double readbackS = SecondsSince(tRead);
+    if (stats) {
+        stats->uploadS = uploadS;
+        stats->drawS = drawS;
+        stats->readbackS = readbackS;
+        stats->depthScale = depthScale_;
+        if (options_.countFragments) {
+            GLuint counts[3] = {0, 0, 0};
+            glGetNamedBufferSubData(counters_.get(), 0, sizeof counts, counts);
+            stats->fragments = counts[0];
+            stats->tested = counts[1];
+            stats->exactHits = counts[2];
+        }
+        stats->totalS = SecondsSince(tStart);
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    return hits;
+}
 
+RasterPass::Programs RasterPass::SetUpPrograms(const RcCamera& camera) {
+    const glm::dvec3 eye(camera.position.x, camera.position.y, camera.position.z);
     const double maxDist = FarthestDistance(bounds_, eye);
     depthScale_ = ResolveDepthScale(options_, maxDist);
     const double diagonal = bounds_.Empty() ? 0.0 : double(bounds_.Diagonal());
@@ -290,7 +302,7 @@ std::vector<RcHit> RasterPass::Render(const RcCamera& camera, RasterStats* stats
         options_.hull == Hull::Auto ? Hull::Sphere : options_.hull,
         options_.hull == Hull::Auto ? Hull::Box : options_.hull,
     };
-    GLuint programs[3];
+    Programs programs;
     for (int k = 0; k < 3; ++k) {
         programs[k] = count_[k] ? Program(Kind(k), hulls[k], slabPass) : 0;
         const GLuint p = programs[k];
@@ -302,7 +314,7 @@ std::vector<RcHit> RasterPass::Render(const RcCamera& camera, RasterStats* stats
         glProgramUniform3f(p, loc("uRight"), camera.right.x, camera.right.y, camera.right.z);
         glProgramUniform3f(p, loc("uUp"), camera.up.x, camera.up.y, camera.up.z);
         glProgramUniform2f(p, loc("uTanHalfFov"), camera.tanHalfFovX, camera.tanHalfFovY);
-        glProgramUniform2ui(p, loc("uSize"), width, height);
+        glProgramUniform2ui(p, loc("uSize"), camera.width, camera.height);
         glProgramUniform1f(p, loc("uDepthScale"), float(depthScale_));
         glProgramUniform1f(p, loc("uZNear"), zNear);
         glProgramUniform1f(p, loc("uMargin"), kMarginPixels);
@@ -310,9 +322,12 @@ std::vector<RcHit> RasterPass::Render(const RcCamera& camera, RasterStats* stats
         if (slabPass) glProgramUniform1i(p, loc("uPrevDepth"), 0);
     }
     CheckGl("setting the camera uniforms");
+    return programs;
+}
 
+void RasterPass::ClearTargets() {
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
-    glViewport(0, 0, GLsizei(width), GLsizei(height));
+    glViewport(0, 0, GLsizei(width_), GLsizei(height_));
     glDisable(GL_CULL_FACE);  // the box hull culls its back faces itself
     glDisable(GL_BLEND);
     glEnable(GL_DEPTH_TEST);
@@ -334,15 +349,16 @@ std::vector<RcHit> RasterPass::Render(const RcCamera& camera, RasterStats* stats
     glBindVertexArray(vao_.get());
     glFinish();
     CheckGl("clearing the raster framebuffer");
-    const auto tDraw = Clock::now();
-    const double uploadS = SecondsSince(tStart);
+}
 
+void RasterPass::Draw(const Programs& programs) {
+    const bool slabPass = options_.slabs > 1;
     const uint32_t nSlabs = slabPass ? options_.slabs : 1;
     for (uint32_t s = 0; s < nSlabs; ++s) {
         if (slabPass) {
             // The nearest hits so far, for the fragment shaders' early skip.
             glCopyImageSubData(depthTex_.get(), GL_TEXTURE_2D, 0, 0, 0, 0, prevDepthTex_.get(),
-                               GL_TEXTURE_2D, 0, 0, 0, 0, GLsizei(width), GLsizei(height), 1);
+                               GL_TEXTURE_2D, 0, 0, 0, 0, GLsizei(width_), GLsizei(height_), 1);
             glBindTextureUnit(0, prevDepthTex_.get());
         }
         for (int k = 0; k < 3; ++k) {
@@ -360,43 +376,26 @@ std::vector<RcHit> RasterPass::Render(const RcCamera& camera, RasterStats* stats
     }
     glFinish();
     CheckGl("drawing the raster pass");
-    const double drawS = SecondsSince(tDraw);
+}
 
-    const auto tRead = Clock::now();
-    const size_t nPixels = size_t(width) * height;
+std::vector<RcHit> RasterPass::ReadHits() {
+    const size_t nPixels = size_t(width_) * height_;
     std::vector<GLuint> ids(nPixels);
     std::vector<GLfloat> dist(nPixels);
     std::vector<GLfloat> uv(2 * nPixels);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
     glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glReadPixels(0, 0, GLsizei(width), GLsizei(height), GL_RED_INTEGER, GL_UNSIGNED_INT,
+    glReadPixels(0, 0, GLsizei(width_), GLsizei(height_), GL_RED_INTEGER, GL_UNSIGNED_INT,
                  ids.data());
     glReadBuffer(GL_COLOR_ATTACHMENT1);
-    glReadPixels(0, 0, GLsizei(width), GLsizei(height), GL_RED, GL_FLOAT, dist.data());
+    glReadPixels(0, 0, GLsizei(width_), GLsizei(height_), GL_RED, GL_FLOAT, dist.data());
     glReadBuffer(GL_COLOR_ATTACHMENT2);
-    glReadPixels(0, 0, GLsizei(width), GLsizei(height), GL_RG, GL_FLOAT, uv.data());
+    glReadPixels(0, 0, GLsizei(width_), GLsizei(height_), GL_RG, GL_FLOAT, uv.data());
     CheckGl("reading back the raster framebuffer");
     std::vector<RcHit> hits(nPixels);
     for (size_t i = 0; i < nPixels; ++i) {
         hits[i] = {dist[i], ids[i], uv[2 * i], uv[2 * i + 1]};
     }
-    const double readbackS = SecondsSince(tRead);
-
-    if (stats) {
-        stats->uploadS = uploadS;
-        stats->drawS = drawS;
-        stats->readbackS = readbackS;
-        stats->depthScale = depthScale_;
-        if (options_.countFragments) {
-            GLuint counts[3] = {0, 0, 0};
-            glGetNamedBufferSubData(counters_.get(), 0, sizeof counts, counts);
-            stats->fragments = counts[0];
-            stats->tested = counts[1];
-            stats->exactHits = counts[2];
-        }
-        stats->totalS = SecondsSince(tStart);
-    }
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
     return hits;
 }
 

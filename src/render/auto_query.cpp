@@ -16,10 +16,9 @@ double SecondsSince(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-// The BVH's sample: runs of consecutive rays spread evenly over the batch, 16384 rays, a few ms
-// of a generation that takes the BVH 0.3-0.6 s on two cores. Runs, because neighbouring rays
-// share the tree's paths through the cache: a sample of every 48th ray came out 30 % dearer
-// per ray than whole generations (Sibenik with mirror rays).
+// The BVH's sample: runs of consecutive rays spread evenly over the batch, a small fraction of a
+// generation's rays. Runs, because neighbouring rays share the tree's paths through the cache: a
+// sample of single rays spread as evenly came out dearer per ray than whole generations.
 constexpr size_t kSampleRuns = 16, kSampleRunRays = 1024;
 
 // One kind of query (nearest hit or shadow) and what its choice is based on.
@@ -50,10 +49,7 @@ class AutoQuery final : public RayQuery {
         : ctx_(ctx), classified_(std::move(classified)), makeBvh_(std::move(makeBvh)) {}
 
     std::string Name() const override { return "auto"; }
-    double HostSeconds() const override { return classified_->HostSeconds(); }
-    uint64_t ShadowRaysFromLight() const override { return classified_->ShadowRaysFromLight(); }
-    uint64_t ShadowRaysInCells() const override { return classified_->ShadowRaysInCells(); }
-    uint64_t EyeRaysFromCamera() const override { return classified_->EyeRaysFromCamera(); }
+    QueryStats Stats() const override { return classified_->Stats(); }
 
     void Reset() override {
         classified_->Reset();
@@ -112,8 +108,8 @@ class AutoQuery final : public RayQuery {
         const uint32_t n = uint32_t(hostRays.size());
         // Shadow rays appear batch by batch: the generation's first batch is sampled, once the
         // nearest-hit sample has built the BVH. Classified from their light, shadow rays stay
-        // cheap, and building the tree for them alone cost more than it saved (Conference: 0.5 s
-        // of build in a render whose shadow rays all stayed classified).
+        // cheap, and building the tree for them alone cost more than it saved (a render whose
+        // shadow rays all stayed classified paid for the build).
         if (bvh_ && !shadow_.onBvh && !shadowSampled_ && shadow_.costs.classified > 0 && n > 0) {
             shadowSampled_ = true;
             Pick(hostRays);
@@ -161,9 +157,8 @@ class AutoQuery final : public RayQuery {
     // Seconds per sample_ ray that run() (the BVH on the uploaded sample, to completion)
     // takes on the otherwise idle device, timed on a run after one that brings the tree back
     // into the caches the classification used, and the first sample of a kind after two: its
-    // first run also compiles the kernel and faults in the tree. Sibenik with mirror rays, ns a
-    // ray on runs after the first: 443, 321, 327 for the first sample, 472, 235, 267 for the
-    // next one; whole generations cost about the lower figures.
+    // first run also compiles the kernel and faults in the tree. The runs after those cost per
+    // ray about what whole generations cost.
     template <typename Run>
     double TimeSample(Choice& choice, const Run& run) {
         clrt::Check("clFinish", [&] { ctx_.queue().finish(); });  // the upload, and nothing else

@@ -1,15 +1,19 @@
 #include "rayclass/render/cl_renderer.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <future>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
 
-#include "rayclass/classify/params.h"
+#include "ray_pages.h"
 #include "rayclass/clrt/mapped.h"
-#include "rayclass/render/auto_query.h"
-#include "rayclass/render/bvh_query.h"
-#include "rayclass/render/classified_query.h"
 #include "rayclass/render/launch.h"
+#include "rayclass/render/query_factory.h"
 
 namespace rayclass::render {
 
@@ -21,109 +25,11 @@ double SecondsSince(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-class BruteForceQuery final : public RayQuery {
-  public:
-    BruteForceQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene)
-        : ctx_(ctx),
-          scene_(scene),
-          intersect_(program, "rc_intersect_brute"),
-          occluded_(program, "rc_occluded_brute") {}
-
-    std::string Name() const override { return "brute"; }
-
-    QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch*,
-                          const cl::Buffer& hits, const ShadeBuffers&,
-                          KernelTimer& timer) override {
-        SetArgs(intersect_, rays, n, scene_.triangles, scene_.spheres, scene_.quadrics,
-                scene_.params, hits);
-        Launch(ctx_, intersect_, n, timer);
-        const auto& p = scene_.hostParams;
-        return {uint64_t(n) * (p.nTriangles + p.nSpheres + p.nQuadrics), false};
-    }
-
-    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
-                      const cl::Buffer& blocked, KernelTimer& timer) override {
-        const uint32_t n = uint32_t(hostRays.size());
-        const cl::Buffer& tests = testsBuffer_.Reserve(ctx_, n * sizeof(uint32_t));
-        SetArgs(occluded_, shadowRays, n, scene_.triangles, scene_.spheres, scene_.quadrics,
-                scene_.params, blocked, tests);
-        Launch(ctx_, occluded_, n, timer);
-        return SumCounters(ctx_, tests, n, tests_);
-    }
-
-  private:
-    clrt::Context& ctx_;
-    const SceneBuffers& scene_;
-    cl::Kernel intersect_, occluded_;
-    GrowingBuffer testsBuffer_;
-    std::vector<uint32_t> tests_;
-};
-
-}  // namespace
-
-void KernelTimer::Record(const std::string& kernel, const cl::Event& event) {
-    event.wait();
-    const auto start = event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
-    const auto end = event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
-    seconds_[kernel] += double(end - start) * 1e-9;
-}
-
-namespace {
-
-// A read-only buffer of convert(item) for each of `items` (one zeroed element when there are
-// none), written in place through a mapping. On a device that shares host memory (PoCL on the
-// CPU) each element is written once: converting into host arrays and creating the buffers from
-// them (CL_MEM_COPY_HOST_PTR) wrote Conference's 37 MB of triangles twice (its one-frame
-// render's transfer_and_other: 40-47 ms that way, 24-33 this way).
-template <typename Items, typename F>
-cl::Buffer ConvertedBuffer(clrt::Context& ctx, const Items& items, F&& convert) {
-    using T = decltype(convert(items[0]));
-    const size_t n = std::max<size_t>(items.size(), 1);
-    cl::Buffer buffer = DeviceBuffer(ctx, n * sizeof(T), CL_MEM_READ_ONLY | CL_MEM_ALLOC_HOST_PTR);
-    T* out = static_cast<T*>(clrt::Check("clEnqueueMapBuffer", [&] {
-        return ctx.queue().enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0,
-                                            n * sizeof(T));
-    }));
-    if (items.empty()) out[0] = T{};
-    for (size_t i = 0; i < items.size(); ++i) out[i] = convert(items[i]);
-    clrt::Check("clEnqueueUnmapMemObject", [&] { ctx.queue().enqueueUnmapMemObject(buffer, out); });
-    return buffer;
-}
-
-}  // namespace
-
-SceneBuffers::SceneBuffers(clrt::Context& ctx, const scene::Scene& scene,
-                           const RcRenderParams& renderParams)
-    : triangles(ConvertedBuffer(ctx, scene.triangles, kToDevice)),
-      triangleShading(ConvertedBuffer(ctx, scene.triangles, ShadingOf)),
-      spheres(ConvertedBuffer(ctx, scene.spheres, kToDevice)),
-      quadrics(ConvertedBuffer(ctx, scene.quadrics, kToDevice)),
-      materials(ConvertedBuffer(ctx, scene.materials, kToDevice)),
-      lights(ConvertedBuffer(ctx, scene.lights, kToDevice)),
-      params(UploadVector(ctx, std::vector<RcRenderParams>{renderParams})),
-      hostParams(renderParams) {}
-
-std::unique_ptr<RayQuery> MakeBruteForceQuery(clrt::Context& ctx, const cl::Program& program,
-                                              const SceneBuffers& scene) {
-    return std::make_unique<BruteForceQuery>(ctx, program, scene);
-}
-
-cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions,
-                               bool* fromCache) {
-    const std::string options = "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
-                                (extraOptions.empty() ? "" : " " + extraOptions);
-    return ctx.BuildProgram({"camera.cl", "intersect.cl", "encoding.cl", "shade.cl",
-                             "generation.cl", "brute.cl", "classified.cl", "bvh.cl"},
-                            options, fromCache);
-}
-
-namespace {
-
 std::string KernelBuildOptions(const RenderOptions& options) {
     std::string out;
     for (const std::string& option :
-         {std::string(options.triangleTest == "watertight" ? "-DRC_WATERTIGHT=1" : ""),
-          std::string(options.rayEncoding == "polar16" ? "-DRC_POLAR16" : ""),
+         {std::string(options.triangleTest == TriangleTest::kWatertight ? "-DRC_WATERTIGHT=1" : ""),
+          std::string(options.rayEncoding == RayEncoding::kPolar16 ? "-DRC_POLAR16" : ""),
           options.buildOptions}) {
         if (option.empty()) continue;
         out += (out.empty() ? "" : " ") + option;
@@ -144,379 +50,467 @@ RcRenderParams MakeRenderParams(const scene::Scene& scene, const RenderOptions& 
     return params;
 }
 
-// The ray query options.accel names; its construction time goes into stats.
-std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& program,
-                                    const SceneBuffers& buffers, const scene::Scene& scene,
-                                    const RenderOptions& options, RenderStats& stats) {
-    if (options.accel == "brute") return MakeBruteForceQuery(ctx, program, buffers);
-    // The caller keeps ctx, program, buffers, scene and stats alive longer than the query.
-    auto makeBvh = [&ctx, &program, &buffers, &scene, &stats] {
-        const auto t0 = Clock::now();
-        auto query = MakeBvhQuery(ctx, program, buffers, scene);
-        stats.timeS["bvh_build"] = SecondsSince(t0);
-        return query;
-    };
-    if (options.accel == "bvh") return makeBvh();
-    const auto t0 = Clock::now();
-    classify::Params params = classify::Params::ForScene(scene);
-    for (const auto& [name, value] : options.classifyParams) {
-        classify::SetParam(params, name, value);
+image::Image NewImage(const CameraBasis& basis, bool aovs) {
+    image::Image img(basis.width, basis.height);
+    if (aovs) {
+        img.depth.assign(img.PixelCount(), std::numeric_limits<float>::infinity());
+        img.id.assign(img.PixelCount(), RC_NO_HIT);
+        img.normal.assign(img.PixelCount(), glm::vec3(0.0f));
     }
-    // The 16-lane kernels are Moeller-Trumbore only: the watertight test runs the scalar style.
-    const KernelStyle style = options.triangleTest == "watertight"
-                                  ? KernelStyle::kScalar
-                                  : ParseKernelStyle(options.kernel);
-    auto query = MakeClassifiedQuery(ctx, program, buffers, scene, params, style);
-    stats.timeS["classify_setup"] = SecondsSince(t0);
-    if (options.accel == "auto") return MakeAutoQuery(ctx, std::move(query), makeBvh);
-    return query;
+    return img;
 }
 
-}  // namespace
-
-ShadeBuffers MakeShadeBuffers(clrt::Context& ctx, size_t rays, uint32_t nLights) {
-    ShadeBuffers shade;
-    shade.radiance = DeviceBuffer(ctx, rays * sizeof(rc_float4));
-    shade.normals = DeviceBuffer(ctx, rays * sizeof(rc_float4));
-    shade.shadow = {DeviceBuffer(ctx, rays * nLights * sizeof(RcRay)),
-                    DeviceBuffer(ctx, rays * nLights * sizeof(rc_float4))};
-    shade.secondary = {
-        DeviceBuffer(ctx, 2 * rays * sizeof(RcRay), CL_MEM_READ_WRITE, Writes::kSome),
-        DeviceBuffer(ctx, 2 * rays * sizeof(RcRayInfo), CL_MEM_READ_WRITE, Writes::kSome)};
-    shade.spawned = DeviceBuffer(ctx, 2 * rays);
-    return shade;
+// The render's program, its build time in stats.
+cl::Program BuildProgram(clrt::Context& ctx, const RenderOptions& options, RenderStats& stats) {
+    const auto t0 = Clock::now();
+    cl::Program program =
+        BuildRenderProgram(ctx, KernelBuildOptions(options), &stats.programFromCache);
+    stats.timeS["program_build"] = SecondsSince(t0);
+    return program;
 }
 
-namespace {
-
-// Kernel times, query time and what no timer covers, once the render is done.
-void FinishStats(RenderStats& stats, const KernelTimer& timer, const RayQuery& query,
-                 double hostSeconds, Clock::time_point tStart) {
-    const auto& ks = timer.Seconds();
-    for (const auto& [name, s] : ks) stats.timeS["kernel_" + name] = s;
-    stats.queryTimeS = query.HostSeconds();
-    stats.shadowRaysFromLight = query.ShadowRaysFromLight();
-    stats.shadowRaysInCells = query.ShadowRaysInCells();
-    stats.eyeRaysFromCamera = query.EyeRaysFromCamera();
-    for (const auto& [name, seconds] : ks) {
+// Kernel times and the ray-query time they and the query's host work add up to.
+void AddKernelTimes(const KernelTimer& timer, const QueryStats& query, RenderStats& stats) {
+    stats.queryTimeS = query.hostSeconds;
+    for (const auto& [name, seconds] : timer.Seconds()) {
+        stats.timeS["kernel_" + name] = seconds;
         if (name.starts_with("rc_query") || name.starts_with("rc_occluded") ||
             name.starts_with("rc_intersect") || name == "rc_gather_blocks") {
             stats.queryTimeS += seconds;
         }
     }
-    stats.timeS["host"] = hostSeconds;
-    if (stats.accel.starts_with("classify") || stats.accel == "auto") {
-        stats.timeS["host_classify"] = query.HostSeconds();
-    }
-    stats.timeS["render"] = SecondsSince(tStart);
-    // What neither the kernels' profiling nor the host timers cover: copies between host and
-    // device, buffer allocation, launch overhead and waiting.
-    double accounted = hostSeconds + query.HostSeconds();
+}
+
+// What neither the kernels' profiling nor the host timers cover of the render: copies between
+// host and device, buffer allocation, launch overhead and waiting.
+void AddOtherTime(const KernelTimer& timer, double hostSeconds, RenderStats& stats) {
+    double accounted = hostSeconds;
     for (const auto& [key, seconds] : stats.timeS) {
         if (key == "program_build" || key == "classify_setup" || key == "bvh_build" ||
             key.starts_with("eye_hits_")) {
             accounted += seconds;
         }
     }
-    for (const auto& [name, seconds] : ks) accounted += seconds;
+    for (const auto& [name, seconds] : timer.Seconds()) accounted += seconds;
     stats.timeS["transfer_and_other"] = std::max(0.0, stats.timeS["render"] - accounted);
 }
 
-// Device pages of rays (both arrays), recycled from generation to generation: a fresh buffer
-// costs its page faults again.
-class PagePool {
+// The device buffers a batch works in, allocated once for the largest batch.
+struct BatchBuffers {
+    BatchBuffers(clrt::Context& ctx, size_t rays, uint32_t nLights)
+        : hits(DeviceBuffer(ctx, rays * sizeof(RcHit))),
+          shade(MakeShadeBuffers(ctx, rays, nLights)),
+          blocked(DeviceBuffer(ctx, rays * nLights)),
+          liveSlots(DeviceBuffer(ctx, 2 * rays * sizeof(uint32_t))) {}
+
+    cl::Buffer hits;       // the nearest hits (RcHit)
+    ShadeBuffers shade;    // what shading reads and writes
+    cl::Buffer blocked;    // the shadow query's answers, a byte a shadow slot
+    cl::Buffer liveSlots;  // the secondary slots compaction copies, in slot order
+};
+
+// One batch of the generation in flight: page `page`, the generation's rays [first, first + n).
+struct Batch {
+    uint32_t generation;
+    size_t page, first;
+    uint32_t n;
+};
+
+// The batch's shadow slots, read in place: the rays by the shadow query (its classification
+// reads them on the host), the contributions by the accumulation.
+struct ShadowSlots {
+    ShadowSlots(const cl::CommandQueue& q, const ShadowBuffers& shadow, size_t n)
+        : rays(q, shadow.rays, n), contribution(q, shadow.contribution, n) {}
+    void Unmap() {
+        rays.Unmap();
+        contribution.Unmap();
+    }
+    clrt::MappedRead<RcRay> rays;
+    clrt::MappedRead<rc_float4> contribution;
+};
+
+// The batch's other outputs, read in place once the shadow query has answered: copies into host
+// arrays would fault in their pages again in every one-frame render. Hits and normals only for
+// the first-hit layers.
+struct BatchOutputs {
+    BatchOutputs(const cl::CommandQueue& q, const BatchBuffers& b, uint32_t n, uint32_t nLights,
+                 bool aovs)
+        : radiance(q, b.shade.radiance, n),
+          blocked(q, b.blocked, size_t(n) * nLights),
+          spawned(q, b.shade.spawned, 2 * size_t(n)),
+          hits(q, b.hits, aovs ? n : 0),
+          normals(q, b.shade.normals, aovs ? n : 0) {}
+    // Before the next batch's shading writes the buffers.
+    void Unmap() {
+        radiance.Unmap();
+        blocked.Unmap();
+        spawned.Unmap();
+        hits.Unmap();
+        normals.Unmap();
+    }
+    clrt::MappedRead<rc_float4> radiance;
+    clrt::MappedRead<uint8_t> blocked, spawned;
+    clrt::MappedRead<RcHit> hits;
+    clrt::MappedRead<rc_float4> normals;
+};
+
+// What a generation counts as its batches go by.
+struct GenerationTally {
+    GenerationStats stats;
+    uint64_t reflection = 0, refraction = 0;
+    Clock::time_point start;
+    double hostBefore = 0;     // the query's host seconds when the generation began
+    uint64_t testsBefore = 0;  // the render's intersection tests when it began
+};
+
+// Prepares a generation's batches one ahead on a worker thread: the worker reads batch k + 1
+// back and classifies it while the device queries and shades batch k.
+class Preparer {
   public:
-    PagePool(clrt::Context& ctx, size_t pageRays) : ctx_(ctx), pageRays_(pageRays) {}
-    size_t PageRays() const { return pageRays_; }
-    RayBuffers Take() {
-        if (free_.empty()) {
-            return {DeviceBuffer(ctx_, pageRays_ * sizeof(RcRay)),
-                    DeviceBuffer(ctx_, pageRays_ * sizeof(RcRayInfo))};
-        }
-        RayBuffers page = std::move(free_.back());
-        free_.pop_back();
-        return page;
-    }
-    void Give(RayBuffers& page) {
-        if (page.rays()) free_.push_back(std::move(page));
-        page = RayBuffers();
-    }
-    void Give(std::vector<RayBuffers>& pages) {
-        for (RayBuffers& page : pages) Give(page);
-        pages.clear();
+    using Prepare = std::function<std::unique_ptr<PreparedBatch>(size_t page)>;
+    Preparer(Prepare prepare, size_t nPages)
+        : prepare_(std::move(prepare)),
+          nPages_(nPages),
+          next_(std::async(std::launch::async, prepare_, 0)) {}
+
+    // Page `page`'s batch, once the worker has prepared it; the worker goes on to the next.
+    std::unique_ptr<PreparedBatch> Next(size_t page) {
+        std::unique_ptr<PreparedBatch> prepared = next_.get();
+        if (page + 1 < nPages_) next_ = std::async(std::launch::async, prepare_, page + 1);
+        return prepared;
     }
 
   private:
-    clrt::Context& ctx_;
-    size_t pageRays_;
-    std::vector<RayBuffers> free_;
+    Prepare prepare_;
+    size_t nPages_;
+    std::future<std::unique_ptr<PreparedBatch>> next_;
 };
 
-// Copies the live secondary slots `live` (indices into `secondary`, in slot order) to the end
-// of `pages`, which hold `count` rays; new pages come from `pool`.
-void AppendToPages(clrt::Context& ctx, cl::Kernel& compact, const RayBuffers& secondary,
-                   const cl::Buffer& liveSlots, const std::vector<uint32_t>& live, size_t count,
-                   PagePool& pool, std::vector<RayBuffers>& pages, KernelTimer& timer) {
-    const size_t pageRays = pool.PageRays();
-    if (live.empty()) return;
-    clrt::Check("clEnqueueWriteBuffer", [&] {
-        ctx.queue().enqueueWriteBuffer(liveSlots, CL_FALSE, 0, live.size() * sizeof(uint32_t),
-                                       live.data());
-    });
-    for (size_t done = 0; done < live.size();) {
+// One Render call: its device state, the generation in flight, and the stages that trace it.
+class Frame {
+  public:
+    Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
+          EyeHitSource* eyeHitSource, RenderStats& stats);
+
+    // Every generation, from the eye rays until no ray is spawned.
+    void Trace() {
+        for (uint32_t generation = 0;; ++generation) {
+            const size_t nRays = generation == 0 ? nEye_ : rays_.pixels.size();
+            if (nRays == 0) break;
+            GenerationTally tally = BeginGeneration(generation, nRays);
+            const size_t nPages = (nRays + batch_ - 1) / batch_;
+            Preparer preparer(
+                [this, generation, nRays](size_t page) { return Prepare(generation, nRays, page); },
+                nPages);
+            for (size_t page = 0; page < nPages; ++page) {
+                const size_t first = page * batch_;
+                const Batch b{generation, page, first, uint32_t(std::min(batch_, nRays - first))};
+                TraceBatch(b, preparer.Next(page), tally);
+                ReportProgress(b, nRays);
+            }
+            EndGeneration(generation, tally);
+        }
+        if (printedProgress_) std::fprintf(stderr, "\n");
+    }
+
+    // The image, once the stats hold every time and count of the render begun at `tStart`.
+    image::Image Finish(Clock::time_point tStart);
+
+  private:
+    // Generation 0's hits come from the eye-hit source, not the query.
+    bool HitsFromSource(uint32_t generation) const { return generation == 0 && eyeHitSource_; }
+
+    GenerationTally BeginGeneration(uint32_t generation, size_t nRays);
+    void GenerateEyeRays(size_t nRays);
+    std::unique_ptr<PreparedBatch> Prepare(uint32_t generation, size_t nRays, size_t page);
+    void TraceBatch(const Batch& b, std::unique_ptr<PreparedBatch> prepared,
+                    GenerationTally& tally);
+    QueryResult Intersect(const Batch& b, std::unique_ptr<PreparedBatch> prepared);
+    void Shade(const Batch& b);
+    void Occlude(const ShadowSlots& shadow);
+    void Accumulate(const Batch& b, const ShadowSlots& shadow, const BatchOutputs& out,
+                    GenerationTally& tally);
+    void Compact(const Batch& b);
+    void ReportProgress(const Batch& b, size_t nRays);
+    void EndGeneration(uint32_t generation, GenerationTally& tally);
+
+    clrt::Context& ctx_;
+    const RenderOptions& options_;
+    EyeHitSource* eyeHitSource_;
+    RenderStats& stats_;
+    const CameraBasis basis_;
+    image::Image img_;
+    const cl::Program program_;
+    const RcRenderParams params_;
+    const SceneBuffers sceneBuffers_;
+    const std::unique_ptr<RayQuery> query_;
+    const RcCamera cam_;
+    const cl::Buffer camBuffer_;
+    cl::Kernel eyeKernel_, shadeKernel_;
+    // Later generations are split into batches of the same size, so no buffer need be larger
+    // than the image.
+    const size_t batch_;
+    BatchBuffers buffers_;
+    cl::Kernel compactKernel_;
+    PagePool pool_;
+    RayPages rays_, next_;        // the generation in flight, and the one its batches spawn
+    std::vector<uint32_t> live_;  // the batch's live secondary slots
+    // Prepare's queue: its reads do not wait for the kernels on ctx_.queue().
+    cl::CommandQueue readQueue_;
+    KernelTimer timer_;
+    double hostSeconds_ = 0;  // the accumulation's
+    const size_t nEye_;
+    std::vector<RcHit> eyeHits_;  // generation 0's, when the eye-hit source finds them
+    Clock::time_point lastProgress_;
+    bool printedProgress_ = false;
+};
+
+Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
+             EyeHitSource* eyeHitSource, RenderStats& stats)
+    : ctx_(ctx),
+      options_(options),
+      eyeHitSource_(eyeHitSource),
+      stats_(stats),
+      basis_(scene.camera),
+      img_(NewImage(basis_, options.aovs)),
+      program_(BuildProgram(ctx, options, stats)),
+      params_(MakeRenderParams(scene, options)),
+      sceneBuffers_(ctx, scene, params_),
+      query_(MakeQuery(ctx, program_, sceneBuffers_, scene, options, stats)),
+      cam_(basis_.ToDevice()),
+      camBuffer_(UploadVector(ctx, std::vector<RcCamera>{cam_})),
+      eyeKernel_(program_, "rc_generate_eye_rays"),
+      shadeKernel_(program_, "rc_shade"),
+      batch_(BatchRays(options.batchRays, size_t(basis_.width) * basis_.height, params_.nLights,
+                       ctx.info().maxAllocBytes)),
+      buffers_(ctx, batch_, params_.nLights),
+      compactKernel_(program_, "rc_compact_rays"),
+      pool_(ctx, batch_),
+      readQueue_(clrt::Check("clCreateCommandQueue",
+                             [&] { return cl::CommandQueue(ctx.context(), ctx.device()); })),
+      nEye_(size_t(basis_.width) * basis_.height) {
+    stats.width = basis_.width;
+    stats.height = basis_.height;
+    stats.device = ctx.info().name;
+    stats.nPrimitives = scene.PrimitiveCount();
+    stats.accel = query_->Name();
+    stats.eyeRays = eyeHitSource ? eyeHitSource->Name() : "kernel";
+    if (eyeHitSource) {
+        const auto t0 = Clock::now();
+        eyeHits_ = eyeHitSource->FindHits(scene, basis_, stats);
+        stats.timeS["eye_hits_" + eyeHitSource->Name()] = SecondsSince(t0);
+    }
+    lastProgress_ = Clock::now();
+}
+
+// Readies generation `generation` of `nRays` rays: the last one's pages go back to the pool,
+// the eye rays are generated, and once all its rays are on the device the query begins it.
+GenerationTally Frame::BeginGeneration(uint32_t generation, size_t nRays) {
+    pool_.Give(next_.pages);
+    next_.pixels.clear();
+    if (generation == 0) GenerateEyeRays(nRays);
+    clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
+    GenerationTally tally;
+    tally.start = Clock::now();
+    tally.hostBefore = query_->Stats().hostSeconds;
+    tally.testsBefore = stats_.intersectionTests;
+    if (!HitsFromSource(generation)) {
+        query_->BeginGeneration(generation, rays_.pages[0].rays, uint32_t(std::min(batch_, nRays)),
+                                timer_);
+    }
+    return tally;
+}
+
+void Frame::GenerateEyeRays(size_t nRays) {
+    for (size_t first = 0; first < nRays; first += batch_) {
+        const uint32_t n = uint32_t(std::min(batch_, nRays - first));
+        rays_.pages.push_back(pool_.Take());
+        SetArgs(eyeKernel_, camBuffer_, uint32_t(first), n, rays_.pages.back().rays);
+        Launch(ctx_, eyeKernel_, n, timer_);
+    }
+}
+
+// The query's host work on page `page` (on the worker thread). Eye rays with float directions
+// come with their camera, so the query need not read them back.
+std::unique_ptr<PreparedBatch> Frame::Prepare(uint32_t generation, size_t nRays, size_t page) {
+    if (HitsFromSource(generation)) return nullptr;
+    RaySource source;
+    if (generation == 0 && options_.rayEncoding != RayEncoding::kPolar16) {
+        source.camera = &cam_;
+        source.firstPixel = uint32_t(page * batch_);
+    }
+    return query_->Prepare(rays_.pages[page].rays,
+                           uint32_t(std::min(batch_, nRays - page * batch_)), readQueue_, source);
+}
+
+// Intersect, shade, occlude, accumulate, compact.
+void Frame::TraceBatch(const Batch& b, std::unique_ptr<PreparedBatch> prepared,
+                       GenerationTally& tally) {
+    if (!Intersect(b, std::move(prepared)).shaded) Shade(b);
+    ShadowSlots shadow(ctx_.queue(), buffers_.shade.shadow, size_t(b.n) * params_.nLights);
+    Occlude(shadow);
+    BatchOutputs out(ctx_.queue(), buffers_, b.n, params_.nLights,
+                     b.generation == 0 && options_.aovs);
+    Accumulate(b, shadow, out, tally);
+    shadow.Unmap();
+    out.Unmap();
+    Compact(b);
+    tally.stats.rays += b.n;
+}
+
+// The batch's nearest hits: the eye-hit source's for generation 0 where there is one, else the
+// query's.
+QueryResult Frame::Intersect(const Batch& b, std::unique_ptr<PreparedBatch> prepared) {
+    const RayBuffers& rays = rays_.pages[b.page];
+    ShadeBuffers& shade = buffers_.shade;
+    // Eye rays have no infos (rc_types.h): the shading kernels take a null buffer for theirs.
+    shade.rayInfo = b.generation == 0 ? cl::Buffer() : rays.info;
+    shade.writeNormals = b.generation == 0 && options_.aovs;
+    QueryResult found;
+    if (HitsFromSource(b.generation)) {
+        clrt::Check("clEnqueueWriteBuffer", [&] {
+            ctx_.queue().enqueueWriteBuffer(buffers_.hits, CL_FALSE, 0, b.n * sizeof(RcHit),
+                                            eyeHits_.data() + b.first);
+        });
+    } else {
+        found = query_->Intersect(rays.rays, b.n, prepared.get(), buffers_.hits, shade, timer_);
+        query_->Recycle(std::move(prepared));
+    }
+    stats_.intersectionTests += found.tests;
+    return found;
+}
+
+// Shading of the batch's hits, for queries whose kernels do not shade: radiance, normals, the
+// shadow slots and the secondary rays it spawns.
+void Frame::Shade(const Batch& b) {
+    const ShadeBuffers& shade = buffers_.shade;
+    const SceneBuffers& s = sceneBuffers_;
+    SetArgs(shadeKernel_, rays_.pages[b.page].rays, shade.rayInfo, buffers_.hits, b.n, s.triangles,
+            s.triangleShading, s.spheres, s.quadrics, s.materials, s.lights, s.params,
+            shade.radiance, shade.NormalsOut(), shade.shadow.rays, shade.shadow.contribution,
+            shade.secondary.rays, shade.secondary.info, shade.spawned);
+    Launch(ctx_, shadeKernel_, b.n, timer_);
+}
+
+void Frame::Occlude(const ShadowSlots& shadow) {
+    stats_.intersectionTests +=
+        query_->Occluded(buffers_.shade.shadow.rays, shadow.rays.span(), buffers_.blocked, timer_);
+}
+
+// Adds the batch's radiance and unblocked shadow contributions to its pixels, in ray order (so a
+// render is reproducible bit for bit), writes the first-hit layers, and lists the live secondary
+// slots, whose rays carry their pixel into the next generation.
+void Frame::Accumulate(const Batch& b, const ShadowSlots& shadow, const BatchOutputs& out,
+                       GenerationTally& tally) {
+    const auto t0 = Clock::now();
+    const uint32_t nLights = params_.nLights;
+    const rc_float4 *radiance = out.radiance.data(), *contribution = shadow.contribution.data();
+    const uint8_t *blocked = out.blocked.data(), *spawned = out.spawned.data();
+    const RcHit* hits = out.hits.data();  // null: no first-hit layers from this batch
+    live_.clear();
+    for (uint32_t i = 0; i < b.n; ++i) {
+        const uint32_t pixel =
+            b.generation == 0 ? uint32_t(b.first + i) : rays_.pixels[b.first + i];
+        glm::vec3& px = img_.rgb[pixel];
+        px += glm::vec3(radiance[i].x, radiance[i].y, radiance[i].z);
+        for (uint32_t l = 0; l < nLights; ++l) {
+            const rc_float4& c = contribution[size_t(i) * nLights + l];
+            if (c.w == 0.0f) continue;
+            ++tally.stats.shadowRays;
+            if (!blocked[size_t(i) * nLights + l]) px += glm::vec3(c.x, c.y, c.z);
+        }
+        for (uint32_t k = 0; k < 2; ++k) {
+            if (!spawned[2 * size_t(i) + k]) continue;
+            live_.push_back(2 * i + k);
+            next_.pixels.push_back(pixel);
+            ++(k == 0 ? tally.reflection : tally.refraction);
+        }
+        if (hits) {
+            img_.id[pixel] = hits[i].prim;
+            img_.depth[pixel] = hits[i].t;
+            const rc_float4& n = out.normals.data()[i];
+            img_.normal[pixel] = glm::vec3(n.x, n.y, n.z);
+        }
+    }
+    hostSeconds_ += SecondsSince(t0);
+}
+
+// Copies the batch's live secondary rays to the end of the next generation's pages (new pages
+// from the pool); the batch's own page goes back to the pool, answered and shaded.
+void Frame::Compact(const Batch& b) {
+    const size_t pageRays = pool_.PageRays();
+    const size_t count = next_.pixels.size() - live_.size();  // rays on the pages before these
+    if (!live_.empty()) {
+        clrt::Check("clEnqueueWriteBuffer", [&] {
+            ctx_.queue().enqueueWriteBuffer(buffers_.liveSlots, CL_FALSE, 0,
+                                            live_.size() * sizeof(uint32_t), live_.data());
+        });
+    }
+    const RayBuffers& secondary = buffers_.shade.secondary;
+    for (size_t done = 0; done < live_.size();) {
         const size_t offset = (count + done) % pageRays;
-        if (offset == 0) pages.push_back(pool.Take());
-        const uint32_t m = uint32_t(std::min(live.size() - done, pageRays - offset));
-        SetArgs(compact, secondary.rays, secondary.info, liveSlots, uint32_t(done), m,
-                pages.back().rays, pages.back().info, uint32_t(offset));
-        Launch(ctx, compact, m, timer);
+        if (offset == 0) next_.pages.push_back(pool_.Take());
+        const uint32_t m = uint32_t(std::min(live_.size() - done, pageRays - offset));
+        SetArgs(compactKernel_, secondary.rays, secondary.info, buffers_.liveSlots, uint32_t(done),
+                m, next_.pages.back().rays, next_.pages.back().info, uint32_t(offset));
+        Launch(ctx_, compactKernel_, m, timer_);
         done += m;
     }
+    pool_.Give(rays_.pages[b.page]);
+}
+
+// A progress line on stderr, at most once a second.
+void Frame::ReportProgress(const Batch& b, size_t nRays) {
+    if (!options_.progress || SecondsSince(lastProgress_) <= 1.0) return;
+    std::fprintf(stderr, "\rrayclass: generation %u, %zu of %zu rays", b.generation, b.first + b.n,
+                 nRays);
+    lastProgress_ = Clock::now();
+    printedProgress_ = true;
+}
+
+// The generation's counts into the stats; the rays it spawned become the generation in flight.
+void Frame::EndGeneration(uint32_t generation, GenerationTally& tally) {
+    GenerationStats& gen = tally.stats;
+    if (generation == 0) stats_.raysByKind["eye"] += gen.rays;
+    stats_.raysByKind["reflection"] += tally.reflection;
+    stats_.raysByKind["refraction"] += tally.refraction;
+    gen.spawned = next_.pixels.size();
+    gen.seconds = SecondsSince(tally.start);
+    gen.hostClassifySeconds = query_->Stats().hostSeconds - tally.hostBefore;
+    gen.intersectionTests = stats_.intersectionTests - tally.testsBefore;
+    query_->DescribeGeneration(gen);
+    if (HitsFromSource(generation)) gen.query = eyeHitSource_->Name();
+    stats_.raysByKind["shadow"] += gen.shadowRays;
+    stats_.generations.push_back(gen);
+    std::swap(rays_, next_);
+}
+
+image::Image Frame::Finish(Clock::time_point tStart) {
+    const QueryStats q = query_->Stats();
+    AddKernelTimes(timer_, q, stats_);
+    stats_.shadowRaysFromLight = q.shadowRaysFromLight;
+    stats_.shadowRaysInCells = q.shadowRaysInCells;
+    stats_.eyeRaysFromCamera = q.eyeRaysFromCamera;
+    stats_.timeS["host"] = hostSeconds_;
+    if (options_.accel == Accel::kClassify || options_.accel == Accel::kAuto) {
+        stats_.timeS["host_classify"] = q.hostSeconds;
+    }
+    stats_.timeS["render"] = SecondsSince(tStart);
+    AddOtherTime(timer_, hostSeconds_ + q.hostSeconds, stats_);
+    return std::move(img_);
 }
 
 }  // namespace
 
 ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
                        EyeHitSource* eyeHits)
-    : ctx_(ctx), scene_(scene), options_(options), eyeHits_(eyeHits) {
-    if (options_.eyeRays != "kernel" && options_.eyeRays != "raster") {
-        throw Error("unknown eye-ray path '" + options_.eyeRays + "' (use raster or kernel)");
-    }
-    if (options_.eyeRays == "kernel") eyeHits_ = nullptr;
-    if (options_.eyeRays == "raster" && !eyeHits_) {
-        throw Error("eye rays 'raster' need a raster pass (no OpenGL context was made)");
-    }
-}
+    : ctx_(ctx), scene_(scene), options_(options), eyeHits_(eyeHits) {}
 
 image::Image ClRenderer::Render(RenderStats& stats) {
     const auto tStart = Clock::now();
-    const CameraBasis basis(scene_.camera);
-    const uint32_t width = basis.width, height = basis.height;
-    image::Image img(width, height);
-    if (options_.aovs) {
-        img.depth.assign(img.PixelCount(), std::numeric_limits<float>::infinity());
-        img.id.assign(img.PixelCount(), RC_NO_HIT);
-        img.normal.assign(img.PixelCount(), glm::vec3(0.0f));
-    }
-    stats.width = width;
-    stats.height = height;
-    stats.device = ctx_.info().name;
-    stats.nPrimitives = scene_.PrimitiveCount();
-
-    auto t0 = Clock::now();
-    const cl::Program program =
-        BuildRenderProgram(ctx_, KernelBuildOptions(options_), &stats.programFromCache);
-    stats.timeS["program_build"] = SecondsSince(t0);
-
-    const RcRenderParams params = MakeRenderParams(scene_, options_);
-    const SceneBuffers sceneBuffers(ctx_, scene_, params);
-    const std::unique_ptr<RayQuery> query =
-        MakeQuery(ctx_, program, sceneBuffers, scene_, options_, stats);
-    stats.accel = query->Name();
-    stats.eyeRays = eyeHits_ ? eyeHits_->Name() : "kernel";
-
-    const RcCamera cam = basis.ToDevice();
-    const cl::Buffer camBuffer = UploadVector(ctx_, std::vector<RcCamera>{cam});
-    cl::Kernel eyeKernel(program, "rc_generate_eye_rays");
-    cl::Kernel shadeKernel(program, "rc_shade");
-
-    const uint32_t nLights = params.nLights;
-    // Later generations are split into batches of the same size, so no buffer need be larger
-    // than the image.
-    const size_t batch = BatchRays(options_.batchRays, size_t(width) * height, params.nLights,
-                                   ctx_.info().maxAllocBytes);
-    // Per batch: the query's hits, the shading kernel's outputs.
-    cl::Buffer hits = DeviceBuffer(ctx_, batch * sizeof(RcHit));
-    ShadeBuffers shade = MakeShadeBuffers(ctx_, batch, nLights);
-    const cl::Buffer &radiance = shade.radiance, &normals = shade.normals, &spawned = shade.spawned;
-    const ShadowBuffers& shadow = shade.shadow;
-    const RayBuffers& secondary = shade.secondary;
-    cl::Buffer blocked = DeviceBuffer(ctx_, batch * nLights);
-    cl::Buffer liveSlots = DeviceBuffer(ctx_, 2 * batch * sizeof(uint32_t));
-    cl::Kernel compactKernel(program, "rc_compact_rays");
-
-    std::vector<uint32_t> hostLive;
-
-    // A generation's rays live on the device in pages of `batch` rays; a batch is one page. The
-    // host keeps only each ray's pixel, for accumulating contributions.
-    std::vector<RayBuffers> pages, nextPages;
-    PagePool pool(ctx_, batch);
-    std::vector<uint32_t> pixels, nextPixels;
-    auto& q = ctx_.queue();
-    cl::CommandQueue readQueue = clrt::Check(
-        "clCreateCommandQueue", [&] { return cl::CommandQueue(ctx_.context(), ctx_.device()); });
-
-    KernelTimer timer;
-    double hostSeconds = 0;
-    const size_t nEye = size_t(width) * height;
-    // Generation 0's hits from another source (the raster pass), uploaded batch by batch below.
-    std::vector<RcHit> eyeHits;
-    if (eyeHits_) {
-        t0 = Clock::now();
-        eyeHits = eyeHits_->FindHits(scene_, basis, stats);
-        stats.timeS["eye_hits_" + eyeHits_->Name()] = SecondsSince(t0);
-    }
-    auto lastProgress = Clock::now();
-    bool printedProgress = false;
-
-    for (uint32_t generation = 0;; ++generation) {
-        const size_t nRays = generation == 0 ? nEye : pixels.size();
-        if (nRays == 0) break;
-        GenerationStats gen;
-        pool.Give(nextPages);
-        nextPixels.clear();
-        uint64_t nReflection = 0, nRefraction = 0;
-        if (generation == 0) {
-            for (size_t first = 0; first < nRays; first += batch) {
-                const uint32_t n = uint32_t(std::min(batch, nRays - first));
-                pages.push_back(pool.Take());
-                SetArgs(eyeKernel, camBuffer, uint32_t(first), n, pages.back().rays);
-                Launch(ctx_, eyeKernel, n, timer);
-            }
-        }
-        // The pages are complete: a worker reads batch k + 1 back and classifies it while the
-        // device queries and shades batch k.
-        clrt::Check("clFinish", [&] { q.finish(); });
-        const auto tGeneration = Clock::now();
-        const double hostBefore = query->HostSeconds();
-        const uint64_t testsBefore = stats.intersectionTests;
-        if (!(generation == 0 && eyeHits_)) {
-            query->BeginGeneration(generation, pages[0].rays, uint32_t(std::min(batch, nRays)),
-                                   timer);
-        }
-        auto prepare = [&](size_t page) -> std::unique_ptr<PreparedBatch> {
-            if (generation == 0 && eyeHits_) return nullptr;
-            RaySource source;
-            if (generation == 0 && options_.rayEncoding != "polar16") {
-                source.camera = &cam;
-                source.firstPixel = uint32_t(page * batch);
-            }
-            return query->Prepare(pages[page].rays, uint32_t(std::min(batch, nRays - page * batch)),
-                                  readQueue, source);
-        };
-        std::future<std::unique_ptr<PreparedBatch>> nextPrepared =
-            std::async(std::launch::async, prepare, 0);
-        for (size_t first = 0, page = 0; first < nRays; first += batch, ++page) {
-            const uint32_t n = uint32_t(std::min(batch, nRays - first));
-            std::unique_ptr<PreparedBatch> prepared = nextPrepared.get();
-            if (first + batch < nRays) {
-                nextPrepared = std::async(std::launch::async, prepare, page + 1);
-            }
-            const RayBuffers& rays = pages[page];
-            // Eye rays have no infos (rc_types.h): the shading kernels take a null buffer for
-            // theirs.
-            shade.rayInfo = generation == 0 ? cl::Buffer() : rays.info;
-            shade.writeNormals = generation == 0 && options_.aovs;
-            QueryResult found;
-            if (generation == 0 && eyeHits_) {
-                clrt::Check("clEnqueueWriteBuffer", [&] {
-                    q.enqueueWriteBuffer(hits, CL_FALSE, 0, n * sizeof(RcHit),
-                                         eyeHits.data() + first);
-                });
-            } else {
-                found = query->Intersect(rays.rays, n, prepared.get(), hits, shade, timer);
-                query->Recycle(std::move(prepared));
-            }
-            stats.intersectionTests += found.tests;
-            if (!found.shaded) {
-                SetArgs(shadeKernel, rays.rays, shade.rayInfo, hits, n, sceneBuffers.triangles,
-                        sceneBuffers.triangleShading, sceneBuffers.spheres, sceneBuffers.quadrics,
-                        sceneBuffers.materials, sceneBuffers.lights, sceneBuffers.params, radiance,
-                        shade.NormalsOut(), shadow.rays, shadow.contribution, secondary.rays,
-                        secondary.info, spawned);
-                Launch(ctx_, shadeKernel, n, timer);
-            }
-            // The rays are read in place by the shadow query's classification, the contributions
-            // by the accumulation below.
-            const uint32_t nShadow = n * nLights;
-            clrt::MappedRead<RcRay> shadowRays(q, shadow.rays, nShadow);
-            clrt::MappedRead<rc_float4> shadowContribution(q, shadow.contribution, nShadow);
-            const rc_float4* hostContribution = shadowContribution.data();
-            stats.intersectionTests +=
-                query->Occluded(shadow.rays, shadowRays.span(), blocked, timer);
-            // The batch's outputs are read in place too: copies into host arrays cost their
-            // page faults in every one-frame render (25 MB for 1024 x 768 without AOVs).
-            clrt::MappedRead<rc_float4> hostRadiance(q, radiance, n);
-            clrt::MappedRead<uint8_t> hostBlocked(q, blocked, nShadow);
-            clrt::MappedRead<uint8_t> hostSpawned(q, spawned, 2 * size_t(n));
-            const bool readAovs = generation == 0 && options_.aovs;
-            clrt::MappedRead<RcHit> hostHits(q, hits, readAovs ? n : 0);
-            clrt::MappedRead<rc_float4> hostNormals(q, normals, readAovs ? n : 0);
-            const rc_float4* radianceOf = hostRadiance.data();
-            const uint8_t *blockedOf = hostBlocked.data(), *spawnedOf = hostSpawned.data();
-            const RcHit* hitOf = hostHits.data();
-            const rc_float4* normalOf = hostNormals.data();
-
-            const auto tHost = Clock::now();
-            auto pixelOf = [&](uint32_t i) {
-                return generation == 0 ? uint32_t(first + i) : pixels[first + i];
-            };
-            hostLive.clear();
-            for (uint32_t i = 0; i < n; ++i) {
-                const uint32_t pixel = pixelOf(i);
-                glm::vec3& px = img.rgb[pixel];
-                px += glm::vec3(radianceOf[i].x, radianceOf[i].y, radianceOf[i].z);
-                for (uint32_t l = 0; l < nLights; ++l) {
-                    const rc_float4& c = hostContribution[size_t(i) * nLights + l];
-                    if (c.w == 0.0f) continue;
-                    ++gen.shadowRays;
-                    if (!blockedOf[size_t(i) * nLights + l]) {
-                        px += glm::vec3(c.x, c.y, c.z);
-                    }
-                }
-                for (uint32_t k = 0; k < 2; ++k) {
-                    if (!spawnedOf[2 * size_t(i) + k]) continue;
-                    hostLive.push_back(2 * i + k);
-                    nextPixels.push_back(pixel);
-                    ++(k == 0 ? nReflection : nRefraction);
-                }
-                if (readAovs) {
-                    img.id[pixel] = hitOf[i].prim;
-                    img.depth[pixel] = hitOf[i].t;
-                    img.normal[pixel] = glm::vec3(normalOf[i].x, normalOf[i].y, normalOf[i].z);
-                }
-            }
-            hostSeconds += SecondsSince(tHost);
-            // Before the next batch's shading writes the buffers.
-            shadowRays.Unmap();
-            shadowContribution.Unmap();
-            hostRadiance.Unmap();
-            hostBlocked.Unmap();
-            hostSpawned.Unmap();
-            hostHits.Unmap();
-            hostNormals.Unmap();
-
-            AppendToPages(ctx_, compactKernel, secondary, liveSlots, hostLive,
-                          nextPixels.size() - hostLive.size(), pool, nextPages, timer);
-            // The batch's rays are answered and shaded: the next generation can fill their page.
-            pool.Give(pages[page]);
-            gen.rays += n;
-
-            if (options_.progress && SecondsSince(lastProgress) > 1.0) {
-                std::fprintf(stderr, "\rrayclass: generation %u, %zu of %zu rays", generation,
-                             first + n, nRays);
-                lastProgress = Clock::now();
-                printedProgress = true;
-            }
-        }
-        if (generation == 0) stats.raysByKind["eye"] += gen.rays;
-        stats.raysByKind["reflection"] += nReflection;
-        stats.raysByKind["refraction"] += nRefraction;
-        gen.spawned = nextPixels.size();
-        gen.seconds = SecondsSince(tGeneration);
-        gen.hostClassifySeconds = query->HostSeconds() - hostBefore;
-        gen.intersectionTests = stats.intersectionTests - testsBefore;
-        query->DescribeGeneration(gen);
-        if (generation == 0 && eyeHits_) gen.query = eyeHits_->Name();
-        stats.raysByKind["shadow"] += gen.shadowRays;
-        stats.generations.push_back(gen);
-        std::swap(pages, nextPages);
-        std::swap(pixels, nextPixels);
-    }
-    if (printedProgress) std::fprintf(stderr, "\n");
-
-    FinishStats(stats, timer, *query, hostSeconds, tStart);
-    return img;
+    Frame frame(ctx_, scene_, options_, eyeHits_, stats);
+    frame.Trace();
+    return frame.Finish(tStart);
 }
 
 }  // namespace rayclass::render

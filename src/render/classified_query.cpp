@@ -8,7 +8,6 @@
 
 #include "rayclass/classify/hierarchy.h"
 #include "rayclass/clrt/mapped.h"
-#include "rayclass/core/error.h"
 #include "rayclass/render/launch.h"
 
 namespace rayclass::render {
@@ -28,15 +27,13 @@ struct ClassifiedBatch final : PreparedBatch {
 
 // Auto's choice per leaf: the style of less work in units of a fragment packet's test of one
 // candidate. A vertex-style leaf costs kVertexIteration per ray and block of 16 candidates
-// (chart 1 of docs/bench: at equal tests per ray the vertex style ran 1.9-3.5x slower) plus
+// (chart 1 of docs/bench: at equal tests per ray the vertex style ran several times slower) plus
 // Params::vertexGatherCost per block, for rc_gather_blocks's copy of the block's triangles.
-// On PoCL on these 2-core Xeons that copy cost 148 ns a block against 11.7 ns a fragment
-// iteration (sibenik_mirror), hence kCpuGatherCost. Without it auto sent 2.2 million blocks of
-// sibenik_mirror's deep generations to the vertex style; with it no leaf is cheaper as vertex
-// style (that needs more iterations per block than the 16 candidates a block holds), and the
-// render's query, gather and shading kernels took 1.02-1.11 s instead of 1.37-1.55 s
-// (conference_mirror 0.85-1.03 against 1.18-1.48 s; 3 alternating runs). Other devices keep
-// the rule without the gather until measured.
+// On PoCL on a CPU that copy costs about as much as kCpuGatherCost fragment iterations. Without
+// it auto sent millions of blocks of deep mirror generations to the vertex style; with it no leaf
+// is cheaper as vertex style (that needs more iterations per block than the 16 candidates a
+// block holds), and the render's query, gather and shading kernels ran faster. Other devices
+// keep the rule without the gather until measured.
 constexpr uint64_t kVertexIteration = 3;
 constexpr float kCpuGatherCost = 13.0f;
 
@@ -63,16 +60,12 @@ class ClassifiedQuery final : public RayQuery {
           shadeLights_(program, "rc_shade_lights"),
           writeMisses_(program, "rc_write_misses") {}
 
-    std::string Name() const override { return std::string("classify/") + KernelStyleName(style_); }
-    double HostSeconds() const override {
-        std::lock_guard<std::mutex> lock(mutex_);
-        return hostSeconds_;
+    std::string Name() const override {
+        return "classify/" + std::string(NameOf(kKernelStyles, style_));
     }
-    uint64_t ShadowRaysFromLight() const override { return shadowFromLight_; }
-    uint64_t ShadowRaysInCells() const override { return shadowInCells_; }
-    uint64_t EyeRaysFromCamera() const override {
+    QueryStats Stats() const override {
         std::lock_guard<std::mutex> lock(mutex_);
-        return eyeFromCamera_;
+        return stats_;
     }
 
     std::unique_ptr<PreparedBatch> Prepare(const cl::Buffer& rays, uint32_t n,
@@ -87,8 +80,8 @@ class ClassifiedQuery final : public RayQuery {
             }
         }
         if (!out) out = std::make_unique<ClassifiedBatch>();
-        // A camera's eye rays are classified from the camera, unread (Sibenik's 2.5-3x faster,
-        // for lists as long), unless it lies more than three box sizes from the scene.
+        // A camera's eye rays are classified from the camera, unread (several times faster, for
+        // lists as long), unless it lies more than three box sizes from the scene.
         if (source.camera) {
             const auto t0 = Clock::now();
             const bool classified =
@@ -97,7 +90,7 @@ class ClassifiedQuery final : public RayQuery {
             if (classified) {
                 {
                     std::lock_guard<std::mutex> lock(mutex_);
-                    eyeFromCamera_ += n;
+                    stats_.eyeRaysFromCamera += n;
                 }
                 SortLeaves(*out, style_);
                 return out;
@@ -118,12 +111,9 @@ class ClassifiedQuery final : public RayQuery {
     // Each generation's rays get hierarchies of their own; later batches of the generation land
     // in the remainders of earlier ones. Routing a generation through the splits an earlier one
     // made cost more than rebuilding: those splits fit other rays, and their nodes filtered their
-    // lists again for the newcomers. Deep mirror renders (--accel classify, default options),
-    // 3 alternating runs: sibenik_mirror 5.6-6.0 -> 4.5-5.0 s (host classification 3.0-3.3 ->
-    // 1.9-2.3 s), conference_mirror 9.5-10.1 -> 6.1-7.1 s (6.6-7.1 -> 3.5-4.1 s), for 2-3 % more
-    // intersection tests and the same image; sibenik_mirror at 2048 x 1536 (three batches a
-    // generation, depth 4) 6.8-8.3 -> 6.4-7.3 s. Shadow rays toward a point light are classified
-    // from the light, where old and new splits come out the same.
+    // lists again for the newcomers: deep mirror renders spend much less host time this way,
+    // for a few more intersection tests and the same image. Shadow rays toward a point light are
+    // classified from the light, where old and new splits come out the same.
     void BeginGeneration(uint32_t, const cl::Buffer&, uint32_t, KernelTimer&) override { Reset(); }
 
     void Reset() override {
@@ -144,9 +134,8 @@ class ClassifiedQuery final : public RayQuery {
         const auto& batch = static_cast<const ClassifiedBatch&>(*prepared);
         // Every kernel style writes the hit of each ray in a leaf: only the rays that reach
         // nothing need the miss written (none, usually, but for eye rays from a camera outside
-        // the scene box: 30 % of Cornell's). A kernel writes theirs: filling the whole buffer
-        // instead made raybench's copy time 1.6-2.0 ms, against 0.3-0.5 ms now, for kernels
-        // as fast within the noise.
+        // the scene box: many of Cornell's). A kernel writes theirs: filling the whole buffer
+        // instead cost several times raybench's copy time, for kernels as fast within the noise.
         if (!batch.batch.missed.empty()) {
             const auto t0 = Clock::now();
             const cl::Buffer& ids = missedBuf_.Share(ctx_, batch.batch.missed);
@@ -168,16 +157,18 @@ class ClassifiedQuery final : public RayQuery {
         Classify(shadowHierarchy_, classify::RayView(hostRays.data(), n, sizeof(RcRay)),
                  classify::RayUse::kAnyHit, shadowBatch_, ShadowStyle());
         const classify::BuildCounters& built = shadowHierarchy_.Counters();
-        shadowFromLight_ += built.fromEnd;
-        shadowInCells_ += built.cellsPerSide > 0 ? built.fromEnd : 0;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            stats_.shadowRaysFromLight += built.fromEnd;
+            stats_.shadowRaysInCells += built.cellsPerSide > 0 ? built.fromEnd : 0;
+        }
         return Query(shadowBatch_, shadowRays, blocked, nullptr, timer).tests;
     }
 
   private:
     // Shadow rays' leaves all take one style; auto takes packets. Any-hit queries let each
     // vertex-style ray stop at its first blocker, yet on PoCL lockstep packets were as fast or
-    // faster (raybench, query kernels for 786,432 anchor shadow rays: Sibenik 15.3 ms as packets
-    // against 29.3 ms vertex style, Conference 23.4 against 22.6 ms).
+    // faster (raybench's shadow-ray query kernels).
     KernelStyle ShadowStyle() const {
         return style_ == KernelStyle::kAuto ? KernelStyle::kFragment : style_;
     }
@@ -219,33 +210,33 @@ class ClassifiedQuery final : public RayQuery {
 
     void AddHostSeconds(double s) {
         std::lock_guard<std::mutex> lock(mutex_);
-        hostSeconds_ += s;
+        stats_.hostSeconds += s;
     }
+
+    // The batch's arrays every kernel style reads. They are not written again before its
+    // kernels are done: SumTests waits for the query kernels, the last to read them.
+    struct BatchArrays {
+        const cl::Buffer &leaves, &rayIndex, &candidates;
+    };
+
+    // The slots a vertex-style launch answers and the leaf of each.
+    struct VertexSlots {
+        const cl::Buffer &slots, &slotLeaf;
+        uint32_t n;
+    };
 
     // Nearest hits (shade != nullptr: also shades every ray) or occlusion (shade == nullptr).
     QueryResult Query(const ClassifiedBatch& cb, const cl::Buffer& rays, const cl::Buffer& out,
                       const ShadeBuffers* shade, KernelTimer& timer) {
         const bool shadow = shade == nullptr;
         const auto t0 = Clock::now();
-        // The batch's arrays are not written again before its kernels are done: SumTests below
-        // waits for the query kernels, the last to read them.
-        const cl::Buffer& leaves = leavesBuf_.Share(ctx_, cb.batch.leaves);
-        const cl::Buffer& rayIndex = rayIndexBuf_.Share(ctx_, cb.batch.rayIndex);
-        const cl::Buffer& candidates = candidatesBuf_.Share(ctx_, cb.batch.candidates);
-        uint64_t tests = 0;
+        const BatchArrays arrays{leavesBuf_.Share(ctx_, cb.batch.leaves),
+                                 rayIndexBuf_.Share(ctx_, cb.batch.rayIndex),
+                                 candidatesBuf_.Share(ctx_, cb.batch.candidates)};
         if (style_ == KernelStyle::kScalar) {
-            const cl::Buffer& rayLeaf = rayLeafBuf_.Upload(ctx_, cb.rayLeaf);
-            const uint32_t nSlots = uint32_t(cb.batch.rayIndex.size());
-            const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
-            cl::Kernel& k = shadow ? occludedScalar_ : queryScalar_;
-            SetArgs(k, rays, rayIndex, rayLeaf, nSlots, leaves, candidates, scene_.triangles,
-                    scene_.spheres, scene_.quadrics, scene_.params, out, testsBuf);
-            AddHostSeconds(Seconds(t0));
-            Launch(ctx_, k, nSlots, timer);
-            return {SumTests(testsBuf, nSlots), false};
+            return {QueryScalar(cb, arrays, rays, out, shadow, t0, timer), false};
         }
-        // Vertex-style leaves: their rays as slots, their candidates as blocks of 16. Every leaf
-        // of a shadow batch takes ShadowStyle().
+        // Every leaf of a shadow batch takes ShadowStyle().
         std::span<const uint32_t> vertexLeaves = cb.vertexLeaves;
         std::span<const uint32_t> fragmentLeaves = cb.fragmentLeaves;
         if (shadow) {
@@ -255,110 +246,162 @@ class ClassifiedQuery final : public RayQuery {
             vertexLeaves = packets ? std::span<const uint32_t>() : allLeaves_;
             fragmentLeaves = packets ? allLeaves_ : std::span<const uint32_t>();
         }
-        // Incoherent rays can have long lists in many leaves: launch the leaves in chunks whose
-        // blocks fit one device allocation.
-        const size_t maxBlocks = std::min<size_t>(ctx_.info().maxAllocBytes, size_t(256) << 20) /
-                                 sizeof(RcTriangleBlock16);
-        for (size_t next = 0; next < vertexLeaves.size();) {
-            const auto t1 = Clock::now();
-            const size_t firstLeaf = next;
-            blockLeaf_.clear();
-            blockFirst_.clear();
-            leafFirstBlock_.assign(cb.batch.leaves.size(), 0);
-            for (; next < vertexLeaves.size(); ++next) {
-                const uint32_t l = vertexLeaves[next];
-                const RcLeaf& leaf = cb.batch.leaves[l];
-                const size_t leafBlocks = (leaf.candCount + 15) / 16;
-                if (!blockLeaf_.empty() && blockLeaf_.size() + leafBlocks > maxBlocks) break;
-                leafFirstBlock_[l] = uint32_t(blockLeaf_.size());
-                for (uint32_t c = 0; c < leaf.candCount; c += 16) {
-                    blockLeaf_.push_back(l);
-                    blockFirst_.push_back(c);
-                }
-            }
-            const bool wholeBatch =
-                firstLeaf == 0 && next == cb.batch.leaves.size() && !cb.rayLeaf.empty();
-            const cl::Buffer* slots = &rayIndex;
-            const cl::Buffer* slotLeaf = nullptr;
-            uint32_t nSlots = uint32_t(cb.batch.rayIndex.size());
-            if (wholeBatch) {
-                slotLeaf = &rayLeafBuf_.Upload(ctx_, cb.rayLeaf);
-            } else {
-                vertexSlots_.clear();
-                vertexRayLeaf_.clear();
-                for (size_t i = firstLeaf; i < next; ++i) {
-                    const uint32_t l = vertexLeaves[i];
-                    const RcLeaf& leaf = cb.batch.leaves[l];
-                    for (uint32_t r = 0; r < leaf.rayCount; ++r) {
-                        vertexSlots_.push_back(cb.batch.rayIndex[leaf.rayBegin + r]);
-                        vertexRayLeaf_.push_back(l);
-                    }
-                }
-                nSlots = uint32_t(vertexSlots_.size());
-                slots = &slotsBuf_.Upload(ctx_, vertexSlots_);
-                slotLeaf = &rayLeafBuf_.Upload(ctx_, vertexRayLeaf_);
-            }
-            const uint32_t nBlocks = uint32_t(blockLeaf_.size());
-            const cl::Buffer& blockLeaf = blockLeafBuf_.Upload(ctx_, blockLeaf_);
-            const cl::Buffer& blockFirst = blockFirstBuf_.Upload(ctx_, blockFirst_);
-            const cl::Buffer& leafFirstBlock = leafFirstBlockBuf_.Upload(ctx_, leafFirstBlock_);
-            const cl::Buffer& blocks =
-                blocksBuf_.Reserve(ctx_, size_t(nBlocks) * sizeof(RcTriangleBlock16));
-            const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
-            SetArgs(gather_, blockLeaf, blockFirst, nBlocks, leaves, candidates, scene_.triangles,
-                    scene_.params, blocks);
-            cl::Kernel& k = shadow ? occludedVertex_ : queryVertexShade_;
-            if (shadow) {
-                SetArgs(k, rays, *slots, *slotLeaf, nSlots, leaves, leafFirstBlock, blocks,
-                        scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
-                        testsBuf);
-            } else {
-                SetArgs(k, rays, shade->rayInfo, *slots, *slotLeaf, nSlots, leaves, leafFirstBlock,
-                        blocks, out, testsBuf, scene_.triangles, scene_.triangleShading,
-                        scene_.spheres, scene_.quadrics, scene_.materials, scene_.lights,
-                        scene_.params, shade->radiance, shade->NormalsOut(), shade->shadow.rays,
-                        shade->shadow.contribution, shade->secondary.rays, shade->secondary.info,
-                        shade->spawned);
-            }
-            AddHostSeconds(Seconds(t1));
-            Launch(ctx_, gather_, nBlocks, timer);
-            Launch(ctx_, k, nSlots, timer);
-            tests += SumTests(testsBuf, nSlots);
-        }
+        uint64_t tests = QueryVertex(cb, arrays, vertexLeaves, rays, out, shade, timer);
         if (!fragmentLeaves.empty()) {
-            const auto t1 = Clock::now();
-            // Sized first and written by index (a push_back loop took 0.11 ms for Sibenik's 49k
-            // eye-ray packets). The arrays stay unchanged until SumTests below has waited for
-            // the kernel, so a CPU device reads them in place.
-            uint32_t nPackets = 0;
-            for (uint32_t l : fragmentLeaves) nPackets += (cb.batch.leaves[l].rayCount + 15) / 16;
-            packetLeaf_.resize(nPackets);
-            packetFirst_.resize(nPackets);
-            uint32_t* packetLeafAt = packetLeaf_.data();
-            uint32_t* packetFirstAt = packetFirst_.data();
-            for (uint32_t l : fragmentLeaves) {
-                const uint32_t count = cb.batch.leaves[l].rayCount;
-                for (uint32_t r = 0; r < count; r += 16) {
-                    *packetLeafAt++ = l;
-                    *packetFirstAt++ = r;
-                }
-            }
-            const cl::Buffer& packetLeaf = packetLeafBuf_.Share(ctx_, packetLeaf_);
-            const cl::Buffer& packetFirst = packetFirstBuf_.Share(ctx_, packetFirst_);
-            const cl::Buffer& testsBuf =
-                fragmentTestsBuf_.Reserve(ctx_, nPackets * sizeof(uint32_t));
-            cl::Kernel& k = shadow ? occludedFragment_ : queryFragment_;
-            SetArgs(k, rays, rayIndex, packetLeaf, packetFirst, nPackets, leaves, candidates,
-                    scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
-                    testsBuf);
-            AddHostSeconds(Seconds(t1));
-            Launch(ctx_, k, nPackets, timer);
-            tests += SumTests(testsBuf, nPackets);
+            tests += QueryFragment(cb, arrays, fragmentLeaves, rays, out, shadow, timer);
         }
         if (shadow) return {tests, false};
-        // The rays the vertex kernel did not shade (fragment leaves' rays and the misses), in
-        // slot order: shading then walks the batch's arrays in order, not leaf by leaf.
-        const auto tUnshaded = Clock::now();
+        ShadeUnshaded(cb, rays, out, *shade, timer);
+        return {tests, true};
+    }
+
+    // Every slot by the scalar kernel (host time counted from `t0`).
+    uint64_t QueryScalar(const ClassifiedBatch& cb, const BatchArrays& arrays,
+                         const cl::Buffer& rays, const cl::Buffer& out, bool shadow,
+                         Clock::time_point t0, KernelTimer& timer) {
+        const cl::Buffer& rayLeaf = rayLeafBuf_.Upload(ctx_, cb.rayLeaf);
+        const uint32_t nSlots = uint32_t(cb.batch.rayIndex.size());
+        const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, nSlots * sizeof(uint32_t));
+        cl::Kernel& k = shadow ? occludedScalar_ : queryScalar_;
+        SetArgs(k, rays, arrays.rayIndex, rayLeaf, nSlots, arrays.leaves, arrays.candidates,
+                scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out, testsBuf);
+        AddHostSeconds(Seconds(t0));
+        Launch(ctx_, k, nSlots, timer);
+        return SumTests(testsBuf, nSlots);
+    }
+
+    // Vertex-style leaves: their rays as slots, their candidates as blocks of 16, launched in
+    // chunks whose blocks fit one device allocation (incoherent rays can have long lists in many
+    // leaves).
+    uint64_t QueryVertex(const ClassifiedBatch& cb, const BatchArrays& arrays,
+                         std::span<const uint32_t> leaves, const cl::Buffer& rays,
+                         const cl::Buffer& out, const ShadeBuffers* shade, KernelTimer& timer) {
+        const size_t maxBlocks = std::min<size_t>(ctx_.info().maxAllocBytes, size_t(256) << 20) /
+                                 sizeof(RcTriangleBlock16);
+        uint64_t tests = 0;
+        for (size_t next = 0; next < leaves.size();) {
+            const auto t0 = Clock::now();
+            const size_t first = next;
+            next = ListBlocks(cb, leaves, first, maxBlocks);
+            const bool wholeBatch =
+                first == 0 && next == cb.batch.leaves.size() && !cb.rayLeaf.empty();
+            const VertexSlots slots =
+                wholeBatch ? VertexSlots{arrays.rayIndex, rayLeafBuf_.Upload(ctx_, cb.rayLeaf),
+                                         uint32_t(cb.batch.rayIndex.size())}
+                           : ListSlots(cb, leaves.subspan(first, next - first));
+            tests += LaunchVertex(arrays, slots, rays, out, shade, t0, timer);
+        }
+        return tests;
+    }
+
+    // Lists the candidate blocks of leaves[first, end) in blockLeaf_ and blockFirst_, and each
+    // leaf's first block in leafFirstBlock_, up to `maxBlocks` blocks (one leaf at least);
+    // returns `end`.
+    size_t ListBlocks(const ClassifiedBatch& cb, std::span<const uint32_t> leaves, size_t first,
+                      size_t maxBlocks) {
+        blockLeaf_.clear();
+        blockFirst_.clear();
+        leafFirstBlock_.assign(cb.batch.leaves.size(), 0);
+        size_t next = first;
+        for (; next < leaves.size(); ++next) {
+            const uint32_t l = leaves[next];
+            const RcLeaf& leaf = cb.batch.leaves[l];
+            const size_t leafBlocks = (leaf.candCount + 15) / 16;
+            if (!blockLeaf_.empty() && blockLeaf_.size() + leafBlocks > maxBlocks) break;
+            leafFirstBlock_[l] = uint32_t(blockLeaf_.size());
+            for (uint32_t c = 0; c < leaf.candCount; c += 16) {
+                blockLeaf_.push_back(l);
+                blockFirst_.push_back(c);
+            }
+        }
+        return next;
+    }
+
+    // The rays of `leaves` as slots, uploaded with their leaves.
+    VertexSlots ListSlots(const ClassifiedBatch& cb, std::span<const uint32_t> leaves) {
+        vertexSlots_.clear();
+        vertexRayLeaf_.clear();
+        for (const uint32_t l : leaves) {
+            const RcLeaf& leaf = cb.batch.leaves[l];
+            for (uint32_t r = 0; r < leaf.rayCount; ++r) {
+                vertexSlots_.push_back(cb.batch.rayIndex[leaf.rayBegin + r]);
+                vertexRayLeaf_.push_back(l);
+            }
+        }
+        const cl::Buffer& slots = slotsBuf_.Upload(ctx_, vertexSlots_);
+        return {slots, rayLeafBuf_.Upload(ctx_, vertexRayLeaf_), uint32_t(vertexSlots_.size())};
+    }
+
+    // The gather of the listed blocks, then the vertex-style kernel over `s` (host time counted
+    // from `t0`).
+    uint64_t LaunchVertex(const BatchArrays& arrays, const VertexSlots& s, const cl::Buffer& rays,
+                          const cl::Buffer& out, const ShadeBuffers* shade, Clock::time_point t0,
+                          KernelTimer& timer) {
+        const uint32_t nBlocks = uint32_t(blockLeaf_.size());
+        const cl::Buffer& blockLeaf = blockLeafBuf_.Upload(ctx_, blockLeaf_);
+        const cl::Buffer& blockFirst = blockFirstBuf_.Upload(ctx_, blockFirst_);
+        const cl::Buffer& leafFirstBlock = leafFirstBlockBuf_.Upload(ctx_, leafFirstBlock_);
+        const cl::Buffer& blocks =
+            blocksBuf_.Reserve(ctx_, size_t(nBlocks) * sizeof(RcTriangleBlock16));
+        const cl::Buffer& testsBuf = testsBuf_.Reserve(ctx_, s.n * sizeof(uint32_t));
+        SetArgs(gather_, blockLeaf, blockFirst, nBlocks, arrays.leaves, arrays.candidates,
+                scene_.triangles, scene_.params, blocks);
+        cl::Kernel& k = shade ? queryVertexShade_ : occludedVertex_;
+        if (!shade) {
+            SetArgs(k, rays, s.slots, s.slotLeaf, s.n, arrays.leaves, leafFirstBlock, blocks,
+                    scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
+                    testsBuf);
+        } else {
+            SetArgs(k, rays, shade->rayInfo, s.slots, s.slotLeaf, s.n, arrays.leaves,
+                    leafFirstBlock, blocks, out, testsBuf, scene_.triangles, scene_.triangleShading,
+                    scene_.spheres, scene_.quadrics, scene_.materials, scene_.lights, scene_.params,
+                    shade->radiance, shade->NormalsOut(), shade->shadow.rays,
+                    shade->shadow.contribution, shade->secondary.rays, shade->secondary.info,
+                    shade->spawned);
+        }
+        AddHostSeconds(Seconds(t0));
+        Launch(ctx_, gather_, nBlocks, timer);
+        Launch(ctx_, k, s.n, timer);
+        return SumTests(testsBuf, s.n);
+    }
+
+    // Fragment-style leaves: packets of 16 of a leaf's rays, in lockstep over its candidates.
+    uint64_t QueryFragment(const ClassifiedBatch& cb, const BatchArrays& arrays,
+                           std::span<const uint32_t> leaves, const cl::Buffer& rays,
+                           const cl::Buffer& out, bool shadow, KernelTimer& timer) {
+        const auto t0 = Clock::now();
+        // Sized first and written by index: a push_back loop cost measurably more. The arrays
+        // stay unchanged until SumTests below has waited for the kernel, so a CPU device reads
+        // them in place.
+        uint32_t nPackets = 0;
+        for (uint32_t l : leaves) nPackets += (cb.batch.leaves[l].rayCount + 15) / 16;
+        packetLeaf_.resize(nPackets);
+        packetFirst_.resize(nPackets);
+        uint32_t* packetLeafAt = packetLeaf_.data();
+        uint32_t* packetFirstAt = packetFirst_.data();
+        for (uint32_t l : leaves) {
+            const uint32_t count = cb.batch.leaves[l].rayCount;
+            for (uint32_t r = 0; r < count; r += 16) {
+                *packetLeafAt++ = l;
+                *packetFirstAt++ = r;
+            }
+        }
+        const cl::Buffer& packetLeaf = packetLeafBuf_.Share(ctx_, packetLeaf_);
+        const cl::Buffer& packetFirst = packetFirstBuf_.Share(ctx_, packetFirst_);
+        const cl::Buffer& testsBuf = fragmentTestsBuf_.Reserve(ctx_, nPackets * sizeof(uint32_t));
+        cl::Kernel& k = shadow ? occludedFragment_ : queryFragment_;
+        SetArgs(k, rays, arrays.rayIndex, packetLeaf, packetFirst, nPackets, arrays.leaves,
+                arrays.candidates, scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params,
+                out, testsBuf);
+        AddHostSeconds(Seconds(t0));
+        Launch(ctx_, k, nPackets, timer);
+        return SumTests(testsBuf, nPackets);
+    }
+
+    // The rays the vertex kernel did not shade (fragment leaves' rays and the misses), in slot
+    // order: shading then walks the batch's arrays in order, not leaf by leaf.
+    void ListUnshaded(const ClassifiedBatch& cb) {
+        const auto t0 = Clock::now();
         unshaded_.clear();
         if (!cb.vertexLeaves.empty()) {
             shadedByVertex_.assign(cb.batch.nRays, 0);
@@ -372,35 +415,37 @@ class ClassifiedQuery final : public RayQuery {
                 if (!shadedByVertex_[i]) unshaded_.push_back(i);
             }
         }
-        AddHostSeconds(Seconds(tUnshaded));
+        AddHostSeconds(Seconds(t0));
+    }
+
+    // Shades the rays the vertex kernel left, in the thesis's fragment pass 2: per ray (radiance,
+    // secondary rays), then per (ray, light) pair (shadow rays).
+    void ShadeUnshaded(const ClassifiedBatch& cb, const cl::Buffer& rays, const cl::Buffer& hits,
+                       const ShadeBuffers& shade, KernelTimer& timer) {
+        ListUnshaded(cb);
         // Without vertex-style leaves every ray is left: the kernels take a null id list.
         const bool allRays = cb.vertexLeaves.empty();
-        if (allRays || !unshaded_.empty()) {
-            // The thesis's fragment pass 2: per ray (radiance, secondary rays), then per
-            // (ray, light) pair (shadow rays).
-            const uint32_t nIds = allRays ? cb.batch.nRays : uint32_t(unshaded_.size());
-            const cl::Buffer ids = allRays ? cl::Buffer() : unshadedBuf_.Upload(ctx_, unshaded_);
-            // Below two lights the per-pair pass has nothing to spread over lanes: rc_shade_ids
-            // shades the light itself, and the saved surfaces' round trip through memory is saved.
-            const bool split = scene_.hostParams.nLights > 1;
-            const cl::Buffer surfaces =
-                split ? surfacesBuf_.Reserve(ctx_, size_t(cb.batch.nRays) * 2 * sizeof(rc_float4))
-                      : cl::Buffer();
-            SetArgs(shadeIds_, rays, shade->rayInfo, out, ids, nIds, surfaces, scene_.triangles,
-                    scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
-                    scene_.lights, scene_.params, shade->radiance, shade->NormalsOut(split),
-                    shade->shadow.rays, shade->shadow.contribution, shade->secondary.rays,
-                    shade->secondary.info, shade->spawned);
-            Launch(ctx_, shadeIds_, nIds, timer);
-            if (split) {
-                SetArgs(shadeLights_, rays, shade->rayInfo, out, ids, nIds, surfaces,
-                        shade->normals, scene_.triangles, scene_.triangleShading, scene_.spheres,
-                        scene_.quadrics, scene_.materials, scene_.lights, scene_.params,
-                        shade->shadow.rays, shade->shadow.contribution);
-                Launch(ctx_, shadeLights_, size_t(nIds) * scene_.hostParams.nLights, timer);
-            }
-        }
-        return {tests, true};
+        if (!allRays && unshaded_.empty()) return;
+        const uint32_t nIds = allRays ? cb.batch.nRays : uint32_t(unshaded_.size());
+        const cl::Buffer ids = allRays ? cl::Buffer() : unshadedBuf_.Upload(ctx_, unshaded_);
+        // Below two lights the per-pair pass has nothing to spread over lanes: rc_shade_ids
+        // shades the light itself, and the saved surfaces' round trip through memory is saved.
+        const bool split = scene_.hostParams.nLights > 1;
+        const cl::Buffer surfaces =
+            split ? surfacesBuf_.Reserve(ctx_, size_t(cb.batch.nRays) * 2 * sizeof(rc_float4))
+                  : cl::Buffer();
+        SetArgs(shadeIds_, rays, shade.rayInfo, hits, ids, nIds, surfaces, scene_.triangles,
+                scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
+                scene_.lights, scene_.params, shade.radiance, shade.NormalsOut(split),
+                shade.shadow.rays, shade.shadow.contribution, shade.secondary.rays,
+                shade.secondary.info, shade.spawned);
+        Launch(ctx_, shadeIds_, nIds, timer);
+        if (!split) return;
+        SetArgs(shadeLights_, rays, shade.rayInfo, hits, ids, nIds, surfaces, shade.normals,
+                scene_.triangles, scene_.triangleShading, scene_.spheres, scene_.quadrics,
+                scene_.materials, scene_.lights, scene_.params, shade.shadow.rays,
+                shade.shadow.contribution);
+        Launch(ctx_, shadeLights_, size_t(nIds) * scene_.hostParams.nLights, timer);
     }
 
     static double Seconds(Clock::time_point t0) {
@@ -416,7 +461,7 @@ class ClassifiedQuery final : public RayQuery {
     // A generation's eye, reflection and refraction rays share one hierarchy (classified on the
     // worker thread); its shadow rays have their own (classified on the calling thread). One
     // thread each: a hierarchy per thread repeats the filtering of the long top-level lists,
-    // which cost more than the thread saved (Conference eye rays 8.5 -> 2.4-5.4 Mrays/s).
+    // which cost more than the thread saved.
     classify::Hierarchy hierarchy_;
     classify::Hierarchy shadowHierarchy_;
     KernelStyle style_;
@@ -430,36 +475,12 @@ class ClassifiedQuery final : public RayQuery {
     GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,
         blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_, packetFirstBuf_,
         fragmentTestsBuf_, unshadedBuf_, surfacesBuf_, missedBuf_;
-    mutable std::mutex mutex_;  // guards hostSeconds_, eyeFromCamera_ and pool_
-    double hostSeconds_ = 0;
-    uint64_t eyeFromCamera_ = 0;    // Prepare's, which runs on a worker thread
-    uint64_t shadowFromLight_ = 0;  // Occluded's, which runs on the render thread only
-    uint64_t shadowInCells_ = 0;    // of them, sorted into direction cells
+    mutable std::mutex mutex_;  // guards stats_ (Prepare runs on a worker thread) and pool_
+    QueryStats stats_;
     std::vector<std::unique_ptr<ClassifiedBatch>> pool_;  // recycled batches
 };
 
 }  // namespace
-
-KernelStyle ParseKernelStyle(const std::string& name) {
-    if (name == "scalar") return KernelStyle::kScalar;
-    if (name == "vertex") return KernelStyle::kVertex;
-    if (name == "fragment") return KernelStyle::kFragment;
-    if (name == "auto") return KernelStyle::kAuto;
-    throw UsageError("--kernel must be scalar, vertex, fragment or auto, not '" + name + "'");
-}
-
-const char* KernelStyleName(KernelStyle style) {
-    switch (style) {
-        case KernelStyle::kScalar:
-            return "scalar";
-        case KernelStyle::kVertex:
-            return "vertex";
-        case KernelStyle::kFragment:
-            return "fragment";
-        default:
-            return "auto";
-    }
-}
 
 std::unique_ptr<RayQuery> MakeClassifiedQuery(clrt::Context& ctx, const cl::Program& program,
                                               const SceneBuffers& buffers,

@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "rayclass/core/large_pages.h"
+#include "rc_types.h"
 
 namespace rayclass::render {
 
@@ -28,14 +29,30 @@ void CL_CALLBACK FreePages(cl_mem, void* pages) { delete static_cast<LargePages*
 
 }  // namespace
 
+cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions,
+                               bool* fromCache) {
+    const std::string options = "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
+                                (extraOptions.empty() ? "" : " " + extraOptions);
+    return ctx.BuildProgram({"camera.cl", "intersect.cl", "encoding.cl", "shade.cl",
+                             "generation.cl", "brute.cl", "classified.cl", "bvh.cl"},
+                            options, fromCache);
+}
+
+void KernelTimer::Record(const std::string& kernel, const cl::Event& event) {
+    event.wait();
+    const auto start = event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
+    const auto end = event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
+    seconds_[kernel] += double(end - start) * 1e-9;
+}
+
 cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags, Writes writes) {
     bytes = std::max<size_t>(1, bytes);
     if (ctx.info().type != "cpu" || bytes < kLargeAllocationBytes || writes == Writes::kSome) {
         return clrt::Check("clCreateBuffer",
                            [&] { return cl::Buffer(ctx.context(), flags, bytes); });
     }
-    // PoCL's own allocations are malloc's, on 4 KiB pages: the kernels' first writes to a
-    // render's ray and shading buffers took 24k of sibenik.json's 53k page faults. Over memory
+    // PoCL's own allocations are malloc's, on small pages: the kernels' first writes to a
+    // render's ray and shading buffers took nearly half of a render's page faults. Over memory
     // of our own the device works in place, and the buffer frees it when it goes.
     // (Declared before the buffer: should the callback fail, the buffer goes first.)
     auto pages = std::make_unique<LargePages>(bytes);

@@ -41,15 +41,12 @@ double FresnelDielectric(double cosi, double eta) {
 class Tracer {
   public:
     Tracer(const scene::Scene& scene, const RenderOptions& options)
-        : scene_(scene),
-          options_(options),
-          test_(options.triangleTest == "watertight" ? geometry::TriangleTest::kWatertight
-                                                     : geometry::TriangleTest::kMoller) {}
+        : scene_(scene), options_(options) {}
 
     // Adds the radiance along the ray, times `weight`, to `color`. For eye rays fills the AOVs.
     void Trace(const Ray& ray, const V& weight, uint32_t depth, V& color, Counters& counters,
                image::Image* aovImage, size_t pixel) const {
-        const auto hit = geometry::IntersectBruteForce(scene_, ray, test_);
+        const auto hit = geometry::IntersectBruteForce(scene_, ray, options_.triangleTest);
         counters.tests += scene_.PrimitiveCount();
         if (!hit.Valid()) {
             color += weight * V(scene_.background);
@@ -65,6 +62,14 @@ class Tracer {
         color += weight * (V(m.emission) + V(m.kd) * V(scene_.ambient));
 
         const V above = geometry::OffsetRayOrigin(s.p, s.ng);
+        AddLights(ray, s, m, above, weight, color, counters);
+        Spawn(ray, s, m, above, weight, depth + 1, color, counters);
+    }
+
+  private:
+    // Adds every light's direct contribution at `s` that no primitive blocks.
+    void AddLights(const Ray& ray, const Surface& s, const scene::Material& m, const V& above,
+                   const V& weight, V& color, Counters& counters) const {
         for (const auto& light : scene_.lights) {
             const V toLight = V(light.position) - s.p;
             const double dist2 = glm::dot(toLight, toLight);
@@ -83,11 +88,16 @@ class Tracer {
             const double dist = glm::length(toLightFromOrigin);
             ++counters.shadow;
             counters.tests += scene_.PrimitiveCount();
-            if (!geometry::Occluded(scene_, Ray{above, toLightFromOrigin / dist, 0.0, dist}, test_)) {
+            const Ray shadow{above, toLightFromOrigin / dist, 0.0, dist};
+            if (!geometry::Occluded(scene_, shadow, options_.triangleTest)) {
                 color += c;
             }
         }
+    }
 
+    // Traces the reflection and refraction rays of depth `next` that `s` spawns.
+    void Spawn(const Ray& ray, const Surface& s, const scene::Material& m, const V& above,
+               const V& weight, uint32_t next, V& color, Counters& counters) const {
         const V kr(m.kr), kt(m.kt);
         if (std::max(MaxComponent(kr), MaxComponent(kt)) <= 0.0) return;
         const double cosi = std::clamp(-glm::dot(ray.d, s.ns), 0.0, 1.0);
@@ -103,7 +113,6 @@ class Tracer {
             krEff = kr + kt;
             ktEff = V(0.0);
         }
-        const uint32_t next = depth + 1;
         const V wr = weight * krEff;
         if (WorthSpawning(wr, next)) {
             V rdir = ray.d + 2.0 * cosi * s.ns;
@@ -122,7 +131,6 @@ class Tracer {
         }
     }
 
-  private:
     bool WorthSpawning(const V& w, uint32_t depth) const {
         return depth <= options_.maxDepth && MaxComponent(w) >= double(options_.minWeight);
     }
@@ -170,7 +178,6 @@ class Tracer {
 
     const scene::Scene& scene_;
     const RenderOptions& options_;
-    geometry::TriangleTest test_;
 };
 
 }  // namespace

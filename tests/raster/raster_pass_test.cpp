@@ -4,6 +4,7 @@
 
 #include "raster_support.h"
 #include "rayclass/image/compare.h"
+#include "rayclass/render/cl_renderer.h"
 #include "rayclass/render/reference.h"
 #include "rayclass/scene/loader.h"
 
@@ -97,12 +98,10 @@ TEST_P(RasterRenderMatchesReference, WithinBounds) {
     options.aovs = true;
     options.progress = false;
     render::RenderStats rasterStats, kernelStats, refStats;
-    options.eyeRays = "raster";
     RasterEyeHits eyeHits(*gl, RasterOptions{});
     const image::Image raster =
         render::ClRenderer(Cl(), scene, options, &eyeHits).Render(rasterStats);
     EXPECT_EQ(rasterStats.eyeRays, "raster");
-    options.eyeRays = "kernel";
     const image::Image kernel = render::ClRenderer(Cl(), scene, options).Render(kernelStats);
     const image::Image ref = render::RenderReference(scene, options, refStats);
     const image::ImageComparison cmp = image::Compare(raster, ref);

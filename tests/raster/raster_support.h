@@ -11,7 +11,7 @@
 
 #include "rayclass/clrt/context.h"
 #include "rayclass/raster/raster_pass.h"
-#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/brute_query.h"
 #include "rayclass/scene/scene.h"
 
 namespace rayclass::raster::testing_support {

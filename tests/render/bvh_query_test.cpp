@@ -17,7 +17,7 @@
 #include "query_io.h"
 #include "rayclass/bvh/bvh.h"
 #include "rayclass/clrt/context.h"
-#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/brute_query.h"
 #include "rayclass/render/device_scene.h"
 
 namespace rayclass::render {

@@ -3,6 +3,7 @@
 // batch of the same generation still lands in the hierarchy its earlier batches built. The
 // primitive tests a query reports tell the two apart: the same rays cost a different number of
 // tests when they are routed through splits made for other rays.
+#include "rayclass/render/brute_query.h"
 #include "rayclass/render/classified_query.h"
 
 #include <gtest/gtest.h>

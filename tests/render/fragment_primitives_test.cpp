@@ -12,6 +12,7 @@
 
 #include "query_io.h"
 #include "rayclass/clrt/context.h"
+#include "rayclass/render/brute_query.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/device_scene.h"
 

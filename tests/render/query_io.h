@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "rayclass/clrt/context.h"
-#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/ray_query.h"
 #include "rayclass/render/launch.h"
 
 namespace rayclass::render {

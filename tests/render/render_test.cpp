@@ -73,7 +73,7 @@ TEST_P(RenderMatchesReference, WithinBounds) {
 
     RenderStats refStats;
     const image::Image ref = RenderReference(scene, options, refStats);
-    options.accel = "brute";
+    options.accel = Accel::kBrute;
     RenderStats bruteStats;
     const image::Image brute = ClRenderer(SharedContext(), scene, options).Render(bruteStats);
     const image::ImageComparison cmp = image::Compare(brute, ref);
@@ -103,10 +103,10 @@ TEST_P(RenderMatchesReference, WithinBounds) {
     // lower id wins ties), so ids and images are identical, not merely close. Shadow rays are
     // classified from a light inside the scene box (every one of them: each ends there within
     // the tolerance) and traced from the surface as given, so their answers are the same too.
-    for (const char* style : {"scalar", "vertex", "fragment", "auto"}) {
-        options.accel = "classify";
-        options.kernel = style;
-        RenderStats stats = renderLikeBrute(style);
+    for (const auto& [style, kernel] : kKernelStyles) {
+        options.accel = Accel::kClassify;
+        options.kernel = kernel;
+        RenderStats stats = renderLikeBrute(std::string(style));
         EXPECT_LT(stats.intersectionTests, bruteStats.intersectionTests) << style;
         EXPECT_EQ(stats.shadowRaysFromLight, c.lightsInBox ? stats.raysByKind["shadow"] : 0u)
             << style;
@@ -115,13 +115,13 @@ TEST_P(RenderMatchesReference, WithinBounds) {
     }
     // Auto without the gather's price (a GPU's default) answers some leaves of a batch in each
     // style: the mixed batch must give the same image too.
-    options.kernel = "auto";
-    options.classifyParams = {{"vertex-gather", "0"}};
+    options.kernel = KernelStyle::kAuto;
+    options.classifyParams = {classify::ParseParam("vertex-gather", "0")};
     renderLikeBrute("auto, vertex-gather=0");
     options.classifyParams.clear();
     // The BVH query uses the same routines and tie-break: identical too.
     {
-        options.accel = "bvh";
+        options.accel = Accel::kBvh;
         const RenderStats stats = renderLikeBrute("bvh");
         EXPECT_EQ(stats.accel, "bvh");
         EXPECT_LE(stats.intersectionTests, bruteStats.intersectionTests) << "bvh";
@@ -131,8 +131,8 @@ TEST_P(RenderMatchesReference, WithinBounds) {
     // small scenes the BVH has won from generation 1 in every run seen), but the classification
     // answers generation 0 and the BVH, once chosen, keeps a kind of query.
     {
-        options.accel = "auto";
-        options.kernel = "auto";
+        options.accel = Accel::kAuto;
+        options.kernel = KernelStyle::kAuto;
         const RenderStats stats = renderLikeBrute("auto");
         EXPECT_EQ(stats.accel, "auto");
         ASSERT_FALSE(stats.generations.empty());
@@ -276,7 +276,7 @@ TEST(ClRenderer, EyeRaysAreClassifiedFromTheirCamera) {
     // glass.json's camera lies inside the scene's box (cornell.json's in front of it: below).
     scene::Scene glass = TestScene("tests/glass.json", 160, 120);
     RenderOptions options = QuietOptions(/*aovs=*/true);
-    options.accel = "classify";
+    options.accel = Accel::kClassify;
     RenderStats whole, batched, polar, brute, outside;
     const image::Image img = ClRenderer(SharedContext(), glass, options).Render(whole);
     EXPECT_EQ(whole.eyeRaysFromCamera, 160u * 120u);
@@ -288,17 +288,17 @@ TEST(ClRenderer, EyeRaysAreClassifiedFromTheirCamera) {
     EXPECT_EQ(same.idMismatchPixels, 0u);
     EXPECT_EQ(same.maxAbsError, 0.0);
     options.batchRays = 1u << 20;
-    options.accel = "brute";
+    options.accel = Accel::kBrute;
     const image::Image truth = ClRenderer(SharedContext(), glass, options).Render(brute);
     EXPECT_EQ(image::Compare(img, truth).idMismatchPixels, 0u);
     EXPECT_EQ(image::Compare(img, truth).maxAbsError, 0.0);
     EXPECT_EQ(brute.eyeRaysFromCamera, 0u);
     // Rounded directions are not the camera's: read back and classified ray by ray.
-    options.accel = "classify";
-    options.rayEncoding = "polar16";
+    options.accel = Accel::kClassify;
+    options.rayEncoding = RayEncoding::kPolar16;
     ClRenderer(SharedContext(), glass, options).Render(polar);
     EXPECT_EQ(polar.eyeRaysFromCamera, 0u);
-    options.rayEncoding = "float";
+    options.rayEncoding = RayEncoding::kFloat;
     ClRenderer(SharedContext(), TestScene("cornell.json", 80, 60), options).Render(outside);
     EXPECT_EQ(outside.eyeRaysFromCamera, 80u * 60u);
 }
@@ -312,7 +312,7 @@ TEST(ClRenderer, Polar16DirectionsCostBoundedAccuracy) {
     RenderStats refStats, floatStats, polarStats;
     const image::Image ref = RenderReference(scene, options, refStats);
     const image::Image exact = ClRenderer(SharedContext(), scene, options).Render(floatStats);
-    options.rayEncoding = "polar16";
+    options.rayEncoding = RayEncoding::kPolar16;
     const image::Image polar = ClRenderer(SharedContext(), scene, options).Render(polarStats);
     const double polarRmse = image::Compare(polar, ref).rmse;
     const double floatRmse = image::Compare(exact, ref).rmse;
@@ -335,22 +335,23 @@ TEST(ClRenderer, WatertightTestAgreesAcrossQueriesAndWithTheReference) {
     // different handful of edge pixels on the float-double boundary).
     scene::Scene scene = TestScene("tests/glass.json", 160, 120);
     RenderOptions options = QuietOptions(/*aovs=*/true);
-    options.triangleTest = "watertight";
+    options.triangleTest = TriangleTest::kWatertight;
     RenderStats refStats;
     const image::Image ref = RenderReference(scene, options, refStats);
-    options.accel = "brute";
+    options.accel = Accel::kBrute;
     RenderStats bruteStats;
     const image::Image brute = ClRenderer(SharedContext(), scene, options).Render(bruteStats);
     const image::ImageComparison cmp = image::Compare(brute, ref);
     EXPECT_LE(cmp.rmse, 5e-4);
     EXPECT_LE(cmp.idMismatchPixels, 3u);
-    for (const char* accel : {"classify", "bvh"}) {
+    for (const Accel accel : {Accel::kClassify, Accel::kBvh}) {
         options.accel = accel;
+        const std::string_view name = NameOf(kAccels, accel);
         RenderStats stats;
         const image::Image img = ClRenderer(SharedContext(), scene, options).Render(stats);
         const image::ImageComparison same = image::Compare(img, brute);
-        EXPECT_EQ(same.idMismatchPixels, 0u) << accel;
-        EXPECT_EQ(same.maxAbsError, 0.0) << accel;
+        EXPECT_EQ(same.idMismatchPixels, 0u) << name;
+        EXPECT_EQ(same.maxAbsError, 0.0) << name;
     }
 }
 

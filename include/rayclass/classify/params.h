@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <string>
+#include <variant>
 
 #include "rayclass/scene/scene.h"
 
@@ -96,16 +97,34 @@ struct Params {
     static Params ForScene(const scene::Scene& scene);
 };
 
-// Sets one parameter by its command-line name (`--classify NAME=VALUE`):
+// One cost-function setting, parsed: a field of Params and the value it takes. The command line
+// parses `--classify NAME=VALUE` into one of these once; whoever builds the Params applies it.
+struct ParamSetting {
+    template <typename T>
+    struct Field {
+        T Params::*member;
+        T value;
+    };
+    std::variant<Field<uint32_t>, Field<int>, Field<float>, Field<SplitRule>> field;
+
+    void ApplyTo(Params& params) const {
+        std::visit([&params](const auto& f) { params.*f.member = f.value; }, field);
+    }
+};
+
+// Parses one parameter by its command-line name (`--classify NAME=VALUE`):
 //   min-rays N, min-candidates N, splits-per-list N (N >= 1), split midpoint|median,
 //   min-origin-fraction F, min-dir-fraction F (0 <= F <= 1), dir-weight W (W > 0),
 //   threads N (0: one per core), task-rays N (0: automatic), plan-rays N (0: never),
 //   light-cells auto|off|N (N a power of two from 4 to 256), vertex-gather F (F >= 0).
 // Throws rayclass::UsageError naming the valid names or values when `name` is unknown or `value`
 // does not parse completely or is out of range.
+ParamSetting ParseParam(const std::string& name, const std::string& value);
+
+// ParseParam(name, value) applied to `params`, for programs that set a parameter once.
 void SetParam(Params& params, const std::string& name, const std::string& value);
 
-// The names SetParam accepts, comma-separated, for help texts.
+// The names ParseParam accepts, comma-separated, for help texts.
 const char* ParamNames();
 
 }  // namespace rayclass::classify

@@ -44,7 +44,8 @@ bool IsSoftwareRenderer(const std::string& renderer);
 
 // Whether EGL enumerates its devices (EGL_EXT_device_enumeration) and every one is a software
 // rasterizer (EGL_MESA_device_software). Then any context would be a software one, which
-// --eye-rays auto learns this way without eglInitialize (loading the driver: 17-34 ms here).
+// --eye-rays auto learns this way without eglInitialize (which loads the driver, a noticeable
+// part of a small render).
 // False when EGL cannot tell.
 bool OnlySoftwareEglDevices();
 

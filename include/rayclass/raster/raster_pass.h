@@ -1,4 +1,4 @@
-// The eye rays' first hits by rasterization (Lessig 2004, sec. 4.2; design notes sec. 4): every
+// The eye rays' first hits by rasterization (Lessig 2004, sec. 4.2; docs/design.md): every
 // primitive is drawn as a hull that covers every pixel whose eye ray can hit it, and the fragment
 // shader tests that pixel's eye ray exactly against the primitive (the formulas of
 // geometry/intersect.h and cl/intersect.cl, in float), writes the hit distance as depth and keeps,
@@ -20,6 +20,7 @@
 // - Ids are full 32-bit global primitive ids (triangles, spheres, quadrics; RC_NO_HIT on a miss).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -27,14 +28,19 @@
 #include <vector>
 
 #include "rayclass/raster/gl.h"
-#include "rayclass/render/cl_renderer.h"
 #include "rayclass/render/device_scene.h"
+#include "rayclass/render/eye_hits.h"
+#include "rayclass/render/options.h"
 #include "rayclass/scene/scene.h"
 #include "rc_types.h"
 
 namespace rayclass::raster {
 
 enum class Hull { Sphere, Box, Billboard, Auto };
+inline constexpr render::Named<Hull> kHulls[] = {{"sphere", Hull::Sphere},
+                                                 {"box", Hull::Box},
+                                                 {"billboard", Hull::Billboard},
+                                                 {"auto", Hull::Auto}};
 
 // "sphere", "box", "billboard", "auto"; throws rayclass::UsageError on anything else.
 Hull ParseHull(const std::string& name);
@@ -102,9 +108,16 @@ class RasterPass {
 
   private:
     enum Kind { kTriangles = 0, kSpheres = 1, kQuadrics = 2 };
+    using Programs = std::array<GLuint, 3>;  // per kind; 0: no primitive of the kind
     GLuint Program(Kind kind, Hull hull, bool slabPass);
     void EnsureFramebuffer(uint32_t width, uint32_t height);
     void PrepareSlabs(const RcCamera& camera);
+    // The stages of Render: the programs with the camera's uniforms, cleared targets, the draw
+    // calls, and the hits read back.
+    Programs SetUpPrograms(const RcCamera& camera);
+    void ClearTargets();
+    void Draw(const Programs& programs);
+    std::vector<RcHit> ReadHits();
 
     GlContext& gl_;
     RasterOptions options_;

@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "rayclass/bvh/bvh.h"
-#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/ray_query.h"
 
 namespace rayclass::render {
 

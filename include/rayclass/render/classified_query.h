@@ -6,22 +6,12 @@
 #pragma once
 
 #include <memory>
-#include <string>
 
 #include "rayclass/classify/params.h"
-#include "rayclass/render/cl_renderer.h"
+#include "rayclass/render/options.h"
+#include "rayclass/render/ray_query.h"
 
 namespace rayclass::render {
-
-enum class KernelStyle {
-    kScalar,    // one work-item per ray, one candidate at a time
-    kVertex,    // one work-item per ray, 16 candidates per step (float16 lanes over candidates)
-    kFragment,  // one work-item per 16 rays of a leaf, lockstep over candidates
-    kAuto,      // per leaf: fragment for coherent leaves, vertex otherwise (shadow rays: fragment)
-};
-
-KernelStyle ParseKernelStyle(const std::string& name);  // throws UsageError
-const char* KernelStyleName(KernelStyle style);
 
 std::unique_ptr<RayQuery> MakeClassifiedQuery(clrt::Context& ctx, const cl::Program& program,
                                               const SceneBuffers& buffers,

@@ -1,19 +1,35 @@
-// Small helpers every query and the renderer use to move data and launch kernels: one fixed
-// local size (PoCL compiles a work-group function per local size), buffers that reject nothing
-// (OpenCL refuses zero-sized ones), and per-kernel device time.
+// Small helpers every query and the renderer use to build their program, move data and launch
+// kernels: one fixed local size (PoCL compiles a work-group function per local size), buffers
+// that reject nothing (OpenCL refuses zero-sized ones), and per-kernel device time.
 #pragma once
 
 #include <algorithm>
 #include <cstdint>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "rayclass/clrt/context.h"
-#include "rayclass/render/cl_renderer.h"
 
 namespace rayclass::render {
 
 // Work-items per work-group in every kernel launch (the kernels' reqd_work_group_size).
 constexpr size_t kLocalSize = 64;
+
+// The program holding every kernel the renderer uses, with the options they need
+// (*fromCache: see clrt::Context::BuildProgram).
+cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions = {},
+                               bool* fromCache = nullptr);
+
+// Sums the device time of every launch per kernel name.
+class KernelTimer {
+  public:
+    void Record(const std::string& kernel, const cl::Event& event);
+    const std::map<std::string, double>& Seconds() const { return seconds_; }
+
+  private:
+    std::map<std::string, double> seconds_;
+};
 
 // A read-only buffer holding a copy of `v` (one zeroed element when `v` is empty).
 template <typename T>
@@ -77,9 +93,8 @@ class GrowingBuffer {
     }
 
     // The same for arrays that stay unchanged until the kernels that read them have finished:
-    // on a CPU device a buffer over `data` itself, which PoCL reads in place (sibenik_mirror's
-    // deep generations copied 180 MB of leaf lists a batch, and faulted in the pages of a second
-    // copy of them).
+    // on a CPU device a buffer over `data` itself, which PoCL reads in place (a copy of a deep
+    // generation's leaf lists is large, and faults in the pages of a second copy of them).
     template <typename T, typename Allocator>
     const cl::Buffer& Share(clrt::Context& ctx, const std::vector<T, Allocator>& data) {
         if (ctx.info().type != "cpu" || data.empty()) return Upload(ctx, data);

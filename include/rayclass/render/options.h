@@ -1,12 +1,72 @@
-// What a render is asked to do, independent of which renderer does it.
+// What a render is asked to do, independent of which renderer does it. Every choice is a typed
+// value here; the command line turns its words into them once, through the name tables below,
+// which --stats and the help texts share.
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
-#include <utility>
+#include <string_view>
 #include <vector>
 
+#include "rayclass/classify/params.h"
+#include "rayclass/geometry/intersect.h"
+
 namespace rayclass::render {
+
+// A choice's name, as the command line and --stats spell it.
+template <typename E>
+struct Named {
+    std::string_view name;
+    E value;
+};
+
+// The value `name` names in `names`, if any.
+template <typename E, size_t N>
+constexpr std::optional<E> FindChoice(const Named<E> (&names)[N], std::string_view name) {
+    for (const Named<E>& n : names) {
+        if (n.name == name) return n.value;
+    }
+    return std::nullopt;
+}
+
+// The name of `value` in `names` (empty when it has none).
+template <typename E, size_t N>
+constexpr std::string_view NameOf(const Named<E> (&names)[N], E value) {
+    for (const Named<E>& n : names) {
+        if (n.value == value) return n.name;
+    }
+    return {};
+}
+
+// The ray query: the ray classification, a BVH, auto (per generation, auto_query.h) or brute
+// force.
+enum class Accel : uint8_t { kClassify, kBvh, kAuto, kBrute };
+inline constexpr Named<Accel> kAccels[] = {{"classify", Accel::kClassify},
+                                           {"bvh", Accel::kBvh},
+                                           {"auto", Accel::kAuto},
+                                           {"brute", Accel::kBrute}};
+
+// The classified query's kernels (cl/classified.cl).
+enum class KernelStyle : uint8_t {
+    kScalar,    // one work-item per ray, one candidate at a time
+    kVertex,    // one work-item per ray, 16 candidates per step (float16 lanes over candidates)
+    kFragment,  // one work-item per 16 rays of a leaf, lockstep over candidates
+    kAuto,      // per leaf: fragment for coherent leaves, vertex otherwise (shadow rays: fragment)
+};
+inline constexpr Named<KernelStyle> kKernelStyles[] = {{"scalar", KernelStyle::kScalar},
+                                                       {"vertex", KernelStyle::kVertex},
+                                                       {"fragment", KernelStyle::kFragment},
+                                                       {"auto", KernelStyle::kAuto}};
+
+// Ray directions on the device: float, or packed 16-bit polar angles (cl/encoding.cl).
+enum class RayEncoding : uint8_t { kFloat, kPolar16 };
+inline constexpr Named<RayEncoding> kRayEncodings[] = {{"float", RayEncoding::kFloat},
+                                                       {"polar16", RayEncoding::kPolar16}};
+
+using geometry::TriangleTest;
+inline constexpr Named<TriangleTest> kTriangleTests[] = {{"moller", TriangleTest::kMoller},
+                                                         {"watertight", TriangleTest::kWatertight}};
 
 struct RenderOptions {
     uint32_t maxDepth = 6;          // deepest secondary ray spawned (eye rays have depth 0)
@@ -15,30 +75,22 @@ struct RenderOptions {
     // Rays per batch: bounds the device buffers (launch.h's BatchRays also keeps them within
     // one device allocation); a generation of several batches lets the host classify one while
     // the device answers another. Yet each batch descends the hierarchy anew and filters the
-    // lists of every node it visits: a 1024x768 generation in one batch filtered 43 % fewer
-    // boxes than in three of 2^18 on sibenik_mirror (3.1 against 5.4 billion), and with
-    // --accel classify rendered in 5.7-6.0 s against 7.0-8.1 s (conference_mirror 8.6-10.3
-    // against 12.0-12.4 s; auto within the noise or faster, bvh up to 10 % slower), for 50 %
-    // more memory (1.77 against 1.20 GB). Where classifying is cheap, the larger buffers'
-    // page faults cost more than it saves: cornell.json at 4096x4096 took 6.7-8.0 s in batches
-    // of 2^18 and 7.7-8.4 s in batches of 2^20, which fault in 0.6 GB more.
+    // lists of every node it visits, so a whole 1024x768 generation in one batch filters far
+    // fewer boxes and renders deep mirror scenes faster with --accel classify, for more memory.
+    // Where classifying is cheap, the larger buffers' page faults cost more than it saves (very
+    // large images of simple scenes).
     uint32_t batchRays = 1u << 20;
-    std::string device = "auto";    // OpenCL device: auto, cpu, gpu or an index
-    // Ray query: classify (ray classification), bvh, auto (auto_query.h) or brute.
-    std::string accel = "classify";
-    // Cost-function settings of the classification (classify::SetParam names and values).
-    std::vector<std::pair<std::string, std::string>> classifyParams;
-    std::string kernel = "auto";        // classified query style: scalar, vertex, fragment, auto
-    std::string buildOptions;           // extra OpenCL build options
-    std::string rayEncoding = "float";  // ray directions: float or polar16 (cl/encoding.cl)
-    bool progress = true;               // progress line on stderr for renders over a second
-    std::string eyeRays = "kernel";     // first hits of eye rays: "kernel" (ray query) or "raster"
-    std::string hull = "auto";  // raster hulls of spheres/quadrics: sphere|box|billboard|auto
-    // Ray/triangle test: moller (Moeller-Trumbore, default) or watertight (Woop, Benthin & Wald
-    // 2013). Watertight applies to the brute-force and scalar classified kernels and the reference
+    Accel accel = Accel::kClassify;
+    std::vector<classify::ParamSetting> classifyParams;  // cost-function settings, in order
+    KernelStyle kernel = KernelStyle::kAuto;
+    std::string buildOptions;  // extra OpenCL build options
+    RayEncoding rayEncoding = RayEncoding::kFloat;
+    bool progress = true;  // progress line on stderr for renders over a second
+    // Ray/triangle test: Moeller-Trumbore (default) or watertight (Woop, Benthin & Wald 2013).
+    // Watertight applies to the brute-force and scalar classified kernels and the reference
     // renderer; the 16-lane vertex/fragment kernels are Moeller only, so with watertight the
     // classified query runs the scalar kernels (auto) and --kernel vertex|fragment is an error.
-    std::string triangleTest = "moller";
+    TriangleTest triangleTest = TriangleTest::kMoller;
 };
 
 }  // namespace rayclass::render

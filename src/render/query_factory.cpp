@@ -1,0 +1,46 @@
+#include "rayclass/render/query_factory.h"
+
+#include <chrono>
+
+#include "rayclass/classify/params.h"
+#include "rayclass/render/auto_query.h"
+#include "rayclass/render/brute_query.h"
+#include "rayclass/render/bvh_query.h"
+#include "rayclass/render/classified_query.h"
+
+namespace rayclass::render {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+}  // namespace
+
+std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& program,
+                                    const SceneBuffers& buffers, const scene::Scene& scene,
+                                    const RenderOptions& options, RenderStats& stats) {
+    if (options.accel == Accel::kBrute) return MakeBruteForceQuery(ctx, program, buffers);
+    auto makeBvh = [&ctx, &program, &buffers, &scene, &stats] {
+        const auto t0 = Clock::now();
+        auto query = MakeBvhQuery(ctx, program, buffers, scene);
+        stats.timeS["bvh_build"] = SecondsSince(t0);
+        return query;
+    };
+    if (options.accel == Accel::kBvh) return makeBvh();
+    const auto t0 = Clock::now();
+    classify::Params params = classify::Params::ForScene(scene);
+    for (const classify::ParamSetting& setting : options.classifyParams) setting.ApplyTo(params);
+    // The 16-lane kernels are Moeller-Trumbore only: the watertight test runs the scalar style.
+    const KernelStyle style =
+        options.triangleTest == TriangleTest::kWatertight ? KernelStyle::kScalar : options.kernel;
+    auto query = MakeClassifiedQuery(ctx, program, buffers, scene, params, style);
+    stats.timeS["classify_setup"] = SecondsSince(t0);
+    if (options.accel == Accel::kAuto) return MakeAutoQuery(ctx, std::move(query), makeBvh);
+    return query;
+}
+
+}  // namespace rayclass::render
