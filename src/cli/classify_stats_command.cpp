@@ -49,7 +49,7 @@ OptionTable StatsOptionTable(StatsArgs& a) {
             {{"--camera"},
              "scene|anchor",
              "the scene's camera, or the benchmark camera of\n"
-             "design/notes/measured-anchors.md (default: scene for .json, anchor\n"
+             "scenes/bench/README.md (default: scene for .json, anchor\n"
              "for .obj)",
              Choice(a.camera, kCameras)},
             {{"--repeat"},

@@ -20,8 +20,8 @@ enum class SplitRule : uint8_t {
 struct Params {
     // Split dimension: the largest extent relative to the face root's extent, the direction
     // extents (u, v) weighted by dirWeight. Split value: splitRule. Midpoint is the default
-    // because on sibenik it gave mirror-ray lists 2-3x shorter than the median and classifies
-    // 2x faster (design/notes/classification-feasibility.md, "Median vs midpoint split").
+    // because it gave shorter mirror-ray lists than the median and classifies faster
+    // (docs/bench/README.md, "Cost-function defaults").
     SplitRule splitRule = SplitRule::kMidpoint;
     float dirWeight = 1.0f;
 
@@ -40,12 +40,10 @@ struct Params {
     // (with the defaults a 16-ray group needs about 260 candidates, a 2-ray group about 2,400),
     // instead of a hard gate that left small groups with lists of 100k+ candidates.
     //
-    // Per-test costs in ns on one core of these 2-vCPU Xeon (Sapphire Rapids) machines, Release
-    // build, measured 2026-11-22 by bench/classify/intersect_bench (scalar float routines of
-    // geometry/intersect.h through IntersectPrimitive, one ray against 4096 random primitives):
-    //   triangle 13.9 ns, sphere 5.2 ns, quadric 12.4 ns; list filter 0.45 ns per box (AVX-512).
-    // The ray-move cost, about 1 ns per ray and level, is classify_bench's partition time over
-    // its moves. Only the ratios matter to the decision.
+    // Per-test costs in ns on one core, as bench/classify/intersect_bench measures them (scalar
+    // float routines of geometry/intersect.h, one ray against many random primitives; the list
+    // filter per box) and classify_bench's partition time per ray and level for the ray move
+    // (docs/bench/README.md, "Cost-function defaults"). Only the ratios matter to the decision.
     uint32_t minRays = 64;        // a work-group's worth of rays: smaller leaves cost extra
     uint32_t minCandidates = 16;  // the device tests 16 candidates at once: fewer gain nothing
     float triangleCost = 13.9f;
@@ -60,7 +58,7 @@ struct Params {
     // the gather kernel's copy of the block's triangles, in fragment-packet iterations
     // (render/classified_query.cpp). Negative: the device's default, 13 on CPU devices
     // (measured with PoCL, where it leaves every leaf to the fragment style) and 0 on others
-    // (not measured: no GPU was at hand).
+    // (not measured on a GPU yet).
     float vertexGatherCost = -1.0f;
 
     // Threads that subdivide a generation (0: one per core, or one for fewer than 32k rays).
@@ -78,7 +76,7 @@ struct Params {
     // Any-hit rays that all end at common points (shadow rays to point lights inside the scene
     // box) are sorted by cell of their direction from the point, on a grid of lightCells x
     // lightCells cells on each face of the direction cube, and the hierarchy splits ranges of
-    // cells instead of moving rays (Hierarchy::SubdivideFromEnds). A power of two from 4 to 256;
+    // cells instead of moving rays (src/classify/light_cells.h). A power of two from 4 to 256;
     // 0: never (such rays take the general path), -1: chosen from the number of rays.
     int lightCells = -1;
 

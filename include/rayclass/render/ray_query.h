@@ -41,7 +41,7 @@ struct QueryStats {
     double hostSeconds = 0;  // host work (classification, the batch arrays), summed over threads
     uint64_t shadowRaysFromLight = 0;  // shadow rays classified from their light
     // Of them, those sorted into cells of their direction from the light
-    // (classify::Hierarchy::SubdivideFromEnds).
+    // (src/classify/light_cells.h).
     uint64_t shadowRaysInCells = 0;
     uint64_t eyeRaysFromCamera = 0;  // eye rays classified from their camera (RaySource), unread
 };

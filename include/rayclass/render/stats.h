@@ -35,7 +35,7 @@ struct RenderStats {
     std::vector<GenerationStats> generations;
     uint64_t intersectionTests = 0;
     uint64_t shadowRaysFromLight = 0;  // classified from their light (classify::CommonEnds)
-    uint64_t shadowRaysInCells = 0;    // of them, sorted into direction cells (SubdivideFromEnds)
+    uint64_t shadowRaysInCells = 0;    // of them, sorted into direction cells (light_cells.h)
     uint64_t eyeRaysFromCamera = 0;    // classified from their camera (ClassifyPinhole)
     bool programFromCache = false;     // the kernels' binary came from the program cache
     double queryTimeS = 0;  // time of the ray-query kernels (nearest hit and shadow)
