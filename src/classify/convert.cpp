@@ -4,20 +4,18 @@
 #include <bit>
 #include <cmath>
 
-#if defined(__AVX512F__)
 #include "rays16.h"
-#endif
 
 namespace rayclass::classify {
 
 namespace {
 
-#if defined(__AVX512F__)
+#if defined(RC_AVX512_PATHS)
 // The bounds of the points a block loop wrote, per face and coordinate, lane by lane.
 struct Bounds16 {
     __m512 lo[kFaceCount][kCoords], hi[kFaceCount][kCoords];
 
-    Bounds16() {
+    RC_AVX512 Bounds16() {
         for (int f = 0; f < kFaceCount; ++f) {
             for (int k = 0; k < kCoords; ++k) {
                 lo[f][k] = _mm512_set1_ps(kInf);
@@ -26,7 +24,7 @@ struct Bounds16 {
         }
     }
     // Grows faceBounds by them, and by the values held back (which were never compared here).
-    void Fold(Bounds6* faceBounds, const HeldCoords& held) const {
+    RC_AVX512 void Fold(Bounds6* faceBounds, const HeldCoords& held) const {
         for (int f = 0; f < kFaceCount; ++f) {
             for (int k = 0; k < kCoords; ++k) {
                 faceBounds[f].lo[k] = std::min(faceBounds[f].lo[k], ReduceMin(lo[f][k]));
@@ -74,9 +72,10 @@ class FaceWriter {
         GrowBounds(faceBounds_[r.face], p);
     }
 
-#if defined(__AVX512F__)
+#if defined(RC_AVX512_PATHS)
     // Lanes m of the points p (all of face f) with ids `id`; their bounds grow `bounds`.
-    void Put16(int f, __mmask16 m, const __m512 p[kCoords], __m512i id, Bounds16& bounds) {
+    RC_AVX512 void Put16(int f, __mmask16 m, const __m512 p[kCoords], __m512i id,
+                         Bounds16& bounds) {
         const uint32_t cnt = uint32_t(std::popcount(unsigned(m)));
         const __mmask16 dst = __mmask16((1u << cnt) - 1u);
         const uint32_t w = next_[f];
@@ -128,7 +127,7 @@ class FaceWriter {
     float faceEnd_[kFaceCount];
 };
 
-#if defined(__AVX512F__)
+#if defined(RC_AVX512_PATHS)
 // Where 16 rays start and the segments mapped from there. `fast`: the lanes the vector path maps;
 // `rejected`: lanes that start outside the box and miss it. The others take the scalar path.
 struct Start16 {
@@ -139,8 +138,8 @@ struct Start16 {
 
 // ToRay5Clipped's slab clip of the lanes `outside` (rays that start outside the box, whose
 // origin is finite), operation for operation, so the points are bit-identical.
-void ClipToBox16(const Rays16& r, __mmask16 outside, const __m512 blo[3], const __m512 bhi[3],
-                 Start16& s) {
+RC_AVX512 void ClipToBox16(const Rays16& r, __mmask16 outside, const __m512 blo[3],
+                           const __m512 bhi[3], Start16& s) {
     const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
     const __m512 o[3] = {r.ox, r.oy, r.oz}, d[3] = {r.dx, r.dy, r.dz};
     __m512 tEnter = r.tmin, tExit = r.tmax;
@@ -173,8 +172,8 @@ void ClipToBox16(const Rays16& r, __mmask16 outside, const __m512 blo[3], const 
     s.rejected = __mmask16(outside & ~clip);
 }
 
-Start16 Starts16(const Rays16& r, const Axis16& axis, __mmask16 live, const __m512 blo[3],
-                 const __m512 bhi[3]) {
+RC_AVX512 Start16 Starts16(const Rays16& r, const Axis16& axis, __mmask16 live, const __m512 blo[3],
+                           const __m512 bhi[3]) {
     const __m512 zero = _mm512_setzero_ps();
     // start = tMin == 0 ? origin : origin + tMin d
     const __mmask16 t0 = _mm512_cmp_ps_mask(r.tmin, zero, _CMP_EQ_OQ);
@@ -199,18 +198,15 @@ Start16 Starts16(const Rays16& r, const Axis16& axis, __mmask16 live, const __m5
     if (outside) ClipToBox16(r, outside, blo, bhi, s);
     return s;
 }
-#endif
 
-}  // namespace
-
-uint64_t ConvertRays(RayView rays, const CommonEnds& ends, const Bounds3f& sceneBox,
-                     uint32_t firstId, const FaceSlabs& out, uint32_t* next, Bounds6* faceBounds,
-                     HeldCoords& held, std::vector<rc_uint>& missed) {
-    FaceWriter writer(out, next, faceBounds, held, sceneBox);
-    uint64_t fromEnd = 0;
+// ConvertRays' blocks of 16 rays (the last one's missing lanes masked); lanes the vector path
+// does not map take the scalar one. Returns the rays done.
+RC_AVX512 size_t ConvertBlocks16(RayView rays, const CommonEnds& ends, const Bounds3f& sceneBox,
+                                 uint32_t firstId, FaceWriter& writer, Bounds6* faceBounds,
+                                 HeldCoords& held, std::vector<rc_uint>& missed,
+                                 uint64_t& fromEnd) {
     const size_t n = rays.size();
     size_t i = 0;
-#if defined(__AVX512F__)
     const __m512i idx = RayOffsets16(rays);
     const bool packed = rays.Stride() == 8 * sizeof(float);
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
@@ -252,6 +248,23 @@ uint64_t ConvertRays(RayView rays, const CommonEnds& ends, const Bounds3f& scene
         }
     }
     bounds.Fold(faceBounds, held);
+    return i;
+}
+#endif
+
+}  // namespace
+
+uint64_t ConvertRays(RayView rays, const CommonEnds& ends, const Bounds3f& sceneBox,
+                     uint32_t firstId, const FaceSlabs& out, uint32_t* next, Bounds6* faceBounds,
+                     HeldCoords& held, std::vector<rc_uint>& missed) {
+    FaceWriter writer(out, next, faceBounds, held, sceneBox);
+    uint64_t fromEnd = 0;
+    const size_t n = rays.size();
+    size_t i = 0;
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512())
+        i = ConvertBlocks16(rays, ends, sceneBox, firstId, writer, faceBounds, held, missed,
+                            fromEnd);
 #endif
     for (; i < n; ++i) {
         Ray5 r;

@@ -5,9 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#if defined(__AVX512F__)
 #include "avx512.h"
-#endif
 
 namespace rayclass::classify {
 
@@ -22,18 +20,16 @@ float WidenLower(float s) { return s == 0.0f ? -kTinySlope : s; }
 // errs by a few of those. The beam grows by this margin, so that rounding never narrows it.
 constexpr float kStepMargin = 1.0f / 32.0f;
 
-#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__) && \
-    defined(__AVX512VBMI2__)
-#define RC_FILTER_AVX512 1
+#if defined(RC_AVX512_PATHS)
 
 // 16 boxes' coordinate in steps, as floats (maskz: see avx512.h).
-inline __m512 Widen16(__m256i steps) {
+RC_AVX512 inline __m512 Widen16(__m256i steps) {
     return _mm512_maskz_cvtepi32_ps(__mmask16(0xFFFF),
                                     _mm512_maskz_cvtepu16_epi32(__mmask16(0xFFFF), steps));
 }
 
 template <int kSigns>
-size_t FilterAvx512(const BeamTest& t, const ListView& in, const ListOut& out) {
+RC_AVX512 size_t FilterAvx512(const BeamTest& t, const ListView& in, const ListOut& out) {
     const __m512 x0 = _mm512_set1_ps(t.x0), x1 = _mm512_set1_ps(t.x1);
     const __m512 y0 = _mm512_set1_ps(t.y0), y1 = _mm512_set1_ps(t.y1);
     const __m512 z0 = _mm512_set1_ps(t.z0), z1 = _mm512_set1_ps(t.z1);
@@ -72,7 +68,7 @@ size_t FilterAvx512(const BeamTest& t, const ListView& in, const ListOut& out) {
 }
 
 template <int kSigns = 0>
-size_t Dispatch(const BeamTest& t, const ListView& in, const ListOut& out) {
+RC_AVX512 size_t Dispatch(const BeamTest& t, const ListView& in, const ListOut& out) {
     if constexpr (kSigns == 16) {
         return 0;
     } else {
@@ -104,15 +100,15 @@ ListFrame MakeListFrame(const float lo[3], const float hi[3]) {
 }
 
 namespace {
-#if defined(__AVX512F__)
+#if defined(RC_AVX512_PATHS)
 // StepsBelow (kRound _MM_FROUND_TO_NEG_INF) or StepsAbove (_MM_FROUND_TO_POS_INF) of 16 world
 // coordinates, in double as they compute it.
 template <int kRound>
-__m256i Steps16(__m512 c, __m512d base, __m512d step) {
+RC_AVX512 __m256i Steps16(__m512 c, __m512d base, __m512d step) {
     // (maskz forms throughout: GCC 12 warns of the plain forms' undefined pass-through)
     const __mmask8 all8 = 0xFF;
     const __m512d zero = _mm512_setzero_pd(), top = _mm512_set1_pd(65535.0);
-    auto half = [&](__m256 x) {
+    auto half = [&](__m256 x) RC_AVX512 {
         const __m512d s = _mm512_maskz_div_pd(
             all8, _mm512_maskz_sub_pd(all8, _mm512_maskz_cvtps_pd(all8, x), base), step);
         const __m512d r = _mm512_maskz_roundscale_pd(all8, s, kRound | _MM_FROUND_NO_EXC);
@@ -125,14 +121,13 @@ __m256i Steps16(__m512 c, __m512d base, __m512d step) {
     return _mm512_maskz_cvtepi32_epi16(__mmask16(0xFFFF), both);
 }
 #endif
-}  // namespace
 
-void FillFaceList(int face, const ListFrame& frame, const Bounds3f* boxes, const uint32_t* order,
-                  size_t n, const ListOut& out) {
-    static_assert(sizeof(Bounds3f) == 6 * sizeof(float));
+#if defined(RC_AVX512_PATHS)
+// FillFaceList's whole blocks of 16 boxes; returns the boxes done.
+RC_AVX512 size_t FillFaceList16(int face, const ListFrame& frame, const Bounds3f* boxes,
+                                const uint32_t* order, size_t n, const ListOut& out) {
     uint16_t* const dst[6] = {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1};
     size_t i = 0;
-#if defined(__AVX512F__)
     // Which of a box's six floats (lo x, y, z, hi x, y, z) BoxInFace puts at each bound of the
     // frame (lo X, hi X, lo Y, ...), and whether it negates it: read off a box whose floats
     // are 1 .. 6, so the mapping stays BoxInFace's own.
@@ -163,6 +158,18 @@ void FillFaceList(int face, const ListFrame& frame, const Bounds3f* boxes, const
             _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst[j] + i), s);
         }
     }
+    return i;
+}
+#endif
+}  // namespace
+
+void FillFaceList(int face, const ListFrame& frame, const Bounds3f* boxes, const uint32_t* order,
+                  size_t n, const ListOut& out) {
+    static_assert(sizeof(Bounds3f) == 6 * sizeof(float));
+    uint16_t* const dst[6] = {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1};
+    size_t i = 0;
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512()) i = FillFaceList16(face, frame, boxes, order, n, out);
 #endif
     for (; i < n; ++i) {
         const Box5 box = BoxInFace(face, boxes[order[i]]);
@@ -261,9 +268,9 @@ bool BeamMayReach(const BeamTest& t, float bx0, float bx1, float by0, float by1,
 }
 
 size_t FilterList(const BeamTest& t, const ListView& in, const ListOut& out) {
-#if defined(RC_FILTER_AVX512)
-    return Dispatch(t, in, out);
-#else
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512()) return Dispatch(t, in, out);
+#endif
     size_t k = 0;
     for (size_t i = 0; i < in.n; ++i) {
         out.x0[k] = in.x0[i];
@@ -276,7 +283,6 @@ size_t FilterList(const BeamTest& t, const ListView& in, const ListOut& out) {
         k += BeamMayReach(t, in.x0[i], in.x1[i], in.y0[i], in.y1[i], in.z0[i], in.z1[i]) ? 1 : 0;
     }
     return k;
-#endif
 }
 
 }  // namespace rayclass::classify

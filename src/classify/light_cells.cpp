@@ -9,12 +9,8 @@
 #include <cmath>
 
 #include "filter.h"
-#include "support.h"
-
-#if defined(__AVX512F__) && defined(__AVX512CD__)
-#define RC_CELLS_AVX512 1
 #include "rays16.h"
-#endif
+#include "support.h"
 
 namespace rayclass::classify {
 
@@ -85,18 +81,18 @@ int CellBits(uint32_t nRays, uint32_t roots, int lightCells) {
     return bits;
 }
 
-#if defined(RC_CELLS_AVX512)
+#if defined(RC_AVX512_PATHS)
 // The keys of 16 rays: a ray's root (point * kFaceCount + face) above its (u, v) cell's bits,
 // interleaved, u's first.
 class CellKeyer16 {
   public:
-    explicit CellKeyer16(int bits)
+    RC_AVX512 explicit CellKeyer16(int bits)
         : bits_(bits),
           half_(_mm512_set1_ps(float(1u << bits) * 0.5f)),
           top_(_mm512_set1_epi32((1 << bits) - 1)) {}
 
     // `which`: the point each lane ends at.
-    __m512i Key(__m512i which, const Axis16& axes, __m512 u, __m512 v) const {
+    RC_AVX512 __m512i Key(__m512i which, const Axis16& axes, __m512 u, __m512 v) const {
         const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi32(1);
         // face = 2 axis + (d_a < 0); root = point * kFaceCount + face
         const __m512i axis = _mm512_mask_blend_epi32(
@@ -114,7 +110,7 @@ class CellKeyer16 {
     static constexpr __mmask16 kAll = 0xFFFF;
 
     // The cell of slope s: floor((s + 1) half), clamped to the grid.
-    __m512i Cell(__m512 s) const {
+    RC_AVX512 __m512i Cell(__m512 s) const {
         const __m512i c = _mm512_maskz_cvt_roundps_epi32(
             kAll, _mm512_mul_ps(_mm512_add_ps(s, _mm512_set1_ps(1.0f)), half_),
             _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
@@ -122,7 +118,7 @@ class CellKeyer16 {
                                       top_);
     }
     // Spread of each lane.
-    static __m512i Spread(__m512i x) {
+    RC_AVX512 static __m512i Spread(__m512i x) {
         x = _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_slli_epi32(kAll, x, 4)),
                              _mm512_set1_epi32(0x0F0F));
         x = _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_slli_epi32(kAll, x, 2)),
@@ -139,7 +135,7 @@ class CellKeyer16 {
 // Adds the lanes `fast` of keys k with ends e to their cells' counts and largest ends.
 // Neighbouring rays often share a cell, so each run of equal keys in the block updates its cell
 // once (its length, and the largest end found by a segmented max over the run).
-void AddRuns16(__m512i k, __m512 e, __mmask16 fast, uint32_t* count, float* end) {
+RC_AVX512 void AddRuns16(__m512i k, __m512 e, __mmask16 fast, uint32_t* count, float* end) {
     const __mmask16 all = 0xFFFF;
     const __m512i zeroI = _mm512_setzero_si512(), oneI = _mm512_set1_epi32(1);
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
@@ -178,9 +174,9 @@ void AddRuns16(__m512i k, __m512 e, __mmask16 fast, uint32_t* count, float* end)
 
 // CellKeys' blocks of 16 rays: the conversion's fast path of ToRay5, operation for operation, on
 // rays that all start at their point, inside the box. Sets `done` to the rays it took.
-bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f& box, int bits,
-                 uint32_t firstId, const KeyOut& out, std::vector<rc_uint>& missed,
-                 uint64_t& fromEnd, size_t& done) {
+RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f& box, int bits,
+                           uint32_t firstId, const KeyOut& out, std::vector<rc_uint>& missed,
+                           uint64_t& fromEnd, size_t& done) {
     const __m512i idx = RayOffsets16(rays);
     const bool packed = rays.Stride() == 8 * sizeof(float);
     const __m512 blo[3] = {_mm512_set1_ps(box.lo.x), _mm512_set1_ps(box.lo.y),
@@ -419,8 +415,9 @@ bool LightCellSubdivision::CellKeys(RayView rays, const CommonEnds& endsIn, uint
     const CommonEnds ends = endsIn;
     uint64_t fromEnd = 0;
     size_t i = 0;
-#if defined(RC_CELLS_AVX512)
-    if (!BlockKeys16(rays, ends, core_.sceneBox, cells_.bits, firstId, out, missed, fromEnd, i)) {
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512() &&
+        !BlockKeys16(rays, ends, core_.sceneBox, cells_.bits, firstId, out, missed, fromEnd, i)) {
         return false;
     }
 #endif

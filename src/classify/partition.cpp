@@ -7,14 +7,14 @@
 #include <utility>
 #include <vector>
 
-#if defined(__AVX512F__)
 #include "avx512.h"
-#endif
 
 namespace rayclass::classify {
 
-void MinMax(const float* x, size_t n, float& lo, float& hi) {
-#if defined(__AVX512F__)
+namespace {
+
+#if defined(RC_AVX512_PATHS)
+RC_AVX512 void MinMax16(const float* x, size_t n, float& lo, float& hi) {
     __m512 vlo = _mm512_set1_ps(kInf);
     __m512 vhi = _mm512_set1_ps(-kInf);
     size_t i = 0;
@@ -30,7 +30,15 @@ void MinMax(const float* x, size_t n, float& lo, float& hi) {
     }
     lo = ReduceMin(vlo);
     hi = ReduceMax(vhi);
-#else
+}
+#endif
+
+}  // namespace
+
+void MinMax(const float* x, size_t n, float& lo, float& hi) {
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512()) return MinMax16(x, n, lo, hi);
+#endif
     float l = kInf, h = -kInf;
     for (size_t i = 0; i < n; ++i) {
         l = std::min(l, x[i]);
@@ -38,7 +46,6 @@ void MinMax(const float* x, size_t n, float& lo, float& hi) {
     }
     lo = l;
     hi = h;
-#endif
 }
 
 // Reads buffer `from` (coordinates and ids) and writes `to`; the key is the caller's.
@@ -57,12 +64,13 @@ PartitionIo Between(const ScratchVector<float>* from, ScratchVector<float>* to,
 
 namespace {
 
+#if defined(RC_AVX512_PATHS)
 // Calls f(std::integral_constant<int, k>) for each coordinate k set in kActive. Every index is
 // then a constant, so the compiler keeps per-coordinate arrays of registers in registers: with a
 // loop over k (even unrolled) GCC 12 also stored each accumulator to the stack on every block.
 template <int kActive, typename F>
-inline void ForActive(F&& f) {
-    [&]<int... K>(std::integer_sequence<int, K...>) {
+RC_AVX512 inline void ForActive(F&& f) {
+    [&]<int... K>(std::integer_sequence<int, K...>) RC_AVX512 {
         ((((kActive >> K) & 1) ? f(std::integral_constant<int, K>{}) : void()), ...);
     }
     (std::make_integer_sequence<int, kCoords>{});
@@ -70,13 +78,12 @@ inline void ForActive(F&& f) {
 
 // kActive is a template argument so that the per-coordinate registers stay registers.
 template <int kActive>
-uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint32_t end,
-                       Bounds6& leftBox, Bounds6& rightBox) {
+RC_AVX512 uint32_t PartitionRays16(const PartitionIo& io, float value, uint32_t begin, uint32_t end,
+                                   Bounds6& leftBox, Bounds6& rightBox) {
     uint32_t l = begin, r = end;
-#if defined(__AVX512F__)
     const __m512 m = _mm512_set1_ps(value);
     __m512 lLo[kCoords], lHi[kCoords], rLo[kCoords], rHi[kCoords];
-    ForActive<kActive>([&](auto k) {
+    ForActive<kActive>([&](auto k) RC_AVX512 {
         lLo[k] = rLo[k] = _mm512_set1_ps(kInf);
         lHi[k] = rHi[k] = _mm512_set1_ps(-kInf);
     });
@@ -111,7 +118,7 @@ uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint3
         const __m512i order = _mm512_mask_compress_epi32(
             _mm512_maskz_expand_epi32(top, _mm512_maskz_compress_epi32(right, lane)), left, lane);
         const uintptr_t back = (uintptr_t(r) - 16) * sizeof(float);
-        ForActive<kActive>([&](auto k) {
+        ForActive<kActive>([&](auto k) RC_AVX512 {
             const __m512 v = _mm512_maskz_loadu_ps(live, src[k] + i);
             const __m512 p = _mm512_maskz_permutexvar_ps(__mmask16(0xFFFF), order, v);
             _mm512_mask_storeu_ps(dst[k] + l, ml, p);
@@ -128,13 +135,20 @@ uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint3
         l += nl;
         r -= nr;
     }
-    ForActive<kActive>([&](auto k) {
+    ForActive<kActive>([&](auto k) RC_AVX512 {
         leftBox.lo[k] = ReduceMin(lLo[k]);
         leftBox.hi[k] = ReduceMax(lHi[k]);
         rightBox.lo[k] = ReduceMin(rLo[k]);
         rightBox.hi[k] = ReduceMax(rHi[k]);
     });
-#else
+    return l;
+}
+#endif
+
+template <int kActive>
+uint32_t PartitionRaysScalar(const PartitionIo& io, float value, uint32_t begin, uint32_t end,
+                             Bounds6& leftBox, Bounds6& rightBox) {
+    uint32_t l = begin, r = end;
     for (uint32_t i = begin; i < end; ++i) {
         const bool isLeft = io.key[i] < value;
         const uint32_t at = isLeft ? l : r - 1;
@@ -150,7 +164,6 @@ uint32_t PartitionRays(const PartitionIo& io, float value, uint32_t begin, uint3
         MinMax(io.dst[k] + begin, l - begin, leftBox.lo[k], leftBox.hi[k]);
         MinMax(io.dst[k] + l, end - l, rightBox.lo[k], rightBox.hi[k]);
     }
-#endif
     return l;
 }
 
@@ -160,8 +173,13 @@ uint32_t DispatchPartition(int active, const PartitionIo& io, float value, uint3
     if constexpr (kActive == 1 << kCoords) {
         return begin;
     } else {
-        if (active == kActive)
-            return PartitionRays<kActive>(io, value, begin, end, leftBox, rightBox);
+        if (active == kActive) {
+#if defined(RC_AVX512_PATHS)
+            if (UseAvx512())
+                return PartitionRays16<kActive>(io, value, begin, end, leftBox, rightBox);
+#endif
+            return PartitionRaysScalar<kActive>(io, value, begin, end, leftBox, rightBox);
+        }
         return DispatchPartition<kActive + 1>(active, io, value, begin, end, leftBox, rightBox);
     }
 }
@@ -173,11 +191,13 @@ uint32_t PartitionRays(int active, const PartitionIo& io, float value, uint32_t 
     return DispatchPartition(active, io, value, begin, end, leftBox, rightBox);
 }
 
-bool AlreadySplit(const float* key, float value, uint32_t begin, uint32_t end, uint32_t* first,
-                  bool* firstLeft) {
+namespace {
+
+#if defined(RC_AVX512_PATHS)
+RC_AVX512 bool AlreadySplit16(const float* key, float value, uint32_t begin, uint32_t end,
+                              uint32_t* first, bool* firstLeft) {
     uint32_t changes = 0, run = end - begin;
     int prev = -1;
-#if defined(__AVX512F__)
     const __m512 m = _mm512_set1_ps(value);
     for (uint32_t i = begin; i < end; i += 16) {
         const uint32_t lanes = std::min(16u, end - i);
@@ -197,7 +217,20 @@ bool AlreadySplit(const float* key, float value, uint32_t begin, uint32_t end, u
         if (changes > 1) return false;
         prev = int((left >> (lanes - 1)) & 1u);
     }
-#else
+    *first = run;
+    return true;
+}
+#endif
+
+}  // namespace
+
+bool AlreadySplit(const float* key, float value, uint32_t begin, uint32_t end, uint32_t* first,
+                  bool* firstLeft) {
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512()) return AlreadySplit16(key, value, begin, end, first, firstLeft);
+#endif
+    uint32_t changes = 0, run = end - begin;
+    int prev = -1;
     for (uint32_t i = begin; i < end; ++i) {
         const int left = key[i] < value ? 1 : 0;
         if (prev < 0) *firstLeft = left;
@@ -207,16 +240,15 @@ bool AlreadySplit(const float* key, float value, uint32_t begin, uint32_t end, u
         }
         prev = left;
     }
-#endif
     *first = run;
     return true;
 }
 
 namespace {
-#if defined(__AVX512F__)
+#if defined(RC_AVX512_PATHS)
 // The cells of `rule` of the 16 rays from i on, as cell numbers.
-__m512i CellsOf16(const PartitionIo& io, const CellRule& rule, __m512 split, uint32_t i,
-                  __mmask16 live) {
+RC_AVX512 __m512i CellsOf16(const PartitionIo& io, const CellRule& rule, __m512 split, uint32_t i,
+                            __mmask16 live) {
     const int firstCell = (1 << rule.levels) - 1;  // heap index of cell 0
     const __m512i one = _mm512_set1_epi32(1);
     __m512i h = _mm512_setzero_si512();
@@ -232,7 +264,7 @@ __m512i CellsOf16(const PartitionIo& io, const CellRule& rule, __m512 split, uin
 }
 
 // The split values of `rule` in heap order, for CellsOf16.
-__m512 SplitValues16(const CellRule& rule) {
+RC_AVX512 __m512 SplitValues16(const CellRule& rule) {
     float values[16] = {};
     std::copy(rule.value, rule.value + (1 << rule.levels) - 1, values);
     return _mm512_loadu_ps(values);
@@ -240,7 +272,7 @@ __m512 SplitValues16(const CellRule& rule) {
 
 // Calls f(c, lanes) for each cell c among the live lanes, with the lanes in it.
 template <typename F>
-void EachCell(__m512i cells, __mmask16 live, const F& f) {
+RC_AVX512 void EachCell(__m512i cells, __mmask16 live, const F& f) {
     alignas(64) int32_t lane[16];
     _mm512_store_si512(lane, cells);
     unsigned rest = live;
@@ -252,37 +284,41 @@ void EachCell(__m512i cells, __mmask16 live, const F& f) {
         rest &= ~unsigned(m);
     }
 }
-#else
+
+RC_AVX512 void CountCells16(const PartitionIo& io, const CellRule& rule, uint32_t begin,
+                            uint32_t end, uint32_t* count) {
+    const __m512 split = SplitValues16(rule);
+    for (uint32_t i = begin; i < end; i += 16) {
+        const __mmask16 live = LiveLanes16(end, i);
+        EachCell(CellsOf16(io, rule, split, i, live), live, [&](int c, __mmask16 m) RC_AVX512 {
+            count[c] += uint32_t(std::popcount(unsigned(m)));
+        });
+    }
+}
+#endif
+
 int CellOf(const PartitionIo& io, const CellRule& rule, uint32_t i) {
     int h = 0;
     for (int l = 0; l < rule.levels; ++l)
         h = 2 * h + (io.src[rule.dim[l]][i] < rule.value[h] ? 1 : 2);
     return h - ((1 << rule.levels) - 1);
 }
-#endif
 
 // Adds the rays [begin, end) of `io` to the counts of their cells of `rule`.
 void CountCells(const PartitionIo& io, const CellRule& rule, uint32_t begin, uint32_t end,
                 uint32_t* count) {
-#if defined(__AVX512F__)
-    const __m512 split = SplitValues16(rule);
-    for (uint32_t i = begin; i < end; i += 16) {
-        const __mmask16 live = LiveLanes16(end, i);
-        EachCell(CellsOf16(io, rule, split, i, live), live,
-                 [&](int c, __mmask16 m) { count[c] += uint32_t(std::popcount(unsigned(m))); });
-    }
-#else
-    for (uint32_t i = begin; i < end; ++i) ++count[CellOf(io, rule, i)];
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512()) return CountCells16(io, rule, begin, end, count);
 #endif
+    for (uint32_t i = begin; i < end; ++i) ++count[CellOf(io, rule, i)];
 }
 
 // Writes the rays [begin, end) of `io` to their cells, cell c's from next[c] on in ray order, and
 // gathers each cell's bounds of the active coordinates (the others are left empty).
-void ScatterCells(const PartitionIo& io, const bool* active, const CellRule& rule, uint32_t begin,
-                  uint32_t end, uint32_t* next, Bounds6* cell) {
+#if defined(RC_AVX512_PATHS)
+RC_AVX512 void ScatterCells16(const PartitionIo& io, const bool* active, const CellRule& rule,
+                              uint32_t begin, uint32_t end, uint32_t* next, Bounds6* cell) {
     const int nCells = 1 << rule.levels;
-    for (int c = 0; c < nCells; ++c) cell[c] = EmptyBounds();
-#if defined(__AVX512F__)
     __m512 lo[16][kCoords], hi[16][kCoords];
     for (int c = 0; c < nCells; ++c) {
         for (int k = 0; k < kCoords; ++k) {
@@ -298,7 +334,7 @@ void ScatterCells(const PartitionIo& io, const bool* active, const CellRule& rul
             v[k] = active[k] ? _mm512_maskz_loadu_ps(live, io.src[k] + i) : _mm512_setzero_ps();
         }
         const __m512i id = _mm512_maskz_loadu_epi32(live, io.srcId + i);
-        EachCell(CellsOf16(io, rule, split, i, live), live, [&](int c, __mmask16 m) {
+        EachCell(CellsOf16(io, rule, split, i, live), live, [&](int c, __mmask16 m) RC_AVX512 {
             const uint32_t n = uint32_t(std::popcount(unsigned(m)));
             const __mmask16 dst = __mmask16((1u << n) - 1u);
             for (int k = 0; k < kCoords; ++k) {
@@ -318,7 +354,16 @@ void ScatterCells(const PartitionIo& io, const bool* active, const CellRule& rul
             cell[c].hi[k] = ReduceMax(hi[c][k]);
         }
     }
-#else
+}
+#endif
+
+void ScatterCells(const PartitionIo& io, const bool* active, const CellRule& rule, uint32_t begin,
+                  uint32_t end, uint32_t* next, Bounds6* cell) {
+    const int nCells = 1 << rule.levels;
+    for (int c = 0; c < nCells; ++c) cell[c] = EmptyBounds();
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512()) return ScatterCells16(io, active, rule, begin, end, next, cell);
+#endif
     for (uint32_t i = begin; i < end; ++i) {
         const int c = CellOf(io, rule, i);
         const uint32_t at = next[c]++;
@@ -331,7 +376,6 @@ void ScatterCells(const PartitionIo& io, const bool* active, const CellRule& rul
         }
         io.dstId[at] = io.srcId[i];
     }
-#endif
 }
 
 }  // namespace
@@ -373,13 +417,13 @@ void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule,
 
 namespace {
 
-#if defined(__AVX512F__)
+#if defined(RC_AVX512_PATHS)
 // GroupRays' first pass: each block of 16 rays' groups as two masks (box0's, box1's), kept in
 // dest at the block's first position (positions are the task's own, so threads do not share
 // them); count[g] gets each group's size.
-void MarkGroups16(const PartitionIo& io, const bool* active, const float* constant,
-                  const Box5& box0, const Box5& box1, uint32_t begin, uint32_t end, uint32_t* dest,
-                  uint32_t count[3]) {
+RC_AVX512 void MarkGroups16(const PartitionIo& io, const bool* active, const float* constant,
+                            const Box5& box0, const Box5& box1, uint32_t begin, uint32_t end,
+                            uint32_t* dest, uint32_t count[3]) {
     __mmask16 in0 = 0xFFFF, in1 = 0xFFFF;  // what the coordinates that never vary allow
     for (int k = 0; k < kDims; ++k) {
         if (active[k]) continue;
@@ -406,8 +450,8 @@ void MarkGroups16(const PartitionIo& io, const bool* active, const float* consta
 }
 
 // GroupRays' second pass: every group in ray order after the groups before it.
-void MoveGroups16(const PartitionIo& io, const bool* active, uint32_t begin, uint32_t end,
-                  const uint32_t* dest, const uint32_t count[3]) {
+RC_AVX512 void MoveGroups16(const PartitionIo& io, const bool* active, uint32_t begin, uint32_t end,
+                            const uint32_t* dest, const uint32_t count[3]) {
     uint32_t next[3] = {begin, begin + count[0], begin + count[0] + count[1]};
     for (uint32_t i = begin; i < end; i += 16) {
         const __mmask16 live = LiveLanes16(end, i);
@@ -439,10 +483,13 @@ void MoveGroups16(const PartitionIo& io, const bool* active, uint32_t begin, uin
 
 void GroupRays(const PartitionIo& io, const bool* active, const float* constant, const Box5& box0,
                const Box5& box1, uint32_t begin, uint32_t end, uint32_t* dest, uint32_t count[3]) {
-#if defined(__AVX512F__)
-    MarkGroups16(io, active, constant, box0, box1, begin, end, dest, count);
-    MoveGroups16(io, active, begin, end, dest, count);
-#else
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512()) {
+        MarkGroups16(io, active, constant, box0, box1, begin, end, dest, count);
+        MoveGroups16(io, active, begin, end, dest, count);
+        return;
+    }
+#endif
     for (uint32_t i = begin; i < end; ++i) {
         std::array<float, kDims> p;
         for (int k = 0; k < kDims; ++k) p[k] = active[k] ? io.src[k][i] : constant[k];
@@ -457,7 +504,6 @@ void GroupRays(const PartitionIo& io, const bool* active, const float* constant,
         for (uint32_t i = begin; i < end; ++i) io.dst[k][dest[i]] = io.src[k][i];
     }
     for (uint32_t i = begin; i < end; ++i) io.dstId[dest[i]] = io.srcId[i];
-#endif
 }
 
 }  // namespace rayclass::classify

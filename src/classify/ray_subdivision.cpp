@@ -9,9 +9,6 @@
 #include "filter.h"
 #include "partition.h"
 
-#if defined(__AVX512F__)
-#include "avx512.h"
-#endif
 
 namespace rayclass::classify {
 

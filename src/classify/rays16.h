@@ -1,7 +1,7 @@
 // Sixteen rays at a time in AVX-512 registers: loading them from a RayView, taking them from
 // their common ends and finding their faces, with the float operations of the scalar paths
 // (ToRay5, CommonEnds::Oriented), so that both map a ray alike. Private to the classify module;
-// included only where __AVX512F__ is defined.
+// its functions run only where UseAvx512() (avx512.h).
 #pragma once
 
 #include <cstddef>
@@ -10,10 +10,12 @@
 #include "rayclass/classify/ray5d.h"
 #include "support.h"
 
+#if defined(RC_AVX512_PATHS)
+
 namespace rayclass::classify {
 
 // Gather offsets (in floats) of 16 consecutive rays of `rays` from the first.
-inline __m512i RayOffsets16(const RayView& rays) {
+RC_AVX512 inline __m512i RayOffsets16(const RayView& rays) {
     return _mm512_mullo_epi32(
         _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
         _mm512_set1_epi32(int(rays.Stride() / 4)));
@@ -26,7 +28,7 @@ struct Axis16 {
     __m512 ax, ay, az, da;
 };
 
-inline Axis16 DominantAxis16(__m512 dx, __m512 dy, __m512 dz) {
+RC_AVX512 inline Axis16 DominantAxis16(__m512 dx, __m512 dy, __m512 dz) {
     const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
     Axis16 a;
     a.ax = _mm512_and_ps(dx, absMask);
@@ -42,7 +44,8 @@ inline Axis16 DominantAxis16(__m512 dx, __m512 dy, __m512 dz) {
 }
 
 // The lanes whose point (x, y, z) lies in the box [blo, bhi], bounds included.
-inline __mmask16 InBox16(__m512 x, __m512 y, __m512 z, const __m512 blo[3], const __m512 bhi[3]) {
+RC_AVX512 inline __mmask16 InBox16(__m512 x, __m512 y, __m512 z, const __m512 blo[3],
+                                   const __m512 bhi[3]) {
     return _mm512_cmp_ps_mask(x, blo[0], _CMP_GE_OQ) & _mm512_cmp_ps_mask(x, bhi[0], _CMP_LE_OQ) &
            _mm512_cmp_ps_mask(y, blo[1], _CMP_GE_OQ) & _mm512_cmp_ps_mask(y, bhi[1], _CMP_LE_OQ) &
            _mm512_cmp_ps_mask(z, blo[2], _CMP_GE_OQ) & _mm512_cmp_ps_mask(z, bhi[2], _CMP_LE_OQ);
@@ -50,7 +53,7 @@ inline __mmask16 InBox16(__m512 x, __m512 y, __m512 z, const __m512 blo[3], cons
 
 // The lanes whose direction ToRay5's fast path maps: d_a > 0 and a finite sum of components (not
 // finite when a component is NaN or infinite).
-inline __mmask16 Mappable16(const Axis16& a, __m512 dx, __m512 dy, __m512 dz) {
+RC_AVX512 inline __mmask16 Mappable16(const Axis16& a, __m512 dx, __m512 dy, __m512 dz) {
     const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
     const __m512 dsum = _mm512_add_ps(_mm512_add_ps(dx, dy), dz);
     return _mm512_cmp_ps_mask(a.da, _mm512_setzero_ps(), _CMP_GT_OQ) &
@@ -67,9 +70,9 @@ struct Point16 {
 // segments [segLo, segHi], in the frame of their dominant axis `a`, for the lanes in `fast` (the
 // others divide by one): ToRay5's fast path, operation for operation. Frame: X = s p_a, Y = p_b,
 // Z = p_c with b = a + 1, c = a + 2 (mod 3).
-inline Point16 FacePoint16(const __m512 start[3], __m512 dx, __m512 dy, __m512 dz, __m512 segLo,
-                           __m512 segHi, const Axis16& a, __mmask16 fast, const __m512 blo[3],
-                           const __m512 bhi[3]) {
+RC_AVX512 inline Point16 FacePoint16(const __m512 start[3], __m512 dx, __m512 dy, __m512 dz,
+                                     __m512 segLo, __m512 segHi, const Axis16& a, __mmask16 fast,
+                                     const __m512 blo[3], const __m512 bhi[3]) {
     const __m512 signMask = _mm512_castsi512_ps(_mm512_set1_epi32(int(0x80000000u)));
     const __m512 one = _mm512_set1_ps(1.0f);
     const __m512 qx = start[0], qy = start[1], qz = start[2];
@@ -101,7 +104,7 @@ struct Rays16 {
     __m512 ox, oy, oz, tmin, dx, dy, dz, tmax;
 };
 
-inline Rays16 Gather16(const float* at, __m512i idx, __mmask16 live) {
+RC_AVX512 inline Rays16 Gather16(const float* at, __m512i idx, __mmask16 live) {
     const __m512 zero = _mm512_setzero_ps();
     Rays16 r;
     r.ox = _mm512_mask_i32gather_ps(zero, live, idx, at + 0, 4);
@@ -118,7 +121,7 @@ inline Rays16 Gather16(const float* at, __m512i idx, __mmask16 live) {
 // The same for `live` consecutive rays of 32 bytes each (classify::Ray, RcRay): plain loads of two
 // rays a vector, then three rounds of two-source permutes that transpose both 256-bit halves
 // (8 x 8 floats each) at once, instead of eight gathers.
-inline Rays16 Load16Packed(const float* at, size_t live) {
+RC_AVX512 inline Rays16 Load16Packed(const float* at, size_t live) {
     __m512 a[8];  // rays k (low half) and k + 8 (high half)
     for (size_t k = 0; k < 8; ++k) {
         const __m256 lo = k < live ? _mm256_loadu_ps(at + 8 * k) : _mm256_setzero_ps();
@@ -164,8 +167,8 @@ inline Rays16 Load16Packed(const float* at, size_t live) {
 // CommonEnds::Oriented for the live lanes of r, with the same float operations, so both paths
 // take a ray alike. Returns the lanes taken from an end; `which`, when given, gets each such
 // lane's end (CommonEnds::Match).
-inline __mmask16 Orient16(const CommonEnds& ends, __mmask16 live, Rays16& r,
-                          __m512i* which = nullptr) {
+RC_AVX512 inline __mmask16 Orient16(const CommonEnds& ends, __mmask16 live, Rays16& r,
+                                    __m512i* which = nullptr) {
     if (ends.n == 0) return 0;
     const __m512 zero = _mm512_setzero_ps();
     const __m512 absMask = _mm512_castsi512_ps(_mm512_set1_epi32(0x7FFFFFFF));
@@ -181,7 +184,7 @@ inline __mmask16 Orient16(const CommonEnds& ends, __mmask16 live, Rays16& r,
     const __m512 ex = _mm512_add_ps(r.ox, _mm512_mul_ps(r.tmax, r.dx));
     const __m512 ey = _mm512_add_ps(r.oy, _mm512_mul_ps(r.tmax, r.dy));
     const __m512 ez = _mm512_add_ps(r.oz, _mm512_mul_ps(r.tmax, r.dz));
-    auto near = [&](__m512 e, float p) {
+    auto near = [&](__m512 e, float p) RC_AVX512 {
         return _mm512_cmp_ps_mask(_mm512_and_ps(_mm512_sub_ps(e, _mm512_set1_ps(p)), absMask), tol,
                                   _CMP_LE_OQ);
     };
@@ -209,3 +212,5 @@ inline __mmask16 Orient16(const CommonEnds& ends, __mmask16 live, Rays16& r,
 }
 
 }  // namespace rayclass::classify
+
+#endif
