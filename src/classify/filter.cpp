@@ -181,6 +181,44 @@ void FillFaceList(int face, const ListFrame& frame, const Bounds3f* boxes, const
     }
 }
 
+namespace {
+
+#if defined(RC_AVX512_PATHS)
+// WriteCandidates' whole blocks of 16 entries; returns the entries done. The fused multiply-add
+// rounds once, as WorldBelow's std::fma does.
+RC_AVX512 size_t WriteCandidates16(const ListView& list, size_t n, RcCandidate* out) {
+    const __mmask16 all = 0xFFFF;
+    const __m512 step = _mm512_set1_ps(list.frame->step);
+    const __m512 base = _mm512_set1_ps(list.frame->base[0]);
+    // (prim, nearX) pairs of lanes 0-7 and of lanes 8-15.
+    const __m512i pairsLo =
+        _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23);
+    const __m512i pairsHi = _mm512_add_epi32(pairsLo, _mm512_set1_epi32(8));
+    size_t i = 0;
+    for (; i + 16 <= n; i += 16) {
+        const __m256i steps = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(list.x0 + i));
+        const __m512 x = _mm512_maskz_fmadd_ps(
+            all, _mm512_maskz_cvtepi32_ps(all, _mm512_maskz_cvtepu16_epi32(all, steps)), step,
+            base);
+        const __m512i prim = _mm512_loadu_si512(list.prim + i);
+        const __m512i xi = _mm512_castps_si512(x);
+        _mm512_storeu_si512(out + i, _mm512_maskz_permutex2var_epi32(all, prim, pairsLo, xi));
+        _mm512_storeu_si512(out + i + 8, _mm512_maskz_permutex2var_epi32(all, prim, pairsHi, xi));
+    }
+    return i;
+}
+#endif
+
+}  // namespace
+
+void WriteCandidates(const ListView& list, size_t n, RcCandidate* out) {
+    size_t i = 0;
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512()) i = WriteCandidates16(list, n, out);
+#endif
+    for (; i < n; ++i) out[i] = {list.prim[i], WorldBelow(*list.frame, 0, list.x0[i])};
+}
+
 size_t CountUpTo(const ListView& list, float endHi) {
     const float limit = float(ToSteps(*list.frame, 0, endHi)) + kStepMargin;
     // Beams that run to the scene box's far side (eye rays' always) keep the whole list: no

@@ -19,6 +19,7 @@
 #include <cstdint>
 
 #include "lists.h"
+#include "rc_types.h"
 #include "support.h"
 
 namespace rayclass::classify {
@@ -50,6 +51,9 @@ void FillFaceList(int face, const ListFrame& frame, const Bounds3f* boxes, const
 inline float WorldBelow(const ListFrame& frame, int axis, uint16_t steps) {
     return std::fma(float(steps), frame.step, frame.base[axis]);
 }
+// The first n entries of `list` as a leaf's candidates: each primitive with the world X its box
+// starts at (WorldBelow).
+void WriteCandidates(const ListView& list, size_t n, RcCandidate* out);
 // The number of the first n entries of `list` whose near X is at most `endHi` (world units; the
 // list is sorted by it): never fewer than hold a box that starts before endHi.
 size_t CountUpTo(const ListView& list, float endHi);

@@ -54,7 +54,7 @@ void Worker::PushLeaf(RcLeaf leaf, uint32_t node, const ListView& list, float en
     const size_t n = CountUpTo(list, endHi);
     leaf.candCount = uint32_t(n);
     RcCandidate* cand = pool->ListRoom(*this, n, leaf.candBegin);
-    for (size_t i = 0; i < n; ++i) cand[i] = {list.prim[i], WorldBelow(*list.frame, 0, list.x0[i])};
+    WriteCandidates(list, n, cand);
     leaf.face = At(node).face;
     leaf.node = node;
     leaves.push_back(leaf);

@@ -262,6 +262,28 @@ TEST(Filter, FaceListFillEqualsTheScalarStepsOnEveryFace) {
     }
 }
 
+// A leaf's candidates (16 at a time where the vector path exists) carry the near X that one
+// correctly rounded multiply-add of the stored steps gives: glibc's fmaf is the oracle.
+TEST(Filter, CandidatesCarryTheFusedNearX) {
+    std::mt19937 rng(15);
+    std::uniform_int_distribution<int> steps(0, 65535);
+    const size_t n = 16 * 40 + 7;
+    FaceList l;
+    l.Resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        l.x0[i] = uint16_t(steps(rng));
+        l.prim[i] = uint32_t(rng());
+    }
+    const float lo[3] = {-1234.5f, 0.0f, 0.0f}, hi[3] = {987.25f, 1.0f, 1.0f};
+    const ListFrame frame = MakeListFrame(lo, hi);
+    std::vector<RcCandidate> out(n);
+    WriteCandidates(View(l, n, &frame), n, out.data());
+    for (size_t i = 0; i < n; ++i) {
+        ASSERT_EQ(out[i].prim, l.prim[i]) << i;
+        ASSERT_EQ(out[i].nearX, fmaf(float(l.x0[i]), frame.step, frame.base[0])) << i;
+    }
+}
+
 TEST(Filter, FramesOfPointsAndEmptySetsAreUsable) {
     const float p[3] = {2.0f, -3.0f, 0.5f};
     const ListFrame point = MakeListFrame(p, p);
