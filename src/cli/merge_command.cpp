@@ -2,6 +2,7 @@
 #include <string>
 #include <vector>
 
+#include "image_choices.h"
 #include "rayclass/cli/cli.h"
 #include "rayclass/cli/option_table.h"
 #include "rayclass/core/error.h"
@@ -26,6 +27,7 @@ struct MergeArgs {
     std::string output;
     std::vector<std::string> tiles;
     bool allowPartial = false;
+    image::WriteOptions write;
     bool help = false;
 };
 
@@ -40,6 +42,11 @@ OptionTable MergeOptionTable(MergeArgs& m) {
              "",
              "merge even where no tile covers some pixels (black, layers of misses)",
              Flag(m.allowPartial)},
+            {{"--exr-compression"},
+             "C",
+             "zip (default), piz or none, as rayclass render's: none writes a\n"
+             "large image many times faster",
+             Choice(m.write.exrCompression, kExrCompressions)},
             {{"--help"}, "", "print this help", Flag(m.help), {"-h"}, true},
         },
         " (see 'rayclass merge --help')");
@@ -59,7 +66,7 @@ int MergeCommand(const std::vector<std::string>& args, std::ostream& out, std::o
     if (m.tiles.empty()) throw UsageError("no tiles given (see 'rayclass merge --help')");
     std::vector<image::NamedTile> tiles;
     for (const std::string& file : m.tiles) tiles.push_back({file, image::ReadImage(file)});
-    image::WriteImage(image::MergeTiles(tiles, m.allowPartial), m.output);
+    image::WriteImage(image::MergeTiles(tiles, m.allowPartial), m.output, m.write);
     return 0;
 }
 

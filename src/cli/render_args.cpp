@@ -4,6 +4,7 @@
 #include <sstream>
 #include <utility>
 
+#include "image_choices.h"
 #include "rayclass/classify/params.h"
 #include "rayclass/cli/option_table.h"
 #include "rayclass/core/error.h"
@@ -15,10 +16,6 @@ namespace {
 constexpr render::Named<bool Aovs::*> kAovNames[] = {
     {"depth", &Aovs::depth}, {"id", &Aovs::id}, {"normal", &Aovs::normal}};
 
-constexpr render::Named<image::ExrCompression> kExrCompressions[] = {
-    {"zip", image::ExrCompression::kZip},
-    {"piz", image::ExrCompression::kPiz},
-    {"none", image::ExrCompression::kNone}};
 constexpr render::Named<image::PngCompression> kPngCompressions[] = {
     {"fast", image::PngCompression::kFast},
     {"small", image::PngCompression::kSmall},
