@@ -544,7 +544,7 @@ int main(int argc, char** argv) try {
     const glm::vec3 lightPos = bench::NamedLight(sc, a.light);
     const std::vector<bench::BenchRay> eye = bench::EyeRays(cam);
     const RcCamera eyeCamera = render::CameraBasis(cam).ToDevice();
-    const bench::RaySets sets = bench::MakeRaySets(sc, eye, EyeHits(b, eye), lightPos, a.seed);
+    const bench::RaySets sets = bench::MakeRaySets(sc, eye, EyeHits(b, eye), lightPos, a.seed, a.width);
     if (!a.saveRays.empty()) bench::SaveRaySets(a.saveRays, sets);
     std::fprintf(stderr,
                  "raybench: %s, %u primitives, camera %s, load %.3f s, program build %.3f s; "
