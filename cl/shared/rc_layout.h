@@ -60,6 +60,10 @@
     FIELD(RcCamera, tanHalfFovY)         \
     FIELD(RcCamera, width)               \
     FIELD(RcCamera, height)              \
+    FIELD(RcCamera, windowX)             \
+    FIELD(RcCamera, windowY)             \
+    FIELD(RcCamera, windowWidth)         \
+    FIELD(RcCamera, windowHeight)        \
     STRUCT(RcRay)                        \
     FIELD(RcRay, origin)                 \
     FIELD(RcRay, direction)              \

@@ -77,7 +77,10 @@ typedef struct RcLight {
 /* Pinhole camera. The eye ray of pixel (x, y) (row 0 at the top) is
  * normalize(forward + sx * right + sy * up), sx = (2 (x + 0.5) / width - 1) * tanHalfFovX,
  * sy = (1 - 2 (y + 0.5) / height) * tanHalfFovY: the same formula in every eye-ray path.
- * right/up/forward are unit vectors. 80 bytes. */
+ * right/up/forward are unit vectors. The render covers the window of windowWidth x windowHeight
+ * pixels at (windowX, windowY) of the width x height image (all of it unless it is a crop or
+ * tile): ray i of a generation-0 batch is the window's pixel i, row-major, and its direction is
+ * the full image's, so a crop's pixels are those of a whole render. 96 bytes. */
 typedef struct RcCamera {
     rc_float4 position;
     rc_float4 forward, right, up;
@@ -85,6 +88,10 @@ typedef struct RcCamera {
     float tanHalfFovY;
     rc_uint width;
     rc_uint height;
+    rc_uint windowX;
+    rc_uint windowY;
+    rc_uint windowWidth;
+    rc_uint windowHeight;
 } RcCamera;
 
 /* Kinds of rays, for statistics and shading decisions. */

@@ -14,7 +14,7 @@ static_assert(sizeof(RcSphere) == 32);
 static_assert(sizeof(RcQuadric) == 96);
 static_assert(sizeof(RcMaterial) == 96);
 static_assert(sizeof(RcLight) == 32);
-static_assert(sizeof(RcCamera) == 80);
+static_assert(sizeof(RcCamera) == 96);
 static_assert(sizeof(RcRay) == 32);
 static_assert(sizeof(RcRayInfo) == 32);
 static_assert(sizeof(RcHit) == 16);

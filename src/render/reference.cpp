@@ -197,13 +197,9 @@ class Tracer {
 image::Image RenderReference(const scene::Scene& scene, const RenderOptions& options,
                              RenderStats& stats, ReferenceQuery query) {
     const auto t0 = std::chrono::steady_clock::now();
-    const CameraBasis basis(scene.camera);
-    image::Image img(basis.width, basis.height);
-    if (options.aovs) {
-        img.depth.assign(img.PixelCount(), std::numeric_limits<float>::infinity());
-        img.id.assign(img.PixelCount(), RC_NO_HIT);
-        img.normal.assign(img.PixelCount(), glm::vec3(0.0f));
-    }
+    const CameraBasis basis(scene.camera, options.window);
+    const image::PixelRect& window = basis.window;
+    image::Image img = NewImage(basis, options.aovs);
     const Tracer tracer(scene, options, query);
     std::atomic<uint32_t> nextRow{0};
     const unsigned nThreads = std::max(1u, std::thread::hardware_concurrency());
@@ -211,9 +207,10 @@ image::Image RenderReference(const scene::Scene& scene, const RenderOptions& opt
     std::vector<std::thread> threads;
     for (unsigned t = 0; t < nThreads; ++t) {
         threads.emplace_back([&, t] {
-            for (uint32_t y = nextRow++; y < basis.height; y = nextRow++) {
-                for (uint32_t x = 0; x < basis.width; ++x) {
-                    const size_t pixel = size_t(y) * basis.width + x;
+            for (uint32_t row = nextRow++; row < window.Height(); row = nextRow++) {
+                const uint32_t y = window.y0 + row;
+                for (uint32_t x = window.x0; x < window.x1; ++x) {
+                    const size_t pixel = size_t(row) * window.Width() + (x - window.x0);
                     V color(0.0);
                     ++counters[t].eye;
                     tracer.Trace(Ray{basis.position, basis.Direction(x, y)}, V(1.0), 0, color,
