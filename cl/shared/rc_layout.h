@@ -125,6 +125,9 @@
     FIELD(RcBvh8Node, hiZ)               \
     FIELD(RcBvh8Node, child)             \
     FIELD(RcBvh8Node, nChildren)         \
-    FIELD(RcBvh8Node, pad)
+    FIELD(RcBvh8Node, pad)               \
+    STRUCT(RcKdNode)                     \
+    FIELD(RcKdNode, word)                \
+    FIELD(RcKdNode, data)
 
 #endif

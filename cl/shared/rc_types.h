@@ -209,4 +209,15 @@ typedef struct RcBvh8Node {
     rc_uint pad[7];
 } RcBvh8Node;
 
+/* A node of the SAH kd-tree that cl/kdtree.cl walks (--accel kdtree; include/rayclass/accel/
+ * kdtree.h). word & 3 is the split axis of an inner node, 3 for a leaf; word >> 2 is the index
+ * of an inner node's upper child (its lower child is the next node) or a leaf's primitive
+ * count. data is an inner node's split position (its float's bits) or the position in the
+ * primitive index list where a leaf's primitives' global ids begin. 8 bytes. */
+#define RC_KD_LEAF 3u
+typedef struct RcKdNode {
+    rc_uint word;
+    rc_uint data;
+} RcKdNode;
+
 #endif

@@ -480,6 +480,7 @@ image::Image Frame::Finish(Clock::time_point tStart) {
     stats_.shadowRaysFromLight = q.shadowRaysFromLight;
     stats_.shadowRaysInCells = q.shadowRaysInCells;
     stats_.eyeRaysFromCamera = q.eyeRaysFromCamera;
+    stats_.accelStats = q.accel;
     stats_.timeS["host"] = hostSeconds_;
     if (options_.accel == Accel::kClassify || options_.accel == Accel::kAuto) {
         stats_.timeS["host_classify"] = q.hostSeconds;
