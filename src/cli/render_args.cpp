@@ -1,5 +1,6 @@
 #include "render_args.h"
 
+#include <cstdio>
 #include <sstream>
 #include <utility>
 
@@ -124,6 +125,20 @@ std::array<uint32_t, 2> ParseTile(const std::string& option, const std::string& 
     return {index, count};
 }
 
+// "A:B": frames A to B, both included.
+std::array<uint32_t, 2> ParseFrames(const std::string& option, const std::string& value) {
+    const auto colon = value.find(':');
+    if (colon == std::string::npos) {
+        throw UsageError(option + " expects A:B (frames A to B, both included), not '" + value +
+                         "'");
+    }
+    const uint32_t first =
+        ParseNumber<uint32_t>(option, value.substr(0, colon), 0u, 999999u, "a first frame A");
+    const uint32_t last =
+        ParseNumber<uint32_t>(option, value.substr(colon + 1), first, 999999u, "a last frame B");
+    return {first, last};
+}
+
 std::vector<Option> PartOptions(RenderArgs& r) {
     return {
         {{"--crop"},
@@ -136,6 +151,18 @@ std::vector<Option> PartOptions(RenderArgs& r) {
          "render tile I (0..N-1) of N compact tiles, as --crop would; 'rayclass\n"
          "merge' puts the tiles together",
          [&r](const std::string& o, const std::string& v) { r.tile = ParseTile(o, v); }},
+        {{"--frame"},
+         "K",
+         "",
+         [&r](const std::string& o, const std::string& v) {
+             const uint32_t k = ParseNumber<uint32_t>(o, v, 0u, 999999u, "a frame");
+             r.frames = std::array<uint32_t, 2>{k, k};
+         }},
+        {{"--frames"},
+         "A:B",
+         "frame K, or frames A to B, of the scene camera's path, each to\n"
+         "OUT_####.exr (its --stats to FILE_####.json)",
+         [&r](const std::string& o, const std::string& v) { r.frames = ParseFrames(o, v); }},
     };
 }
 
@@ -328,6 +355,13 @@ void Validate(const RenderArgs& r) {
 }
 
 }  // namespace
+
+std::string FrameFile(const std::string& path, uint32_t frame) {
+    const std::string ext = Extension(path);
+    char number[16];
+    std::snprintf(number, sizeof number, "_%04u", frame);
+    return path.substr(0, path.size() - ext.size()) + number + ext;
+}
 
 RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
     RenderArgs r;

@@ -4,11 +4,11 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <stdexcept>
 #include <glm/gtc/matrix_transform.hpp>
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -289,6 +289,7 @@ class SceneFileReader {
         SplitPatches(scene_, PatchSplit{scene_.patchFlatness, 0});
         if (const Json* v = Find(root, "camera")) {
             scene_.camera = ReadCamera(*v);
+            if (const Json* path = Find(*v, "path")) scene_.cameraPath = ReadCameraPath(*path);
         } else {
             const Bounds3f bounds = scene_.Bounds();
             if (bounds.Empty()) Fail(root, "scene: no 'camera' and nothing to frame");
@@ -540,17 +541,16 @@ class SceneFileReader {
         try {
             far = AppendMesh(scene_, mesh, toWorld, material, index);
         } catch (const std::length_error& e) {
-            Fail(fileValue, context + ": mesh " + Quoted(path.string()) + ": the scene has " +
-                                e.what());
+            Fail(fileValue,
+                 context + ": mesh " + Quoted(path.string()) + ": the scene has " + e.what());
         }
         if (far) {
             const Json* t = Find(v, "transform");
-            Fail(t ? *t : fileValue,
-                 context + ": mesh " + Quoted(path.string()) + ": vertex " +
-                     std::to_string(*far + 1) + " (line " +
-                     std::to_string(StatementLine(obj.text, "v", *far)) +
-                     ") is out of range after the transform (magnitude above " +
-                     MaxCoordinateText() + ")");
+            Fail(t ? *t : fileValue, context + ": mesh " + Quoted(path.string()) + ": vertex " +
+                                         std::to_string(*far + 1) + " (line " +
+                                         std::to_string(StatementLine(obj.text, "v", *far)) +
+                                         ") is out of range after the transform (magnitude above " +
+                                         MaxCoordinateText() + ")");
         }
         return path.filename().string();
     }
@@ -724,8 +724,8 @@ class SceneFileReader {
             const auto degrees = Finite(degreesValue);
             if (!degrees) Fail(degreesValue, context + ": 'degrees' must be a finite number");
             // Scaled before normalising: the length of a huge axis overflows.
-            const glm::vec3 scaled = axis / glm::max(glm::max(std::fabs(axis.x), std::fabs(axis.y)),
-                                                     std::fabs(axis.z));
+            const glm::vec3 scaled =
+                axis / glm::max(glm::max(std::fabs(axis.x), std::fabs(axis.y)), std::fabs(axis.z));
             result = glm::rotate(result, glm::radians(*degrees), glm::normalize(scaled));
         }
         if (const Json* e = Find(*t, "scale")) {
@@ -746,7 +746,7 @@ class SceneFileReader {
     Camera ReadCamera(const Json& v) const {
         const std::string context = "camera";
         RequireObject(v, "scene: 'camera'");
-        CheckKeys(v, {"position", "look_at", "up", "fov_y", "width", "height"}, context);
+        CheckKeys(v, {"position", "look_at", "up", "fov_y", "width", "height", "path"}, context);
         Camera c;
         if (const Json* e = Find(v, "position")) c.position = Position(*e, "position", context);
         if (const Json* e = Find(v, "look_at")) c.lookAt = Position(*e, "look_at", context);
@@ -783,6 +783,55 @@ class SceneFileReader {
             Fail(v, "camera: 'up' must not be zero or parallel to the view direction");
         }
         return c;
+    }
+
+    // "path": {"interpolation": "linear" | "catmull-rom", "fps": F, "keyframes": [{"time": T,
+    // "position": P, "look_at": L}, ...]}: at least two keyframes, times strictly increasing.
+    CameraPath ReadCameraPath(const Json& v) const {
+        const std::string context = "camera path";
+        RequireObject(v, "camera: 'path'");
+        CheckKeys(v, {"interpolation", "fps", "keyframes"}, context);
+        CameraPath path;
+        if (const Json* e = Find(v, "interpolation")) {
+            if (*e == "linear") {
+                path.interpolation = Interpolation::kLinear;
+            } else if (*e == "catmull-rom") {
+                path.interpolation = Interpolation::kCatmullRom;
+            } else {
+                Fail(*e, context + ": 'interpolation' must be \"linear\" or \"catmull-rom\"");
+            }
+        }
+        if (const Json* e = Find(v, "fps")) {
+            const auto f = Finite(*e);
+            if (!f || *f <= 0.0f || *f > 1e6f) {
+                Fail(*e, context + ": 'fps' must be a number in (0, 1e6]");
+            }
+            path.fps = *f;
+        }
+        const Json& keys = Require(v, "keyframes", context);
+        if (!keys.is_array() || keys.size() < 2) {
+            Fail(keys, context + ": 'keyframes' must be an array of at least 2 keyframes");
+        }
+        for (const Json& k : keys) {
+            const std::string where =
+                "camera path keyframe " + std::to_string(path.keyframes.size() + 1);
+            RequireObject(k, where);
+            CheckKeys(k, {"time", "position", "look_at"}, where);
+            Keyframe key;
+            const Json& time = Require(k, "time", where);
+            const auto t = Finite(time);
+            if (!t || std::fabs(*t) > 1e9f) Fail(time, where + ": 'time' must be a finite number");
+            if (!path.keyframes.empty() && !(*t > path.keyframes.back().time)) {
+                Fail(time, where + ": 'time' must be later than the keyframe before");
+            }
+            key.time = *t;
+            key.position = Position(Require(k, "position", where), "position", where);
+            key.lookAt = Position(Require(k, "look_at", where), "look_at", where);
+            if (key.lookAt == key.position)
+                Fail(k, where + ": 'look_at' must differ from 'position'");
+            path.keyframes.push_back(key);
+        }
+        return path;
     }
 
     const fs::path& file_;

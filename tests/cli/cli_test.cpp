@@ -760,5 +760,55 @@ TEST_F(Cli, CropAndTileUsageErrors) {
     EXPECT_EQ(Entries(), std::vector<std::string>{});
 }
 
+TEST_F(Cli, FramesFollowTheCameraPathToNumberedFiles) {
+    const std::string source = EnvOr("RAYCLASS_SOURCE_DIR", ".");
+    const std::vector<std::string> common = {"--width", "40", "--height", "30",
+                                             "--aov",   "id", "-q"};
+    std::vector<std::string> args = {"render",   source + "/scenes/cornell_orbit.json",
+                                     "-o",       "f.exr",
+                                     "--frames", "11:12",
+                                     "--stats",  "s.json"};
+    args.insert(args.end(), common.begin(), common.end());
+    const Result r = Run(args);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(Entries(),
+              (std::vector<std::string>{"f_0011.exr", "f_0012.exr", "s_0011.json", "s_0012.json"}));
+    const nlohmann::json stats = nlohmann::json::parse(ReadText(Work("s_0012.json")));
+    EXPECT_EQ(stats.at("frame"), 12);
+    EXPECT_EQ(stats.at("frame_time"), 1.0);
+    // Frame 12 is keyframe 1 (12 fps): a still scene with that camera renders the same image.
+    nlohmann::json scene = nlohmann::json::parse(ReadText(source + "/scenes/cornell_orbit.json"));
+    nlohmann::json& camera = scene.at("camera");
+    camera["position"] = camera.at("path").at("keyframes").at(1).at("position");
+    camera["look_at"] = camera.at("path").at("keyframes").at(1).at("look_at");
+    camera.erase("path");
+    for (auto& object : scene.at("objects")) {
+        if (object.contains("file"))
+            object["file"] = source + "/scenes/" + object["file"].get<std::string>();
+    }
+    WriteText(Work("still.json"), scene.dump());
+    args = {"render", "still.json", "-o", "still.exr"};
+    args.insert(args.end(), common.begin(), common.end());
+    ASSERT_EQ(Run(args).status, 0);
+    EXPECT_TRUE(
+        SameLayers(image::ReadImage(Work("f_0012.exr")), image::ReadImage(Work("still.exr"))));
+    EXPECT_FALSE(
+        SameLayers(image::ReadImage(Work("f_0011.exr")), image::ReadImage(Work("still.exr"))));
+    // Frames past the path, or a scene without one: nothing is rendered.
+    fs::remove_all(Work());
+    fs::create_directories(Work());
+    const Result past = Run({"render", source + "/scenes/cornell_orbit.json", "-o", "f.exr",
+                             "--frames", "35:37", "-q"});
+    EXPECT_EQ(past.status, 1);
+    EXPECT_EQ(past.err,
+              "rayclass render: error: frame 37 (time 3.083333) lies past the camera path's last "
+              "keyframe (time 3.000000; frames 0..36)\n");
+    const Result still = Run({"render", Cornell(), "-o", "f.exr", "--frame", "0", "-q"});
+    EXPECT_EQ(still.status, 1);
+    EXPECT_EQ(still.err, "rayclass render: error: " + Cornell() +
+                             ": --frame and --frames need a camera 'path' in the scene\n");
+    EXPECT_EQ(Entries(), std::vector<std::string>{});
+}
+
 }  // namespace
 }  // namespace rayclass::cli

@@ -8,12 +8,12 @@
 
 #include <array>
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <string>
 #include <vector>
 
-#include <glm/glm.hpp>
-
 #include "rayclass/core/bounds.h"
+#include "rayclass/scene/camera_path.h"
 
 namespace rayclass::scene {
 
@@ -100,6 +100,7 @@ struct Object {
 
 struct Scene {
     Camera camera;
+    CameraPath cameraPath;                        // the camera's animation, if any (camera "path")
     std::vector<Material> materials{Material{}};  // index 0 is the default material
     std::vector<Triangle> triangles;
     std::vector<Sphere> spheres;
