@@ -1,5 +1,6 @@
 // rayclass's side of scripts/bench: times each ray query (classified kernels per style, the BVH,
-// brute force on small scenes) on the ray sets of bench/common/raysets.h, one kind at a time.
+// the seed documents' structures (kdtree), brute force on small scenes) on the ray sets of
+// bench/common/raysets.h, one kind at a time.
 //
 //   raybench SCENE --camera NAME --light SPEC [--width W --height H] [--runs N] [--warmup N]
 //            [--methods LIST] [--brute-max-prims N] [--save-rays FILE] [--cl-options S]
@@ -48,6 +49,7 @@
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/device_scene.h"
+#include "rayclass/render/kdtree_query.h"
 #include "rayclass/scene/loader.h"
 #include "raysets.h"
 
@@ -122,6 +124,7 @@ struct Bench {
     std::unique_ptr<render::RayQuery> Make(const std::string& method) {
         if (method == "brute") return render::MakeBruteForceQuery(ctx, program, buffers);
         if (method == "bvh") return render::MakeBvhQuery(ctx, program, buffers, scene);
+        if (method == "kdtree") return render::MakeKdTreeQuery(ctx, program, buffers, scene);
         const auto style = method.starts_with("classify/")
                                ? render::FindChoice(render::kKernelStyles, method.substr(9))
                                : std::nullopt;
@@ -351,8 +354,13 @@ struct Args {
     bool warm = false;
     std::vector<std::string> kinds{std::begin(bench::kKinds), std::end(bench::kKinds)};
     std::vector<std::pair<std::string, std::string>> classifyParams;
-    std::vector<std::string> methods{"classify/scalar", "classify/vertex", "classify/fragment",
-                                     "classify/auto", "bvh", "brute"};
+    std::vector<std::string> methods{"classify/scalar",
+                                     "classify/vertex",
+                                     "classify/fragment",
+                                     "classify/auto",
+                                     "bvh",
+                                     "kdtree",
+                                     "brute"};
 };
 
 Args ParseArgs(int argc, char** argv) {
@@ -553,8 +561,9 @@ int main(int argc, char** argv) try {
                  sets.sets[0].size(), sets.sets[1].size(), sets.sets[2].size(), sets.sets[3].size(),
                  sets.sets[4].size());
 
-    std::printf("kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,"
-                "setup_s,tests_per_ray,hits\n");
+    std::printf(
+        "kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,"
+        "setup_s,tests_per_ray,hits\n");
     const uint32_t nLights = std::max<uint32_t>(1, uint32_t(sc.lights.size()));
     for (int k = 0; k < bench::kNumKinds; ++k) {
         const auto& set = sets.sets[k];

@@ -60,6 +60,10 @@
     FIELD(RcCamera, tanHalfFovY)         \
     FIELD(RcCamera, width)               \
     FIELD(RcCamera, height)              \
+    FIELD(RcCamera, windowX)             \
+    FIELD(RcCamera, windowY)             \
+    FIELD(RcCamera, windowWidth)         \
+    FIELD(RcCamera, windowHeight)        \
     STRUCT(RcRay)                        \
     FIELD(RcRay, origin)                 \
     FIELD(RcRay, direction)              \
@@ -121,6 +125,9 @@
     FIELD(RcBvh8Node, hiZ)               \
     FIELD(RcBvh8Node, child)             \
     FIELD(RcBvh8Node, nChildren)         \
-    FIELD(RcBvh8Node, pad)
+    FIELD(RcBvh8Node, pad)               \
+    STRUCT(RcKdNode)                     \
+    FIELD(RcKdNode, word)                \
+    FIELD(RcKdNode, data)
 
 #endif

@@ -77,7 +77,10 @@ typedef struct RcLight {
 /* Pinhole camera. The eye ray of pixel (x, y) (row 0 at the top) is
  * normalize(forward + sx * right + sy * up), sx = (2 (x + 0.5) / width - 1) * tanHalfFovX,
  * sy = (1 - 2 (y + 0.5) / height) * tanHalfFovY: the same formula in every eye-ray path.
- * right/up/forward are unit vectors. 80 bytes. */
+ * right/up/forward are unit vectors. The render covers the window of windowWidth x windowHeight
+ * pixels at (windowX, windowY) of the width x height image (all of it unless it is a crop or
+ * tile): ray i of a generation-0 batch is the window's pixel i, row-major, and its direction is
+ * the full image's, so a crop's pixels are those of a whole render. 96 bytes. */
 typedef struct RcCamera {
     rc_float4 position;
     rc_float4 forward, right, up;
@@ -85,6 +88,10 @@ typedef struct RcCamera {
     float tanHalfFovY;
     rc_uint width;
     rc_uint height;
+    rc_uint windowX;
+    rc_uint windowY;
+    rc_uint windowWidth;
+    rc_uint windowHeight;
 } RcCamera;
 
 /* Kinds of rays, for statistics and shading decisions. */
@@ -201,5 +208,16 @@ typedef struct RcBvh8Node {
     rc_uint nChildren;
     rc_uint pad[7];
 } RcBvh8Node;
+
+/* A node of the SAH kd-tree that cl/kdtree.cl walks (--accel kdtree; include/rayclass/accel/
+ * kdtree.h). word & 3 is the split axis of an inner node, 3 for a leaf; word >> 2 is the index
+ * of an inner node's upper child (its lower child is the next node) or a leaf's primitive
+ * count. data is an inner node's split position (its float's bits) or the position in the
+ * primitive index list where a leaf's primitives' global ids begin. 8 bytes. */
+#define RC_KD_LEAF 3u
+typedef struct RcKdNode {
+    rc_uint word;
+    rc_uint data;
+} RcKdNode;
 
 #endif

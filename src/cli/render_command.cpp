@@ -19,6 +19,7 @@
 #include "rayclass/render/reference.h"
 #include "rayclass/scene/loader.h"
 #include "render_args.h"
+#include "render_hash.h"
 
 namespace rayclass::cli {
 
@@ -74,12 +75,18 @@ class PendingTextFile {
 // The render on the OpenCL device of `ctx`, its eye rays' first hits from the path that
 // raster::ChooseEyeRays picks.
 image::Image RenderOnDevice(const RenderArgs& r, const scene::Scene& scene,
-                            std::unique_ptr<clrt::Context> ctx, render::RenderStats& stats,
-                            std::ostream& err) {
+                            const render::RenderOptions& options, clrt::Context& ctx,
+                            render::RenderStats& stats, std::ostream& err) {
     const raster::EyeRays eyeRays =
-        raster::ChooseEyeRays(r.eyeRays, r.options.rayEncoding, scene, err);
+        raster::ChooseEyeRays(r.eyeRays, options.rayEncoding, scene, err);
     stats.eyeRaysChoice = eyeRays.choice;
-    return render::ClRenderer(*ctx, scene, r.options, eyeRays.hits.get()).Render(stats);
+    return render::ClRenderer(ctx, scene, options, eyeRays.hits.get()).Render(stats);
+}
+
+// The pixels to render: --crop's, --tile's, or all of them.
+std::optional<image::PixelRect> WindowOf(const RenderArgs& r, const scene::Camera& camera) {
+    if (r.tile) return image::TileRect((*r.tile)[0], (*r.tile)[1], camera.width, camera.height);
+    return r.crop;
 }
 
 // Drops the first-hit layers that were not asked for.
@@ -124,10 +131,19 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
     if (r.height) scene.camera.height = r.height;
     const double loadSeconds = SecondsSince(t0);
 
+    render::RenderOptions options = r.options;
+    options.window = WindowOf(r, scene.camera);
     render::RenderStats stats;
-    image::Image img = r.reference ? render::RenderReference(scene, r.options, stats)
-                                   : RenderOnDevice(r, scene, device.get(), stats, err);
+    if (r.tile) stats.part.tile = r.tile;
+    if (options.window) {
+        const image::PixelRect& w = *options.window;
+        stats.part.crop = {w.x0, w.y0, w.x1, w.y1};
+    }
+    std::unique_ptr<clrt::Context> ctx = r.reference ? nullptr : device.get();
+    image::Image img = r.reference ? render::RenderReference(scene, options, stats)
+                                   : RenderOnDevice(r, scene, options, *ctx, stats, err);
     KeepAovs(r.aovs, img);
+    img.sceneHash = RenderHash(scene, options, r.reference);
 
     // The total stops before the image is written: the stats are on disk first (see Write).
     stats.timeS["scene_load"] = loadSeconds;

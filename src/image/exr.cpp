@@ -4,6 +4,7 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
 #include <ImfThreading.h>
 
 #include <algorithm>
@@ -21,6 +22,7 @@ namespace rayclass::image::detail {
 namespace {
 
 constexpr size_t kVec3Stride = sizeof(glm::vec3);
+constexpr const char* kSceneHashAttribute = "rayclassSceneHash";
 static_assert(kVec3Stride == 3 * sizeof(float), "glm::vec3 must be three packed floats");
 
 // Routes OpenEXR's output through OutFile so the OS error of a failed write is kept.
@@ -79,9 +81,21 @@ class ExrThreads {
 
 void WriteExr(const Image& image, OutFile& file, const std::string& name,
               ExrCompression compression) {
-    if (image.width > INT_MAX || image.height > INT_MAX)
+    if (uint64_t(image.originX) + image.width > image.DisplayWidth() ||
+        uint64_t(image.originY) + image.height > image.DisplayHeight()) {
+        throw std::runtime_error("pixels outside the display window");
+    }
+    if (image.DisplayWidth() > INT_MAX || image.DisplayHeight() > INT_MAX)
         throw std::runtime_error("image too large");
-    Imf::Header header(int(image.width), int(image.height));
+    const Imath::Box2i display({0, 0},
+                               {int(image.DisplayWidth()) - 1, int(image.DisplayHeight()) - 1});
+    const Imath::Box2i data(
+        {int(image.originX), int(image.originY)},
+        {int(image.originX + image.width) - 1, int(image.originY + image.height) - 1});
+    Imf::Header header(display, data);
+    if (!image.sceneHash.empty()) {
+        header.insert(kSceneHashAttribute, Imf::StringAttribute(image.sceneHash));
+    }
     header.compression() = compression == ExrCompression::kZip   ? Imf::ZIP_COMPRESSION
                            : compression == ExrCompression::kPiz ? Imf::PIZ_COMPRESSION
                                                                  : Imf::NO_COMPRESSION;
@@ -112,6 +126,28 @@ void WriteExr(const Image& image, OutFile& file, const std::string& name,
     output.writePixels(int(image.height));
 }
 
+namespace {
+
+// The scene hash, and a crop's place in the display window when the file's data window lies
+// inside a display window that starts at (0, 0); any other file is an image of its own.
+void ReadPlacement(const Imf::Header& header, Image& image) {
+    if (const auto* hash = header.findTypedAttribute<Imf::StringAttribute>(kSceneHashAttribute)) {
+        image.sceneHash = hash->value();
+    }
+    const Imath::Box2i& data = header.dataWindow();
+    const Imath::Box2i& display = header.displayWindow();
+    if (display.min.x != 0 || display.min.y != 0 || data.min.x < 0 || data.min.y < 0 ||
+        data.max.x > display.max.x || data.max.y > display.max.y) {
+        return;
+    }
+    image.originX = uint32_t(data.min.x);
+    image.originY = uint32_t(data.min.y);
+    image.displayWidth = uint32_t(display.max.x + 1);
+    image.displayHeight = uint32_t(display.max.y + 1);
+}
+
+}  // namespace
+
 Image ReadExr(const std::filesystem::path& path) {
     const ExrThreads threads;
     Imf::InputFile input(path.c_str(), threads.Count());
@@ -123,6 +159,7 @@ Image ReadExr(const std::filesystem::path& path) {
     }
     Image image(uint32_t(window.max.x - window.min.x + 1),
                 uint32_t(window.max.y - window.min.y + 1));
+    ReadPlacement(header, image);
     Imf::FrameBuffer frame;
     auto insert = [&](const char* name, Imf::PixelType type, void* base, size_t xStride) {
         frame.insert(name, Imf::Slice::Make(type, base, window, xStride));

@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <functional>
 #include <future>
-#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -48,16 +47,6 @@ RcRenderParams MakeRenderParams(const scene::Scene& scene, const RenderOptions& 
     params.ambient = {scene.ambient.x, scene.ambient.y, scene.ambient.z, 0.0f};
     params.background = {scene.background.x, scene.background.y, scene.background.z, 0.0f};
     return params;
-}
-
-image::Image NewImage(const CameraBasis& basis, bool aovs) {
-    image::Image img(basis.width, basis.height);
-    if (aovs) {
-        img.depth.assign(img.PixelCount(), std::numeric_limits<float>::infinity());
-        img.id.assign(img.PixelCount(), RC_NO_HIT);
-        img.normal.assign(img.PixelCount(), glm::vec3(0.0f));
-    }
-    return img;
 }
 
 // The render's program, its build time in stats.
@@ -271,7 +260,7 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
       options_(options),
       eyeHitSource_(eyeHitSource),
       stats_(stats),
-      basis_(scene.camera),
+      basis_(scene.camera, options.window),
       img_(NewImage(basis_, options.aovs)),
       program_(BuildProgram(ctx, options, stats)),
       params_(MakeRenderParams(scene, options)),
@@ -281,14 +270,14 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
       camBuffer_(UploadVector(ctx, std::vector<RcCamera>{cam_})),
       eyeKernel_(program_, "rc_generate_eye_rays"),
       shadeKernel_(program_, "rc_shade"),
-      batch_(BatchRays(options.batchRays, size_t(basis_.width) * basis_.height, params_.nLights,
+      batch_(BatchRays(options.batchRays, basis_.window.PixelCount(), params_.nLights,
                        ctx.info().maxAllocBytes)),
       buffers_(ctx, batch_, params_.nLights),
       compactKernel_(program_, "rc_compact_rays"),
       pool_(ctx, batch_),
       readQueue_(clrt::Check("clCreateCommandQueue",
                              [&] { return cl::CommandQueue(ctx.context(), ctx.device()); })),
-      nEye_(size_t(basis_.width) * basis_.height) {
+      nEye_(basis_.window.PixelCount()) {
     stats.width = basis_.width;
     stats.height = basis_.height;
     stats.device = ctx.info().name;
@@ -491,6 +480,7 @@ image::Image Frame::Finish(Clock::time_point tStart) {
     stats_.shadowRaysFromLight = q.shadowRaysFromLight;
     stats_.shadowRaysInCells = q.shadowRaysInCells;
     stats_.eyeRaysFromCamera = q.eyeRaysFromCamera;
+    stats_.accelStats = q.accel;
     stats_.timeS["host"] = hostSeconds_;
     if (options_.accel == Accel::kClassify || options_.accel == Accel::kAuto) {
         stats_.timeS["host_classify"] = q.hostSeconds;

@@ -12,6 +12,12 @@ nlohmann::json RenderStats::ToJson() const {
     nlohmann::json j;
     j["width"] = width;
     j["height"] = height;
+    if (part.frame) {
+        j["frame"] = *part.frame;
+        j["frame_time"] = part.frameTime;
+    }
+    if (part.tile) j["tile"] = {{"index", (*part.tile)[0]}, {"count", (*part.tile)[1]}};
+    if (part.crop) j["crop"] = *part.crop;
     j["device"] = device;
     j["accel"] = accel;
     j["eye_rays"] = eyeRays;
@@ -45,6 +51,7 @@ nlohmann::json RenderStats::ToJson() const {
     j["shadow_rays_from_light"] = shadowRaysFromLight;
     j["shadow_rays_in_cells"] = shadowRaysInCells;
     j["eye_rays_from_camera"] = eyeRaysFromCamera;
+    if (!accelStats.empty()) j["accel_stats"] = accelStats;
     j["mrays_per_s"] = queryTimeS > 0 ? double(RaysTotal()) / queryTimeS * 1e-6 : 0.0;
     j["time_s"] = timeS;
     return j;

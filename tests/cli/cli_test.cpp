@@ -278,9 +278,9 @@ TEST_F(CliFailure, UsageErrorsExitWith2AndNameTheProblem) {
          2,
          "rayclass render: x: unsupported output format '' (use .exr or .png)\n",
          "x"},
-        {{"SCENE", "-o", "x.exr", "--accel", "kdtree"},
+        {{"SCENE", "-o", "x.exr", "--accel", "octree"},
          2,
-         "rayclass render: --accel must be classify, bvh, auto or brute, not 'kdtree'\n",
+         "rayclass render: --accel must be classify, bvh, auto, brute or kdtree, not 'octree'\n",
          "x.exr"},
         {{"SCENE", "-o", "x.exr", "--exr-compression", "dwaa"},
          2,
@@ -427,7 +427,8 @@ TEST_F(CliFailure, FailuresAfterLoadingLeaveNoOutput) {
           "-cl-no-such-option"},
          1,
          "rayclass render: error: building OpenCL program (camera.cl, intersect.cl, encoding.cl, "
-         "shade.cl, generation.cl, brute.cl, classified.cl, bvh.cl) with options '-cl-std=CL1.2 "
+         "shade.cl, generation.cl, brute.cl, classified.cl, bvh.cl, kdtree.cl) with options "
+         "'-cl-std=CL1.2 "
          "-DRC_LOCAL_SIZE=64 -cl-no-such-option' failed "
          "with CL_INVALID_BUILD_OPTIONS (-43)\nbuild log:\n",
          "x.exr",
@@ -688,6 +689,75 @@ TEST_F(Cli, QuietPngRenderReplacesThePreviousOutput) {
     const image::Image img = image::ReadImage(Work("x.png"));
     EXPECT_EQ(img.width, 16u);
     EXPECT_EQ(img.height, 12u);
+}
+
+// Every layer of `a` and `b`, bit for bit.
+bool SameLayers(const image::Image& a, const image::Image& b) {
+    auto same = [](const auto& x, const auto& y) {
+        return x.size() == y.size() &&
+               (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0);
+    };
+    return a.width == b.width && a.height == b.height && same(a.rgb, b.rgb) &&
+           same(a.depth, b.depth) && same(a.id, b.id) && same(a.normal, b.normal);
+}
+
+TEST_F(Cli, TilesMergeIntoTheWholeRenderAndSayWhichTheyAre) {
+    const std::vector<std::string> common = {
+        "render", Cornell(), "--width", "50", "--height", "36", "--aov", "depth,id,normal", "-q"};
+    auto render = [&](std::vector<std::string> extra) {
+        std::vector<std::string> args = common;
+        args.insert(args.end(), extra.begin(), extra.end());
+        const Result r = Run(args);
+        EXPECT_EQ(r.status, 0) << r.err;
+    };
+    render({"-o", "whole.exr"});
+    std::vector<std::string> merge = {"merge", "-o", "merged.exr"};
+    for (int i = 0; i < 3; ++i) {
+        const std::string n = std::string(1, 't').append(std::to_string(i));  // see Run
+        render(
+            {"-o", n + ".exr", "--tile", std::to_string(i).append("/3"), "--stats", n + ".json"});
+        const nlohmann::json stats = nlohmann::json::parse(ReadText(Work(n + ".json")));
+        EXPECT_EQ(stats.at("tile"), (nlohmann::json{{"index", i}, {"count", 3}}));
+        EXPECT_EQ(stats.at("width"), 50);
+        merge.push_back(n + ".exr");
+    }
+    const Result r = Run(merge);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(
+        SameLayers(image::ReadImage(Work("merged.exr")), image::ReadImage(Work("whole.exr"))));
+    // A tile left out: the merge names the pixels and writes nothing.
+    const Result partial = Run({"merge", "-o", "partial.exr", "t0.exr", "t2.exr"});
+    EXPECT_EQ(partial.status, 1);
+    EXPECT_EQ(partial.err,
+              "rayclass merge: error: no tile covers pixels 16,0,33,36 of the 50x36 image "
+              "(--allow-partial merges anyway)\n");
+    EXPECT_FALSE(fs::exists(Work("partial.exr")));
+}
+
+TEST_F(Cli, CropAndTileUsageErrors) {
+    const std::pair<std::vector<std::string>, std::string> cases[] = {
+        {{"--crop", "1,2,3"},
+         "--crop expects X0,Y0,X1,Y1 (pixel bounds, end exclusive), not '1,2,3'"},
+        {{"--crop", "4,2,4,9"}, "--crop 4,2,4,9 is empty (X1 must exceed X0 and Y1 Y0)"},
+        {{"--tile", "3"}, "--tile expects I/N (tile I of N, from 0), not '3'"},
+        {{"--tile", "4/4"}, "--tile expects a tile index I in [0, 3], not '4'"},
+        {{"--tile", "0/2", "--crop", "0,0,1,1"},
+         "--crop and --tile both choose the pixels: give one"},
+    };
+    for (const auto& [extra, message] : cases) {
+        std::vector<std::string> args = {"render", Cornell(), "-o", "x.exr"};
+        args.insert(args.end(), extra.begin(), extra.end());
+        const Result r = Run(args);
+        EXPECT_EQ(r.status, 2);
+        std::string expected = "rayclass render: ";  // appended: see Run
+        EXPECT_EQ(r.err, expected.append(message).append("\n"));
+    }
+    const Result r = Run({"render", Cornell(), "-o", "x.exr", "--crop", "0,0,801,10", "-q"});
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.err,
+              "rayclass render: error: crop 0,0,801,10 is not a non-empty part of the "
+              "800x600 image\n");
+    EXPECT_EQ(Entries(), std::vector<std::string>{});
 }
 
 }  // namespace

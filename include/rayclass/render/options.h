@@ -11,6 +11,7 @@
 
 #include "rayclass/classify/params.h"
 #include "rayclass/geometry/intersect.h"
+#include "rayclass/image/tiles.h"
 
 namespace rayclass::render {
 
@@ -39,13 +40,14 @@ constexpr std::string_view NameOf(const Named<E> (&names)[N], E value) {
     return {};
 }
 
-// The ray query: the ray classification, a BVH, auto (per generation, auto_query.h) or brute
-// force.
-enum class Accel : uint8_t { kClassify, kBvh, kAuto, kBrute };
+// The ray query: the ray classification, a BVH, auto (per generation, auto_query.h), brute
+// force, or one of the seed documents' structures: a SAH kd-tree (kdtree_query.h).
+enum class Accel : uint8_t { kClassify, kBvh, kAuto, kBrute, kKdTree };
 inline constexpr Named<Accel> kAccels[] = {{"classify", Accel::kClassify},
                                            {"bvh", Accel::kBvh},
                                            {"auto", Accel::kAuto},
-                                           {"brute", Accel::kBrute}};
+                                           {"brute", Accel::kBrute},
+                                           {"kdtree", Accel::kKdTree}};
 
 // The classified query's kernels (cl/classified.cl).
 enum class KernelStyle : uint8_t {
@@ -69,9 +71,9 @@ inline constexpr Named<TriangleTest> kTriangleTests[] = {{"moller", TriangleTest
                                                          {"watertight", TriangleTest::kWatertight}};
 
 struct RenderOptions {
-    uint32_t maxDepth = 6;          // deepest secondary ray spawned (eye rays have depth 0)
-    float minWeight = 1e-3f;        // adaptive depth control: weaker secondary rays are not spawned
-    bool aovs = false;              // fill depth, id and normal layers of the first hit
+    uint32_t maxDepth = 6;    // deepest secondary ray spawned (eye rays have depth 0)
+    float minWeight = 1e-3f;  // adaptive depth control: weaker secondary rays are not spawned
+    bool aovs = false;        // fill depth, id and normal layers of the first hit
     // Rays per batch: bounds the device buffers (launch.h's BatchRays also keeps them within
     // one device allocation); a generation of several batches lets the host classify one while
     // the device answers another. Yet each batch descends the hierarchy anew and filters the
@@ -91,6 +93,8 @@ struct RenderOptions {
     // renderer; the 16-lane vertex/fragment kernels are Moeller only, so with watertight the
     // classified query runs the scalar kernels (auto) and --kernel vertex|fragment is an error.
     TriangleTest triangleTest = TriangleTest::kMoller;
+    // Only these pixels of the image (a crop or tile), each as the whole render has it.
+    std::optional<image::PixelRect> window;
 };
 
 }  // namespace rayclass::render
