@@ -139,6 +139,10 @@ void AttachTriangles(RTCDevice device, RTCScene scene, const scene::Scene& sc) {
 
 EmbreeScene::EmbreeScene(const scene::Scene& sc, int threads)
     : sphereBase_(sc.SphereBase()), quadricBase_(sc.QuadricBase()) {
+    if (!sc.patchBoxes.empty()) {
+        throw Error("the Embree peer takes triangles, spheres and quadrics; this scene has " +
+                    std::to_string(sc.patches.size()) + " Bezier patches");
+    }
     const std::string config = "threads=" + std::to_string(threads);
     device_.reset(rtcNewDevice(config.c_str()));
     if (!device_) throw Error("Embree: rtcNewDevice failed");

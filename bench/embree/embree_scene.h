@@ -15,7 +15,8 @@ namespace rayclass::bench {
 
 class EmbreeScene {
   public:
-    // Builds the BVH on `threads` threads. Throws rayclass::Error when Embree fails.
+    // Builds the BVH on `threads` threads. Throws rayclass::Error when Embree fails or the scene
+    // has Bezier patches, which the peer does not trace.
     EmbreeScene(const scene::Scene& scene, int threads);
 
     RTCScene handle() const { return scene_.get(); }
