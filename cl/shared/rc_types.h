@@ -220,4 +220,17 @@ typedef struct RcKdNode {
     rc_uint data;
 } RcKdNode;
 
+/* The primitives of a leaf of the 8-wide hierarchy in blocks of eight lanes, structure of arrays,
+ * so that one float8 Moller-Trumbore test covers a block (cl/bvh.cl). Triangle lanes hold v0 and
+ * the edges e1 = v1 - v0, e2 = v2 - v0; sphere, quadric and unused lanes hold zero edges, which
+ * the triangle test rejects (det = 0). prim: the lanes' global ids, RC_NO_HIT in unused lanes.
+ * The kernels' leaf references name the leaf's first block in place of its primIndex position
+ * (include/rayclass/bvh/leaf_blocks.h). 320 bytes. */
+typedef struct RcBvhLeafBlock8 {
+    float v0x[8], v0y[8], v0z[8];
+    float e1x[8], e1y[8], e1z[8];
+    float e2x[8], e2y[8], e2z[8];
+    rc_uint prim[8];
+} RcBvhLeafBlock8;
+
 #endif
