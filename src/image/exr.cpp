@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <climits>
 #include <cstddef>
+#include <cstdint>
+#include <fstream>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -112,7 +114,54 @@ void WriteExr(const Image& image, OutFile& file, const std::string& name,
     output.writePixels(int(image.height));
 }
 
+namespace {
+
+// Reads a NUL-terminated header string of at most 255 characters.
+std::string HeaderString(std::ifstream& in) {
+    std::string s;
+    for (char c; in.get(c);) {
+        if (c == '\0') return s;
+        if (s.size() == 255) throw std::runtime_error("header name longer than 255 characters");
+        s.push_back(c);
+    }
+    throw std::runtime_error("header ends early");
+}
+
+// OpenEXR's reader allocates the size an attribute declares before reading it, so that a few
+// bytes claiming 2 GiB cost 2 GiB (found by tests/fuzz/fuzz_exr.cpp). Every header's attribute
+// sizes are checked against what the file holds before OpenEXR sees it.
+void CheckAttributeSizes(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    const uint64_t fileSize = std::filesystem::file_size(path);
+    unsigned char version[8];
+    if (!in.read(reinterpret_cast<char*>(version), sizeof(version))) {
+        throw std::runtime_error("header ends early");
+    }
+    const bool multipart = (version[5] & 0x10) != 0;  // flag bit 12 of the version field
+    do {
+        for (std::string name = HeaderString(in); !name.empty(); name = HeaderString(in)) {
+            HeaderString(in);  // the attribute's type
+            unsigned char b[4];
+            if (!in.read(reinterpret_cast<char*>(b), sizeof(b))) {
+                throw std::runtime_error("header ends early");
+            }
+            const int32_t size = int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 |
+                                         uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24);
+            const uint64_t left = fileSize - uint64_t(in.tellg());
+            if (size < 0 || uint64_t(size) > left) {
+                throw std::runtime_error("header attribute '" + name + "' declares " +
+                                         std::to_string(size) + " bytes, but " +
+                                         std::to_string(left) + " remain in the file");
+            }
+            in.seekg(size, std::ios::cur);
+        }
+    } while (multipart && in.peek() != 0 && in.peek() != std::ifstream::traits_type::eof());
+}
+
+}  // namespace
+
 Image ReadExr(const std::filesystem::path& path) {
+    CheckAttributeSizes(path);
     const ExrThreads threads;
     Imf::InputFile input(path.c_str(), threads.Count());
     const Imf::Header& header = input.header();
