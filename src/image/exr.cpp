@@ -116,12 +116,16 @@ void WriteExr(const Image& image, OutFile& file, const std::string& name,
 
 namespace {
 
-// Reads a NUL-terminated header string of at most 255 characters.
-std::string HeaderString(std::ifstream& in) {
+// Reads a NUL-terminated header string of at most `limit` characters (31, or 255 in files that
+// declare long names: what OpenEXR reads, so that both walk the header alike).
+std::string HeaderString(std::ifstream& in, size_t limit) {
     std::string s;
     for (char c; in.get(c);) {
         if (c == '\0') return s;
-        if (s.size() == 255) throw std::runtime_error("header name longer than 255 characters");
+        if (s.size() == limit) {
+            throw std::runtime_error("header name longer than " + std::to_string(limit) +
+                                     " characters");
+        }
         s.push_back(c);
     }
     throw std::runtime_error("header ends early");
@@ -137,10 +141,13 @@ void CheckAttributeSizes(const std::filesystem::path& path) {
     if (!in.read(reinterpret_cast<char*>(version), sizeof(version))) {
         throw std::runtime_error("header ends early");
     }
-    const bool multipart = (version[5] & 0x10) != 0;  // flag bit 12 of the version field
+    // Flag bits 10 (long names) and 12 (multipart) of the version field.
+    const size_t limit = (version[5] & 0x04) != 0 ? 255 : 31;
+    const bool multipart = (version[5] & 0x10) != 0;
     do {
-        for (std::string name = HeaderString(in); !name.empty(); name = HeaderString(in)) {
-            HeaderString(in);  // the attribute's type
+        for (std::string name = HeaderString(in, limit); !name.empty();
+             name = HeaderString(in, limit)) {
+            HeaderString(in, limit);  // the attribute's type
             unsigned char b[4];
             if (!in.read(reinterpret_cast<char*>(b), sizeof(b))) {
                 throw std::runtime_error("header ends early");

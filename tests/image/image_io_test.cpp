@@ -450,8 +450,9 @@ TEST_F(ImageIoTest, ExrAttributeLargerThanTheFileIsAnError) {
     }
 }
 
-// The inputs fuzz_exr found (tests/fuzz/regressions/exr: a 2 GiB allocation, and a timeout
-// while ASan filled one) fail with the attribute named.
+// The inputs fuzz_exr found (tests/fuzz/regressions/exr: a 2 GiB allocation, a timeout while
+// ASan filled one, and a name longer than OpenEXR reads, after which its reader and a plain walk
+// of the header disagree on where the next attribute starts) fail with the problem named.
 TEST_F(ImageIoTest, FuzzFindingsAreErrors) {
     const char* source = std::getenv("RAYCLASS_SOURCE_DIR");
     const fs::path dir = fs::path(source ? source : ".") / "tests/fuzz/regressions/exr";
@@ -462,11 +463,10 @@ TEST_F(ImageIoTest, FuzzFindingsAreErrors) {
             ReadImage(entry.path());
             ADD_FAILURE() << entry.path() << ": no error";
         } catch (const Error& e) {
-            EXPECT_THAT(e.what(),
-                        StartsWith(entry.path().string() + ": cannot read: header attribute '"));
+            EXPECT_THAT(e.what(), StartsWith(entry.path().string() + ": cannot read: header "));
         }
     }
-    EXPECT_EQ(n, 2u);
+    EXPECT_EQ(n, 3u);
 }
 
 TEST_F(ImageIoTest, TruncatedExrIsAnError) {
