@@ -56,8 +56,8 @@ Box PrimitiveBox(const scene::Scene& scene, uint32_t id) {
     return b;
 }
 
-// Rounding moves a computed hit point by far less than 1e-7 of the coordinates involved (the
-// primitive's and, through the ray origin, the scene's); the padding covers both.
+// Rounding in float moves a computed hit point by far less than 1e-4 of the coordinates involved
+// (the primitive's and, through the ray origin, the scene's); the padding covers both.
 std::vector<Box> PaddedPrimitiveBoxes(const scene::Scene& scene) {
     std::vector<Box> boxes(scene.PrimitiveCount());
     double sceneMax = 0.0;
@@ -66,7 +66,7 @@ std::vector<Box> PaddedPrimitiveBoxes(const scene::Scene& scene) {
         sceneMax = std::max(sceneMax, MaxAbs(boxes[id]));
     }
     for (Box& b : boxes) {
-        const double pad = 1e-7 * MaxAbs(b) + 1e-10 * sceneMax + 1e-300;
+        const double pad = 1e-4 * MaxAbs(b) + 1e-5 * sceneMax + 1e-300;
         b.lo -= pad;
         b.hi += pad;
     }
@@ -76,9 +76,10 @@ std::vector<Box> PaddedPrimitiveBoxes(const scene::Scene& scene) {
 // A ray's slab test against boxes. A zero direction component gives infinite slab distances (or
 // NaN for an origin on the slab's plane, which the comparisons ignore: the box counts as entered).
 struct Slabs {
-    explicit Slabs(const geometry::Ray<double>& ray) : o(ray.o), tMin(ray.tMin) {
+    template <typename T>
+    explicit Slabs(const geometry::Ray<T>& ray) : o(ray.o), tMin(double(ray.tMin)) {
         for (int a = 0; a < 3; ++a) {
-            inv[a] = 1.0 / ray.d[a];
+            inv[a] = 1.0 / double(ray.d[a]);
             negative[a] = std::signbit(inv[a]);
         }
     }
@@ -231,9 +232,8 @@ uint32_t ReferenceBvh::LargestLeaf() const {
 // Visits the leaves whose boxes the ray enters no farther than `bound` (read again after every
 // leaf, so a nearer hit prunes the rest), nearer child first. `visit(first, count)` returns
 // true to stop.
-template <typename Visit>
-void ReferenceBvh::Traverse(const geometry::Ray<double>& ray, const double& bound,
-                            Visit&& visit) const {
+template <typename T, typename Visit>
+void ReferenceBvh::Traverse(const geometry::Ray<T>& ray, const T& bound, Visit&& visit) const {
     if (nodes_.empty()) return;
     const Slabs slabs(ray);
     struct Entry {
@@ -273,9 +273,9 @@ void ReferenceBvh::Traverse(const geometry::Ray<double>& ray, const double& boun
     }
 }
 
-geometry::Hit<double> ReferenceBvh::Nearest(const geometry::Ray<double>& ray,
-                                            uint64_t& tests) const {
-    geometry::Hit<double> best;
+template <typename T>
+geometry::Hit<T> ReferenceBvh::Nearest(const geometry::Ray<T>& ray, uint64_t& tests) const {
+    geometry::Hit<T> best;
     best.t = ray.tMax;
     Traverse(ray, best.t, [&](uint32_t first, uint32_t count) {
         for (uint32_t i = first; i < first + count; ++i) {
@@ -284,16 +284,17 @@ geometry::Hit<double> ReferenceBvh::Nearest(const geometry::Ray<double>& ray,
         tests += count;
         return false;
     });
-    if (!best.Valid()) best.t = std::numeric_limits<double>::infinity();
+    if (!best.Valid()) best.t = std::numeric_limits<T>::infinity();
     return best;
 }
 
-bool ReferenceBvh::Occluded(const geometry::Ray<double>& ray, uint64_t& tests) const {
+template <typename T>
+bool ReferenceBvh::Occluded(const geometry::Ray<T>& ray, uint64_t& tests) const {
     bool occluded = false;
     Traverse(ray, ray.tMax, [&](uint32_t first, uint32_t count) {
         for (uint32_t i = first; i < first + count; ++i) {
             ++tests;
-            geometry::Hit<double> best;
+            geometry::Hit<T> best;
             best.t = ray.tMax;
             if (geometry::IntersectPrimitive(scene_, ids_[i], ray, best, test_)) {
                 occluded = true;
@@ -304,5 +305,10 @@ bool ReferenceBvh::Occluded(const geometry::Ray<double>& ray, uint64_t& tests) c
     });
     return occluded;
 }
+
+template geometry::Hit<float> ReferenceBvh::Nearest(const geometry::Ray<float>&, uint64_t&) const;
+template geometry::Hit<double> ReferenceBvh::Nearest(const geometry::Ray<double>&, uint64_t&) const;
+template bool ReferenceBvh::Occluded(const geometry::Ray<float>&, uint64_t&) const;
+template bool ReferenceBvh::Occluded(const geometry::Ray<double>&, uint64_t&) const;
 
 }  // namespace rayclass::render

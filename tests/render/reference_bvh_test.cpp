@@ -1,7 +1,8 @@
-// The reference renderer's double-precision BVH against brute force in double: every hit (id,
-// distance, barycentrics) and every shadow answer equal, ray by ray, on random scenes built to
-// be hard for a hierarchy (ties, flat and stacked primitives, axis-parallel rays) and on a sample
-// of rays in Sibenik; and reference images rendered through it bit-identical to brute force's.
+// The reference renderer's double-precision BVH against brute force in double and in float: every
+// hit (id, distance, barycentrics) and every shadow answer equal, ray by ray, on random scenes
+// built to be hard for a hierarchy (ties, flat and stacked primitives, axis-parallel rays) and on a
+// sample of rays in Sibenik; and reference images rendered through it bit-identical to brute
+// force's.
 #include "rayclass/render/reference_bvh.h"
 
 #include <gtest/gtest.h>
@@ -99,28 +100,34 @@ std::vector<DRay> HardRays(const scene::Scene& s, uint32_t seed, size_t n) {
     return rays;
 }
 
-void ExpectSameAnswers(const scene::Scene& s, const std::vector<DRay>& rays, TriangleTest test) {
+// Nearest and Occluded in T (float: the kernels' arithmetic; double: the reference renderer's).
+template <typename T>
+void ExpectSameAnswers(const scene::Scene& s, const std::vector<DRay>& doubleRays,
+                       TriangleTest test) {
     const ReferenceBvh bvh(s, test);
     EXPECT_LE(bvh.LargestLeaf(), 4u);
     uint64_t tests = 0;
     size_t hits = 0, occluded = 0, mismatches = 0;
+    std::vector<geometry::Ray<T>> rays;
+    for (const DRay& r : doubleRays) {
+        rays.push_back({glm::vec<3, T>(r.o), glm::vec<3, T>(r.d), T(r.tMin), T(r.tMax)});
+    }
     for (size_t i = 0; i < rays.size(); ++i) {
-        const DRay& ray = rays[i];
-        const Hit<double> want = geometry::IntersectBruteForce(s, ray, test);
-        const Hit<double> got = bvh.Nearest(ray, tests);
-        const bool same = got.prim == want.prim &&
-                          std::memcmp(&got.t, &want.t, sizeof(double)) == 0 &&
-                          std::memcmp(&got.u, &want.u, sizeof(double)) == 0 &&
-                          std::memcmp(&got.v, &want.v, sizeof(double)) == 0;
+        const geometry::Ray<T>& ray = rays[i];
+        const Hit<T> want = geometry::IntersectBruteForce(s, ray, test);
+        const Hit<T> got = bvh.Nearest(ray, tests);
+        const bool same = got.prim == want.prim && std::memcmp(&got.t, &want.t, sizeof(T)) == 0 &&
+                          std::memcmp(&got.u, &want.u, sizeof(T)) == 0 &&
+                          std::memcmp(&got.v, &want.v, sizeof(T)) == 0;
         if (!same && ++mismatches <= 5) {
             ADD_FAILURE() << "ray " << i << ": bvh prim " << got.prim << " t " << got.t
                           << ", brute force prim " << want.prim << " t " << want.t;
         }
         hits += want.Valid();
         // Shadow segments ending before, at and beyond the nearest hit.
-        const double ends[] = {want.Valid() ? want.t * 0.999 : 5.0, want.t, 1e30};
-        for (double end : ends) {
-            DRay segment = ray;
+        const T ends[] = {want.Valid() ? want.t * T(0.999) : T(5), want.t, T(1e30)};
+        for (T end : ends) {
+            geometry::Ray<T> segment = ray;
             segment.tMax = end;
             const bool blocked = geometry::Occluded(s, segment, test);
             EXPECT_EQ(bvh.Occluded(segment, tests), blocked) << "ray " << i << " to " << end;
@@ -139,8 +146,10 @@ TEST(ReferenceBvh, HitsEqualBruteForceOnHardRandomScenes) {
     for (uint32_t seed = 1; seed <= 2; ++seed) {
         const scene::Scene s = HardScene(seed, 3000);
         const std::vector<DRay> rays = HardRays(s, seed + 100, 2000);
-        ExpectSameAnswers(s, rays, TriangleTest::kMoller);
-        ExpectSameAnswers(s, rays, TriangleTest::kWatertight);
+        ExpectSameAnswers<double>(s, rays, TriangleTest::kMoller);
+        ExpectSameAnswers<double>(s, rays, TriangleTest::kWatertight);
+        ExpectSameAnswers<float>(s, rays, TriangleTest::kMoller);
+        ExpectSameAnswers<float>(s, rays, TriangleTest::kWatertight);
     }
 }
 
@@ -172,7 +181,7 @@ TEST(ReferenceBvh, HitsEqualBruteForceOnSibenikSample) {
     std::mt19937 rng(7);
     const auto box = s.Bounds();
     std::vector<DRay> rays;
-    for (int i = 0; i < 400; ++i) {
+    for (int i = 0; i < 300; ++i) {
         const glm::vec3 d = RandomPoint(rng, -1.0f, 1.0f);
         glm::vec3 o = s.camera.position;
         if (i % 2) {
@@ -182,7 +191,8 @@ TEST(ReferenceBvh, HitsEqualBruteForceOnSibenikSample) {
         }
         rays.push_back(DRay{glm::dvec3(o), glm::dvec3(d)});
     }
-    ExpectSameAnswers(s, rays, TriangleTest::kMoller);
+    ExpectSameAnswers<double>(s, rays, TriangleTest::kMoller);
+    ExpectSameAnswers<float>(s, rays, TriangleTest::kMoller);
 }
 
 struct ImageCase {

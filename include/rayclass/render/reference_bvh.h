@@ -2,11 +2,12 @@
 // double precision on the host, apart from the float BVH builder (src/bvh) and the kernels, so
 // that the reference stays an independent oracle for them.
 //
-// Its answers equal geometry::IntersectBruteForce and geometry::Occluded in double exactly (the
-// same primitive tests, the lower id winning among equal distances): a primitive's computed
-// distance does not depend on the ray's far bound, so visiting primitives in another order and
-// skipping boxes that start beyond the best distance changes nothing. Boxes are padded so that a
-// primitive's computed hit never lies outside its box through rounding.
+// Its answers equal geometry::IntersectBruteForce and geometry::Occluded exactly, in double (the
+// reference renderer) or in float (the tests' oracle for the kernels' hits): the same primitive
+// tests, the lower id winning among equal distances. A primitive's computed distance does not
+// depend on the ray's far bound, so visiting primitives in another order and skipping boxes that
+// start beyond the best distance changes nothing. Boxes are padded so that a primitive's hit
+// computed in float never lies outside its box through rounding.
 #pragma once
 
 #include <cstdint>
@@ -24,11 +25,13 @@ class ReferenceBvh {
     // outlive the hierarchy and stay unchanged.
     ReferenceBvh(const scene::Scene& scene, geometry::TriangleTest test);
 
-    // The nearest hit in (ray.tMin, ray.tMax), as geometry::IntersectBruteForce. `tests` counts
-    // the primitive tests made.
-    geometry::Hit<double> Nearest(const geometry::Ray<double>& ray, uint64_t& tests) const;
-    // Whether any primitive is hit in (ray.tMin, ray.tMax), as geometry::Occluded.
-    bool Occluded(const geometry::Ray<double>& ray, uint64_t& tests) const;
+    // The nearest hit in (ray.tMin, ray.tMax), as geometry::IntersectBruteForce<T> (T is float
+    // or double). `tests` counts the primitive tests made.
+    template <typename T>
+    geometry::Hit<T> Nearest(const geometry::Ray<T>& ray, uint64_t& tests) const;
+    // Whether any primitive is hit in (ray.tMin, ray.tMax), as geometry::Occluded<T>.
+    template <typename T>
+    bool Occluded(const geometry::Ray<T>& ray, uint64_t& tests) const;
 
     size_t NodeCount() const { return nodes_.size(); }
     // The most primitives in one leaf.
@@ -49,8 +52,8 @@ class ReferenceBvh {
     };
     struct Build;
 
-    template <typename Visit>
-    void Traverse(const geometry::Ray<double>& ray, const double& bound, Visit&& visit) const;
+    template <typename T, typename Visit>
+    void Traverse(const geometry::Ray<T>& ray, const T& bound, Visit&& visit) const;
 
     const scene::Scene& scene_;
     geometry::TriangleTest test_;
