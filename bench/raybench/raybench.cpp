@@ -1,5 +1,5 @@
 // rayclass's side of scripts/bench: times each ray query (classified kernels per style, the BVH,
-// the seed documents' structures (kdtree), brute force on small scenes) on the ray sets of
+// the seed documents' structures (kdtree, grid), brute force on small scenes) on the ray sets of
 // bench/common/raysets.h, one kind at a time.
 //
 //   raybench SCENE --camera NAME --light SPEC [--width W --height H] [--runs N] [--warmup N]
@@ -51,6 +51,7 @@
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/device_scene.h"
+#include "rayclass/render/grid_query.h"
 #include "rayclass/render/kdtree_query.h"
 #include "rayclass/scene/loader.h"
 #include "raysets.h"
@@ -127,6 +128,7 @@ struct Bench {
         if (method == "brute") return render::MakeBruteForceQuery(ctx, program, buffers);
         if (method == "bvh") return render::MakeBvhQuery(ctx, program, buffers, scene);
         if (method == "kdtree") return render::MakeKdTreeQuery(ctx, program, buffers, scene);
+        if (method == "grid") return render::MakeGridQuery(ctx, program, buffers, scene);
         const auto style = method.starts_with("classify/")
                                ? render::FindChoice(render::kKernelStyles, method.substr(9))
                                : std::nullopt;
@@ -362,6 +364,7 @@ struct Args {
                                      "classify/auto",
                                      "bvh",
                                      "kdtree",
+                                     "grid",
                                      "brute"};
 };
 

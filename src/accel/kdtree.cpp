@@ -176,7 +176,7 @@ KdTree BuildKdTree(const scene::Scene& scene, const KdBuildParams& params) {
     root.lo = {Down(root.lo.x), Down(root.lo.y), Down(root.lo.z)};
     root.hi = {Up(root.hi.x), Up(root.hi.y), Up(root.hi.z)};
     tree.box = {glm::vec3(root.lo), glm::vec3(root.hi)};
-    const uint32_t depthRule = uint32_t(8 + 1.3 * std::log2(std::max(1u, n)));
+    const uint32_t depthRule = uint32_t(8 + 2 * std::log2(std::max(1u, n)));
     Builder b{scene, params,
               pad,   std::min(params.maxDepth ? params.maxDepth : depthRule, kKdMaxDepth - 1),
               tree,  std::vector<Side>(n, Side::kBoth)};

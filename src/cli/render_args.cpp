@@ -173,7 +173,7 @@ std::vector<Option> QueryOptions(RenderArgs& r) {
          "ray query: classify (5D ray classification, default), bvh\n"
          "(binned-SAH BVH, same kernels' routines), auto (per generation,\n"
          "the classification until a sample shows the BVH cheaper), brute,\n"
-         "kdtree (SAH kd-tree)",
+         "kdtree (SAH kd-tree) or grid (uniform grid, 3D-DDA)",
          Choice(r.options.accel, render::kAccels)},
         {{"--kernel"},
          "K",

@@ -22,9 +22,9 @@ namespace rayclass::accel {
 
 struct KdBuildParams {
     float traversalCost = 1.0f;  // cost of one node step
-    float intersectCost = 1.5f;  // cost of one primitive test
+    float intersectCost = 4.0f;  // cost of one primitive test
     float emptyBonus = 0.8f;     // share of the cost a split cutting off empty space saves
-    uint32_t maxDepth = 0;       // 0: 8 + 1.3 log2 N, at most kKdMaxDepth
+    uint32_t maxDepth = 0;       // 0: 8 + 2 log2 N, at most kKdMaxDepth - 1
 };
 
 // The traversal kernel's stack holds one entry per level (RC_KD_STACK in cl/kdtree.cl).
