@@ -125,6 +125,20 @@
     FIELD(RcBvh8Node, hiZ)               \
     FIELD(RcBvh8Node, child)             \
     FIELD(RcBvh8Node, nChildren)         \
-    FIELD(RcBvh8Node, pad)
+    FIELD(RcBvh8Node, pad)               \
+    STRUCT(RcBvhLeafBlock8)              \
+    FIELD(RcBvhLeafBlock8, v0x)          \
+    FIELD(RcBvhLeafBlock8, v0y)          \
+    FIELD(RcBvhLeafBlock8, v0z)          \
+    FIELD(RcBvhLeafBlock8, e1x)          \
+    FIELD(RcBvhLeafBlock8, e1y)          \
+    FIELD(RcBvhLeafBlock8, e1z)          \
+    FIELD(RcBvhLeafBlock8, e2x)          \
+    FIELD(RcBvhLeafBlock8, e2y)          \
+    FIELD(RcBvhLeafBlock8, e2z)          \
+    FIELD(RcBvhLeafBlock8, prim)         \
+    STRUCT(RcKdNode)                     \
+    FIELD(RcKdNode, word)                \
+    FIELD(RcKdNode, data)
 
 #endif

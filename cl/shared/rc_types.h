@@ -209,4 +209,28 @@ typedef struct RcBvh8Node {
     rc_uint pad[7];
 } RcBvh8Node;
 
+/* A node of the SAH kd-tree that cl/kdtree.cl walks (--accel kdtree; include/rayclass/accel/
+ * kdtree.h). word & 3 is the split axis of an inner node, 3 for a leaf; word >> 2 is the index
+ * of an inner node's upper child (its lower child is the next node) or a leaf's primitive
+ * count. data is an inner node's split position (its float's bits) or the position in the
+ * primitive index list where a leaf's primitives' global ids begin. 8 bytes. */
+#define RC_KD_LEAF 3u
+typedef struct RcKdNode {
+    rc_uint word;
+    rc_uint data;
+} RcKdNode;
+
+/* The primitives of a leaf of the 8-wide hierarchy in blocks of eight lanes, structure of arrays,
+ * so that one float8 Moller-Trumbore test covers a block (cl/bvh.cl). Triangle lanes hold v0 and
+ * the edges e1 = v1 - v0, e2 = v2 - v0; sphere, quadric and unused lanes hold zero edges, which
+ * the triangle test rejects (det = 0). prim: the lanes' global ids, RC_NO_HIT in unused lanes.
+ * The kernels' leaf references name the leaf's first block in place of its primIndex position
+ * (include/rayclass/bvh/leaf_blocks.h). 320 bytes. */
+typedef struct RcBvhLeafBlock8 {
+    float v0x[8], v0y[8], v0z[8];
+    float e1x[8], e1y[8], e1z[8];
+    float e2x[8], e2y[8], e2z[8];
+    rc_uint prim[8];
+} RcBvhLeafBlock8;
+
 #endif

@@ -169,7 +169,8 @@ std::vector<Option> QueryOptions(RenderArgs& r) {
          "A",
          "ray query: classify (5D ray classification, default), bvh\n"
          "(binned-SAH BVH, same kernels' routines), auto (per generation,\n"
-         "the classification until a sample shows the BVH cheaper) or brute",
+         "the classification until a sample shows the BVH cheaper), brute,\n"
+         "kdtree (SAH kd-tree) or grid (uniform grid, 3D-DDA)",
          Choice(r.options.accel, render::kAccels)},
         {{"--kernel"},
          "K",

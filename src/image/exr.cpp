@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <climits>
 #include <cstddef>
+#include <cstdint>
+#include <fstream>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -146,9 +148,59 @@ void ReadPlacement(const Imf::Header& header, Image& image) {
     image.displayHeight = uint32_t(display.max.y + 1);
 }
 
+// Reads a NUL-terminated header string of at most `limit` characters (31, or 255 in files that
+// declare long names: what OpenEXR reads, so that both walk the header alike).
+std::string HeaderString(std::ifstream& in, size_t limit) {
+    std::string s;
+    for (char c; in.get(c);) {
+        if (c == '\0') return s;
+        if (s.size() == limit) {
+            throw std::runtime_error("header name longer than " + std::to_string(limit) +
+                                     " characters");
+        }
+        s.push_back(c);
+    }
+    throw std::runtime_error("header ends early");
+}
+
+// OpenEXR's reader allocates the size an attribute declares before reading it, so that a few
+// bytes claiming 2 GiB cost 2 GiB (found by tests/fuzz/fuzz_exr.cpp). Every header's attribute
+// sizes are checked against what the file holds before OpenEXR sees it.
+void CheckAttributeSizes(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    const uint64_t fileSize = std::filesystem::file_size(path);
+    unsigned char version[8];
+    if (!in.read(reinterpret_cast<char*>(version), sizeof(version))) {
+        throw std::runtime_error("header ends early");
+    }
+    // Flag bits 10 (long names) and 12 (multipart) of the version field.
+    const size_t limit = (version[5] & 0x04) != 0 ? 255 : 31;
+    const bool multipart = (version[5] & 0x10) != 0;
+    do {
+        for (std::string name = HeaderString(in, limit); !name.empty();
+             name = HeaderString(in, limit)) {
+            HeaderString(in, limit);  // the attribute's type
+            unsigned char b[4];
+            if (!in.read(reinterpret_cast<char*>(b), sizeof(b))) {
+                throw std::runtime_error("header ends early");
+            }
+            const int32_t size = int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 |
+                                         uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24);
+            const uint64_t left = fileSize - uint64_t(in.tellg());
+            if (size < 0 || uint64_t(size) > left) {
+                throw std::runtime_error("header attribute '" + name + "' declares " +
+                                         std::to_string(size) + " bytes, but " +
+                                         std::to_string(left) + " remain in the file");
+            }
+            in.seekg(size, std::ios::cur);
+        }
+    } while (multipart && in.peek() != 0 && in.peek() != std::ifstream::traits_type::eof());
+}
+
 }  // namespace
 
 Image ReadExr(const std::filesystem::path& path) {
+    CheckAttributeSizes(path);
     const ExrThreads threads;
     Imf::InputFile input(path.c_str(), threads.Count());
     const Imf::Header& header = input.header();

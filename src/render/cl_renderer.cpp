@@ -175,11 +175,15 @@ class Preparer {
     std::future<std::unique_ptr<PreparedBatch>> next_;
 };
 
+std::unique_ptr<RayQuery> WrapQuery(std::unique_ptr<RayQuery> query, const QueryWrapper& wrap) {
+    return wrap ? wrap(std::move(query)) : std::move(query);
+}
+
 // One Render call: its device state, the generation in flight, and the stages that trace it.
 class Frame {
   public:
     Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
-          EyeHitSource* eyeHitSource, RenderStats& stats);
+          EyeHitSource* eyeHitSource, const QueryWrapper& wrapQuery, RenderStats& stats);
 
     // Every generation, from the eye rays until no ray is spawned.
     void Trace() {
@@ -255,7 +259,7 @@ class Frame {
 };
 
 Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
-             EyeHitSource* eyeHitSource, RenderStats& stats)
+             EyeHitSource* eyeHitSource, const QueryWrapper& wrapQuery, RenderStats& stats)
     : ctx_(ctx),
       options_(options),
       eyeHitSource_(eyeHitSource),
@@ -265,7 +269,7 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
       program_(BuildProgram(ctx, options, stats)),
       params_(MakeRenderParams(scene, options)),
       sceneBuffers_(ctx, scene, params_),
-      query_(MakeQuery(ctx, program_, sceneBuffers_, scene, options, stats)),
+      query_(WrapQuery(MakeQuery(ctx, program_, sceneBuffers_, scene, options, stats), wrapQuery)),
       cam_(basis_.ToDevice()),
       camBuffer_(UploadVector(ctx, std::vector<RcCamera>{cam_})),
       eyeKernel_(program_, "rc_generate_eye_rays"),
@@ -480,6 +484,7 @@ image::Image Frame::Finish(Clock::time_point tStart) {
     stats_.shadowRaysFromLight = q.shadowRaysFromLight;
     stats_.shadowRaysInCells = q.shadowRaysInCells;
     stats_.eyeRaysFromCamera = q.eyeRaysFromCamera;
+    stats_.accelStats = q.accel;
     stats_.timeS["host"] = hostSeconds_;
     if (options_.accel == Accel::kClassify || options_.accel == Accel::kAuto) {
         stats_.timeS["host_classify"] = q.hostSeconds;
@@ -492,12 +497,16 @@ image::Image Frame::Finish(Clock::time_point tStart) {
 }  // namespace
 
 ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
-                       EyeHitSource* eyeHits)
-    : ctx_(ctx), scene_(scene), options_(options), eyeHits_(eyeHits) {}
+                       EyeHitSource* eyeHits, QueryWrapper wrapQuery)
+    : ctx_(ctx),
+      scene_(scene),
+      options_(options),
+      eyeHits_(eyeHits),
+      wrapQuery_(std::move(wrapQuery)) {}
 
 image::Image ClRenderer::Render(RenderStats& stats) {
     const auto tStart = Clock::now();
-    Frame frame(ctx_, scene_, options_, eyeHits_, stats);
+    Frame frame(ctx_, scene_, options_, eyeHits_, wrapQuery_, stats);
     frame.Trace();
     return frame.Finish(tStart);
 }

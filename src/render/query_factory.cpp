@@ -7,6 +7,8 @@
 #include "rayclass/render/brute_query.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
+#include "rayclass/render/grid_query.h"
+#include "rayclass/render/kdtree_query.h"
 
 namespace rayclass::render {
 
@@ -31,6 +33,18 @@ std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& progr
         return query;
     };
     if (options.accel == Accel::kBvh) return makeBvh();
+    if (options.accel == Accel::kKdTree) {
+        const auto t0 = Clock::now();
+        auto query = MakeKdTreeQuery(ctx, program, buffers, scene);
+        stats.timeS["kdtree_build"] = SecondsSince(t0);
+        return query;
+    }
+    if (options.accel == Accel::kGrid) {
+        const auto t0 = Clock::now();
+        auto query = MakeGridQuery(ctx, program, buffers, scene);
+        stats.timeS["grid_build"] = SecondsSince(t0);
+        return query;
+    }
     const auto t0 = Clock::now();
     classify::Params params = classify::Params::ForScene(scene);
     for (const classify::ParamSetting& setting : options.classifyParams) setting.ApplyTo(params);

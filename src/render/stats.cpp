@@ -51,6 +51,7 @@ nlohmann::json RenderStats::ToJson() const {
     j["shadow_rays_from_light"] = shadowRaysFromLight;
     j["shadow_rays_in_cells"] = shadowRaysInCells;
     j["eye_rays_from_camera"] = eyeRaysFromCamera;
+    if (!accelStats.empty()) j["accel_stats"] = accelStats;
     j["mrays_per_s"] = queryTimeS > 0 ? double(RaysTotal()) / queryTimeS * 1e-6 : 0.0;
     j["time_s"] = timeS;
     return j;

@@ -278,9 +278,10 @@ TEST_F(CliFailure, UsageErrorsExitWith2AndNameTheProblem) {
          2,
          "rayclass render: x: unsupported output format '' (use .exr or .png)\n",
          "x"},
-        {{"SCENE", "-o", "x.exr", "--accel", "kdtree"},
+        {{"SCENE", "-o", "x.exr", "--accel", "octree"},
          2,
-         "rayclass render: --accel must be classify, bvh, auto or brute, not 'kdtree'\n",
+         "rayclass render: --accel must be classify, bvh, auto, brute, kdtree or grid, not "
+         "'octree'\n",
          "x.exr"},
         {{"SCENE", "-o", "x.exr", "--exr-compression", "dwaa"},
          2,
@@ -427,7 +428,9 @@ TEST_F(CliFailure, FailuresAfterLoadingLeaveNoOutput) {
           "-cl-no-such-option"},
          1,
          "rayclass render: error: building OpenCL program (camera.cl, intersect.cl, encoding.cl, "
-         "shade.cl, generation.cl, brute.cl, classified.cl, bvh.cl) with options '-cl-std=CL1.2 "
+         "shade.cl, generation.cl, brute.cl, classified.cl, bvh.cl, kdtree.cl, grid.cl) with "
+         "options "
+         "'-cl-std=CL1.2 "
          "-DRC_LOCAL_SIZE=64 -cl-no-such-option' failed "
          "with CL_INVALID_BUILD_OPTIONS (-43)\nbuild log:\n",
          "x.exr",

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <span>
 #include <string>
@@ -44,6 +45,9 @@ struct QueryStats {
     // (src/classify/light_cells.h).
     uint64_t shadowRaysInCells = 0;
     uint64_t eyeRaysFromCamera = 0;  // eye rays classified from their camera (RaySource), unread
+    // The query's own figures (--stats "accel_stats", docs/stats.md): its structure's size and
+    // what its kernels counted, e.g. "kdtree_nodes_visited".
+    std::map<std::string, double> accel;
 };
 
 class RayQuery {
