@@ -37,13 +37,13 @@ std::vector<Path> Paths() {
         paths.push_back(std::move(p));
     };
     using render::Accel;
-    using render::KernelStyle;
     for (const auto& [name, style] : render::kKernelStyles) {
         add("classify/" + std::string(name), [style](auto& o) { o.kernel = style; });
     }
-    add("bvh", [](auto& o) { o.accel = Accel::kBvh; });
-    add("auto", [](auto& o) { o.accel = Accel::kAuto; });
-    add("brute", [](auto& o) { o.accel = Accel::kBrute; });
+    for (const auto& [name, accel] : render::kAccels) {
+        if (accel != Accel::kClassify)
+            add(std::string(name), [accel](auto& o) { o.accel = accel; });
+    }
     add("polar16", [](auto& o) { o.rayEncoding = render::RayEncoding::kPolar16; });
     add("watertight", [](auto& o) { o.triangleTest = render::TriangleTest::kWatertight; });
     // Small batches: a window's eye rays in several pages, classified from the camera.
