@@ -126,6 +126,9 @@
     FIELD(RcBvh8Node, child)             \
     FIELD(RcBvh8Node, nChildren)         \
     FIELD(RcBvh8Node, pad)               \
+    STRUCT(RcKdNode)                     \
+    FIELD(RcKdNode, word)                \
+    FIELD(RcKdNode, data)                \
     STRUCT(RcBvhLeafBlock8)              \
     FIELD(RcBvhLeafBlock8, v0x)          \
     FIELD(RcBvhLeafBlock8, v0y)          \
@@ -136,9 +139,6 @@
     FIELD(RcBvhLeafBlock8, e2x)          \
     FIELD(RcBvhLeafBlock8, e2y)          \
     FIELD(RcBvhLeafBlock8, e2z)          \
-    FIELD(RcBvhLeafBlock8, prim)         \
-    STRUCT(RcKdNode)                     \
-    FIELD(RcKdNode, word)                \
-    FIELD(RcKdNode, data)
+    FIELD(RcBvhLeafBlock8, prim)
 
 #endif
