@@ -5,7 +5,7 @@
  * uses (intersect.cl, lower id wins ties), so the hits equal brute force's exactly. Node
  * boxes are padded on the host and the slab test's far distance is widened by 2 gamma(3) (Ize
  * 2013), so rounding never culls a primitive the routines would hit. tests[i] counts primitive
- * tests. */
+ * tests (in a packet, the tests of every leaf the packet visits while ray i is active). */
 #include "rc_types.h"
 #include "intersect.cl"
 
@@ -211,44 +211,300 @@ inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
     }
 }
 
+/* --- packets of 16 rays -------------------------------------------------------------------
+ * A work-item answers 16 consecutive rays. Where they are coherent (their directions share an
+ * octant and lie within a narrow cone) it walks the tree once for all of them, the lanes of every
+ * float16 over the rays: a node's child is entered when any lane enters it, each lane with the
+ * single-ray walk's slab test and bounds, and a leaf's triangles are tested one at a time against
+ * all lanes with rc_intersect_triangle's operations, lane by lane the same nearest hit and
+ * tie-break. Neighbouring rays (eye rays of a row, the rays they spawn, their shadow rays) mostly
+ * visit the same nodes, so the packet reads each node and triangle once for 16 rays. Other
+ * packets, and scenes with spheres, quadrics or the watertight test, take the single-ray walk ray
+ * by ray. */
+#define RC_PACKET 16
+
+inline float16 rc_min16(float16 a, float16 b) { return select(b, a, a < b); }
+inline float16 rc_max16(float16 a, float16 b) { return select(b, a, a > b); }
+
+inline float rc_hmin16(float16 a) {
+    const float8 m8 = fmin(a.lo, a.hi);
+    const float4 m4 = fmin(m8.lo, m8.hi);
+    const float2 m2 = fmin(m4.lo, m4.hi);
+    return fmin(m2.x, m2.y);
+}
+
+inline float rc_hmax16(float16 a) {
+    const float8 m8 = fmax(a.lo, a.hi);
+    const float4 m4 = fmax(m8.lo, m8.hi);
+    const float2 m2 = fmax(m4.lo, m4.hi);
+    return fmax(m2.x, m2.y);
+}
+
+/* The rays of a packet, the lanes over the rays; inactive lanes hold a harmless ray. */
+typedef struct RcBvhPacket {
+    float16 ox, oy, oz, dx, dy, dz, ix, iy, iz, tmin, tmax;
+    int16 active;
+} RcBvhPacket;
+
+/* The largest spread of a packet's origins that walks as one, squared: a 32nd of the diagonal
+ * of the root's children's boxes. Rays from scattered points share few nodes even when their
+ * directions agree (shadow rays toward one light after several bounces). */
+inline float rc_bvh_max_spread2(__global const RcBvh8Node* root) {
+    float3 lo = (float3)(INFINITY), hi = (float3)(-INFINITY);
+    for (uint c = 0; c < root->nChildren; ++c) {
+        lo = fmin(lo, (float3)(root->loX[c], root->loY[c], root->loZ[c]));
+        hi = fmax(hi, (float3)(root->hiX[c], root->hiY[c], root->hiZ[c]));
+    }
+    const float3 e = (hi - lo) * (1.0f / 32.0f);
+    return dot(e, e);
+}
+
+/* The packet's rays from rays[first, first + 16), lanes beyond n inactive, and lanes with
+ * tmax == 0 (empty shadow slots) inactive when skipEmpty. Returns whether the packet is
+ * coherent enough to walk as one: every active direction in the first active one's octant and
+ * within about 18 degrees of it (cos > 0.95), the origins' box's diagonal squared at most
+ * maxSpread2. */
+inline int rc_bvh_load_packet(__global const RcRay* rays, uint first, uint n, int skipEmpty,
+                              float maxSpread2, RcBvhPacket* p) {
+    float o[3][RC_PACKET], dir[3][RC_PACKET], tn[RC_PACKET], tf[RC_PACKET];
+    int act[RC_PACKET];
+    int lead = -1, coherent = 1;
+    float3 d0 = (float3)(0.0f), lo = (float3)(INFINITY), hi = (float3)(-INFINITY);
+    for (int k = 0; k < RC_PACKET; ++k) {
+        float4 ro = (float4)(0.0f), rd = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
+        act[k] = first + k < n;
+        if (act[k]) {
+            ro = rays[first + k].origin;
+            rd = rays[first + k].direction;
+            act[k] = !skipEmpty || rd.w != 0.0f;
+        }
+        o[0][k] = ro.x, o[1][k] = ro.y, o[2][k] = ro.z;
+        dir[0][k] = rd.x, dir[1][k] = rd.y, dir[2][k] = rd.z;
+        tn[k] = ro.w, tf[k] = rd.w;
+        if (!act[k]) continue;
+        lo = fmin(lo, ro.xyz);
+        hi = fmax(hi, ro.xyz);
+        const float3 d = rd.xyz;
+        if (lead < 0) {
+            lead = k;
+            d0 = d;
+            continue;
+        }
+        const float dd = dot(d, d0);
+        coherent &= signbit(d.x) == signbit(d0.x) && signbit(d.y) == signbit(d0.y) &&
+                    signbit(d.z) == signbit(d0.z) && dd > 0.0f &&
+                    dd * dd > 0.9025f * dot(d, d) * dot(d0, d0);
+    }
+    const float3 spread = hi - lo;
+    coherent &= lead < 0 || dot(spread, spread) <= maxSpread2;
+    p->ox = vload16(0, o[0]), p->oy = vload16(0, o[1]), p->oz = vload16(0, o[2]);
+    p->dx = vload16(0, dir[0]), p->dy = vload16(0, dir[1]), p->dz = vload16(0, dir[2]);
+    p->tmin = vload16(0, tn), p->tmax = vload16(0, tf);
+    p->active = vload16(0, act) != 0;
+    /* rc_bvh_inverse lane by lane */
+    const float16 invX = 1.0f / p->dx, invY = 1.0f / p->dy, invZ = 1.0f / p->dz;
+    p->ix = select(invX, copysign((float16)(1e30f), invX), isinf(invX));
+    p->iy = select(invY, copysign((float16)(1e30f), invY), isinf(invY));
+    p->iz = select(invZ, copysign((float16)(1e30f), invZ), isinf(invZ));
+    return coherent;
+}
+
+/* Walks the tree once for the packet: nearest hits in (bt, bp, bu, bv), or with anyHit the lanes
+ * that found a hit in *blocked (a lane stops at its first). Returns primitive tests per lane. */
+inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
+                                  __global const RcBvh8Node* nodes,
+                                  __global const RcBvhLeafBlock8* blocks, float16* bt, uint16* bp,
+                                  float16* bu, float16* bv, int16* blocked) {
+    uint stackRef[RC_BVH_STACK];
+    float stackT[RC_BVH_STACK];
+    int sp = 0;
+    uint ref = 0;
+    uint16 tests = (uint16)(0);
+    int16 active = p->active;
+    for (;;) {
+        if (ref & RC_BVH8_LEAF) {
+            const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
+            __global const RcBvhLeafBlock8* blk = blocks + (ref & RC_BVH8_FIRST_MASK);
+            for (uint k = 0; k < count; ++k) {
+                __global const RcBvhLeafBlock8* b = blk + k / 8;
+                const uint lane = k % 8;
+                const uint prim = b->prim[lane];
+                const float e1x = b->e1x[lane], e1y = b->e1y[lane], e1z = b->e1z[lane];
+                const float e2x = b->e2x[lane], e2y = b->e2y[lane], e2z = b->e2z[lane];
+                tests += as_uint16(active) & (uint16)(1);
+                /* rc_intersect_triangle's operations, lane by lane */
+                const float16 pvx = p->dy * e2z - e2y * p->dz;
+                const float16 pvy = p->dz * e2x - e2z * p->dx;
+                const float16 pvz = p->dx * e2y - e2x * p->dy;
+                const float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
+                const float16 invDet = 1.0f / det;
+                const float16 tvx = p->ox - b->v0x[lane];
+                const float16 tvy = p->oy - b->v0y[lane];
+                const float16 tvz = p->oz - b->v0z[lane];
+                const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
+                const float16 qvx = tvy * e1z - e1y * tvz;
+                const float16 qvy = tvz * e1x - e1z * tvx;
+                const float16 qvz = tvx * e1y - e1x * tvy;
+                const float16 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
+                const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
+                const uint16 prim16 = (uint16)(prim);
+                const int16 hit = active & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) &
+                                  (v >= 0.0f) & (u + v <= 1.0f) & (t > p->tmin) &
+                                  (t < p->tmax) &
+                                  ((t < *bt) | ((t == *bt) & (prim16 < *bp)));
+                *bt = select(*bt, t, hit);
+                *bp = select(*bp, prim16, as_uint16(hit));
+                *bu = select(*bu, u, hit);
+                *bv = select(*bv, v, hit);
+                if (anyHit) {
+                    *blocked |= hit;
+                    active &= ~hit;
+                    if (!any(active)) return tests;
+                }
+            }
+        } else {
+            __global const RcBvh8Node* nd = nodes + ref;
+            const float16 reach = rc_min16(p->tmax, *bt);
+            uint r[8];
+            float t[8];
+            int k = 0;
+            for (uint c = 0; c < nd->nChildren; ++c) {
+                const float16 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
+                const float16 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
+                const float16 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
+                const float16 tn = rc_max16(rc_max16(rc_min16(ax, bx), rc_min16(ay, by)),
+                                            rc_max16(rc_min16(az, bz), p->tmin));
+                const float16 tf =
+                    rc_min16(rc_min16(rc_max16(ax, bx), rc_max16(ay, by)), rc_max16(az, bz)) *
+                    1.0000004f;
+                const int16 enters = active & (tn <= rc_min16(tf, reach));
+                if (!any(enters)) continue;
+                /* The nearest entry over the lanes that enter orders and culls the child. */
+                const float near = rc_hmin16(select((float16)(INFINITY), tn, enters));
+                int j = k++;
+                for (; !anyHit && j > 0 && t[j - 1] > near; --j) {
+                    t[j] = t[j - 1];
+                    r[j] = r[j - 1];
+                }
+                t[j] = near;
+                r[j] = nd->child[c];
+            }
+            if (k > 0) {
+                for (int j = k - 1; j > 0; --j) {
+                    stackRef[sp] = r[j];
+                    stackT[sp++] = t[j];
+                }
+                ref = r[0];
+                continue;
+            }
+        }
+        /* An entry no active lane can still improve on is dropped. */
+        const float far = rc_hmax16(select((float16)(-INFINITY), *bt, active));
+        for (;;) {
+            if (sp == 0) return tests;
+            --sp;
+            if (stackT[sp] <= far) break;
+        }
+        ref = stackRef[sp];
+    }
+}
+
+/* Whether packets may walk the tree: triangles only, tested as rc_intersect_triangle tests. */
+inline int rc_packets_allowed(__constant const RcRenderParams* params) {
+#ifdef RC_WATERTIGHT
+    return 0;
+#else
+    return params->nSpheres + params->nQuadrics == 0;
+#endif
+}
+
+/* One work-item per 16 rays rays[16 i, 16 i + 16). */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_bvh(
     __global const RcRay* rays, uint n, __global const RcBvh8Node* nodes,
     __global const RcBvhLeafBlock8* blocks, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
     __constant const RcRenderParams* params, __global RcHit* hits, __global uint* tests) {
-    const uint i = get_global_id(0);
-    if (i >= n) return;
-    const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-    const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-    RcHit best = rc_no_hit(tmax);
+    const uint first = get_global_id(0) * RC_PACKET;
+    if (first >= n) return;
     const uint nT = params->nTriangles, nS = params->nSpheres;
-    uint count = 0;
-    if (nT + nS + params->nQuadrics > 0)
-        count = rc_bvh_trace(o, d, tmin, tmax, 0, nodes, blocks, triangles, spheres, quadrics,
-                             nT, nS, &best);
-    if (best.prim == RC_NO_HIT) best.t = INFINITY;
-    hits[i] = best;
-    tests[i] = count;
+    const int hasPrims = nT + nS + params->nQuadrics > 0;
+    RcBvhPacket p;
+    if (hasPrims && rc_packets_allowed(params) &&
+        rc_bvh_load_packet(rays, first, n, 0, rc_bvh_max_spread2(nodes), &p)) {
+        float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
+        uint16 bp = (uint16)(RC_NO_HIT);
+        int16 blocked = (int16)(0);
+        const uint16 count = rc_bvh_trace_packet(&p, 0, nodes, blocks, &bt, &bp, &bu, &bv,
+                                                 &blocked);
+        float ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
+        uint ps[RC_PACKET], cs[RC_PACKET];
+        vstore16(bt, 0, ts);
+        vstore16(bu, 0, us);
+        vstore16(bv, 0, vs);
+        vstore16(bp, 0, ps);
+        vstore16(count, 0, cs);
+        for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
+            RcHit h;
+            h.t = ps[k] == RC_NO_HIT ? INFINITY : ts[k];
+            h.prim = ps[k];
+            h.u = us[k];
+            h.v = vs[k];
+            hits[first + k] = h;
+            tests[first + k] = cs[k];
+        }
+        return;
+    }
+    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
+        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
+        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
+        RcHit best = rc_no_hit(tmax);
+        uint count = 0;
+        if (hasPrims)
+            count = rc_bvh_trace(o, d, tmin, tmax, 0, nodes, blocks, triangles, spheres,
+                                 quadrics, nT, nS, &best);
+        if (best.prim == RC_NO_HIT) best.t = INFINITY;
+        hits[i] = best;
+        tests[i] = count;
+    }
 }
 
-/* Any hit before the light ends the search. */
+/* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_bvh(
     __global const RcRay* rays, uint n, __global const RcBvh8Node* nodes,
     __global const RcBvhLeafBlock8* blocks, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
     __constant const RcRenderParams* params, __global uchar* blocked, __global uint* tests) {
-    const uint i = get_global_id(0);
-    if (i >= n) return;
-    blocked[i] = 0;
-    tests[i] = 0;
-    /* An empty slot has tmax 0: nothing can block it. */
-    if (rays[i].direction.w == 0.0f) return;
-    const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-    const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-    RcHit best = rc_no_hit(tmax);
+    const uint first = get_global_id(0) * RC_PACKET;
+    if (first >= n) return;
     const uint nT = params->nTriangles, nS = params->nSpheres;
-    if (nT + nS + params->nQuadrics == 0) return;
-    tests[i] = rc_bvh_trace(o, d, tmin, tmax, 1, nodes, blocks, triangles, spheres, quadrics,
-                            nT, nS, &best);
-    blocked[i] = best.prim != RC_NO_HIT;
+    const int hasPrims = nT + nS + params->nQuadrics > 0;
+    RcBvhPacket p;
+    if (hasPrims && rc_packets_allowed(params) &&
+        rc_bvh_load_packet(rays, first, n, 1, rc_bvh_max_spread2(nodes), &p)) {
+        float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
+        uint16 bp = (uint16)(RC_NO_HIT);
+        int16 hit = (int16)(0);
+        const uint16 count = rc_bvh_trace_packet(&p, 1, nodes, blocks, &bt, &bp, &bu, &bv, &hit);
+        int hs[RC_PACKET];
+        uint cs[RC_PACKET];
+        vstore16(hit, 0, hs);
+        vstore16(count, 0, cs);
+        for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
+            blocked[first + k] = hs[k] != 0;
+            tests[first + k] = cs[k];
+        }
+        return;
+    }
+    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
+        blocked[i] = 0;
+        tests[i] = 0;
+        /* An empty slot has tmax 0: nothing can block it. */
+        if (rays[i].direction.w == 0.0f || !hasPrims) continue;
+        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
+        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
+        RcHit best = rc_no_hit(tmax);
+        tests[i] = rc_bvh_trace(o, d, tmin, tmax, 1, nodes, blocks, triangles, spheres, quadrics,
+                                nT, nS, &best);
+        blocked[i] = best.prim != RC_NO_HIT;
+    }
 }

@@ -167,10 +167,10 @@ std::vector<Option> QueryOptions(RenderArgs& r) {
     return {
         {{"--accel"},
          "A",
-         "ray query: classify (5D ray classification, default), bvh\n"
-         "(binned-SAH BVH, same kernels' routines), auto (per generation,\n"
-         "the classification until a sample shows the BVH cheaper), brute,\n"
-         "kdtree (SAH kd-tree) or grid (uniform grid, 3D-DDA)",
+         "ray query: auto (default: per generation, the classification\n"
+         "until a sample shows the BVH cheaper), classify (5D ray\n"
+         "classification), bvh (binned-SAH BVH, same kernels' routines),\n"
+         "brute, kdtree (SAH kd-tree) or grid (uniform grid, 3D-DDA)",
          Choice(r.options.accel, render::kAccels)},
         {{"--kernel"},
          "K",

@@ -4,7 +4,7 @@
 // same: primitive, distance and barycentrics for nearest hits, the answer for any-hit queries.
 // When it was written, unpadded node boxes failed it (rays in the squares' planes missed them),
 // and so did skipping boxes entered exactly at the nearest hit's distance (a higher id won ties
-// at shared edges).
+// at shared edges). The same rays in coherent runs of 16 take the kernels' packet walk.
 #include "rayclass/render/bvh_query.h"
 
 #include <gtest/gtest.h>
@@ -99,6 +99,45 @@ std::vector<RcRay> FragileRays(const scene::Scene& scene, float tmax) {
     return rays;
 }
 
+// Packets of 16 consecutive rays that the kernels walk as one (cl/bvh.cl): from every point of
+// the half-unit lattice along each of the 26 lattice directions in turn (so each run of 16 shares
+// its direction, many of them axis-parallel or in the squares' planes), then runs of 16 random
+// origins with directions jittered within a few degrees of a random one. Every fifth ray has
+// tmax 0 when `emptySlots`: the empty shadow slots the any-hit kernel skips.
+std::vector<RcRay> CoherentRays(float tmax, bool emptySlots) {
+    std::vector<RcRay> rays;
+    for (int dx = -1; dx <= 1; ++dx) {
+        for (int dy = -1; dy <= 1; ++dy) {
+            for (int dz = -1; dz <= 1; ++dz) {
+                if (dx == 0 && dy == 0 && dz == 0) continue;
+                const glm::vec3 d = glm::normalize(glm::vec3(dx, dy, dz));
+                for (int x = -1; x <= 7; ++x) {
+                    for (int y = -1; y <= 7; ++y) {
+                        for (int z = -1; z <= 7; ++z) {
+                            rays.push_back(
+                                {{0.5f * x, 0.5f * y, 0.5f * z, 1e-4f}, {d.x, d.y, d.z, tmax}});
+                        }
+                    }
+                }
+            }
+        }
+    }
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> pos(-0.5f, 3.5f), dir(-1.0f, 1.0f), jitter(-0.02f, 0.02f);
+    for (int packet = 0; packet < 512; ++packet) {
+        const glm::vec3 base = glm::normalize(glm::vec3(dir(rng), dir(rng), dir(rng)));
+        for (int k = 0; k < 16; ++k) {
+            const glm::vec3 d =
+                glm::normalize(base + glm::vec3(jitter(rng), jitter(rng), jitter(rng)));
+            rays.push_back({{pos(rng), pos(rng), pos(rng), 1e-4f}, {d.x, d.y, d.z, tmax}});
+        }
+    }
+    if (emptySlots) {
+        for (size_t i = 0; i < rays.size(); i += 5) rays[i].direction.w = 0.0f;
+    }
+    return rays;
+}
+
 struct Queries {
     scene::Scene scene = GridOfSquares();
     cl::Program program = BuildRenderProgram(Ctx());
@@ -113,9 +152,8 @@ struct Queries {
     }
 };
 
-TEST(BvhQuery, AxisParallelRaysAndRaysInFacePlanesHitWhatBruteForceHits) {
-    Queries q;
-    const std::vector<RcRay> rays = FragileRays(q.scene, INFINITY);
+// Nearest hits of `rays` by the BVH and by brute force must be equal: primitive, t, u and v.
+void ExpectBruteForcesHits(Queries& q, const std::vector<RcRay>& rays) {
     const std::vector<RcHit> bvh = NearestHits(Ctx(), *q.bvh, rays),
                              brute = NearestHits(Ctx(), *q.brute, rays);
     uint32_t hits = 0, mismatches = 0;
@@ -137,9 +175,8 @@ TEST(BvhQuery, AxisParallelRaysAndRaysInFacePlanesHitWhatBruteForceHits) {
     EXPECT_GT(hits, rays.size() / 3);  // the rays do meet the grid
 }
 
-TEST(BvhQuery, AnyHitAnswersOfFragileRaysAreBruteForces) {
-    Queries q;
-    const std::vector<RcRay> rays = FragileRays(q.scene, 0.75f);
+// The any-hit answers of `rays` by the BVH and by brute force must be equal.
+void ExpectBruteForcesBlocked(Queries& q, const std::vector<RcRay>& rays) {
     const std::vector<uint8_t> bvh = BlockedAnswers(Ctx(), *q.bvh, rays),
                                brute = BlockedAnswers(Ctx(), *q.brute, rays);
     uint32_t blocked = 0, mismatches = 0;
@@ -150,6 +187,26 @@ TEST(BvhQuery, AnyHitAnswersOfFragileRaysAreBruteForces) {
     EXPECT_EQ(mismatches, 0u);
     EXPECT_GT(blocked, rays.size() / 10);
     EXPECT_LT(blocked, rays.size() - rays.size() / 10);
+}
+
+TEST(BvhQuery, AxisParallelRaysAndRaysInFacePlanesHitWhatBruteForceHits) {
+    Queries q;
+    ExpectBruteForcesHits(q, FragileRays(q.scene, INFINITY));
+}
+
+TEST(BvhQuery, PacketsOfCoherentRaysHitWhatBruteForceHits) {
+    Queries q;
+    ExpectBruteForcesHits(q, CoherentRays(INFINITY, false));
+}
+
+TEST(BvhQuery, PacketsOfCoherentRaysAreBlockedAsByBruteForce) {
+    Queries q;
+    ExpectBruteForcesBlocked(q, CoherentRays(0.75f, true));
+}
+
+TEST(BvhQuery, AnyHitAnswersOfFragileRaysAreBruteForces) {
+    Queries q;
+    ExpectBruteForcesBlocked(q, FragileRays(q.scene, 0.75f));
 }
 
 }  // namespace

@@ -81,7 +81,7 @@ struct RenderOptions {
     // Where classifying is cheap, the larger buffers' page faults cost more than it saves (very
     // large images of simple scenes).
     uint32_t batchRays = 1u << 20;
-    Accel accel = Accel::kClassify;
+    Accel accel = Accel::kAuto;
     std::vector<classify::ParamSetting> classifyParams;  // cost-function settings, in order
     KernelStyle kernel = KernelStyle::kAuto;
     std::string buildOptions;  // extra OpenCL build options
