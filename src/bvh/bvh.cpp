@@ -190,7 +190,8 @@ struct Collapser {
         std::vector<uint32_t> height(tree.nodes.size(), 0);
         for (size_t b = tree.nodes.size(); b-- > 0;) {
             const BinaryNode& n = tree.nodes[b];
-            if (n.count > 0) continue;
+            // A tree without primitives is a single node of count 0 that has no children.
+            if (n.count > 0 || tree.primIndex.empty()) continue;
             height[b] = 1 + std::max(height[b + 1], height[n.first]);
             uint32_t child[8];
             const uint32_t k = Expand(uint32_t(b), child, ~0u);

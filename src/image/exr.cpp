@@ -163,9 +163,50 @@ std::string HeaderString(std::ifstream& in, size_t limit) {
     throw std::runtime_error("header ends early");
 }
 
+uint32_t HeaderUint(std::ifstream& in) {
+    unsigned char b[4];
+    if (!in.read(reinterpret_cast<char*>(b), sizeof(b))) {
+        throw std::runtime_error("header ends early");
+    }
+    return uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
+}
+
+// The bytes OpenEXR reads for a value of `type` that declares `size` bytes, read past here.
+// Its reader takes fixed-size types at their size and channel lists and previews by their
+// content, whatever the declared size, so a file whose sizes disagree puts the two walks out of
+// step; other types (strings, unknown ones) take the declared size.
+uint64_t ValueBytes(std::ifstream& in, const std::string& type, size_t limit, uint32_t size) {
+    static const std::pair<const char*, uint32_t> kFixed[] = {
+        {"box2i", 16},      {"box2f", 16},   {"chromaticities", 32},
+        {"compression", 1}, {"double", 8},   {"envmap", 1},
+        {"float", 4},       {"int", 4},      {"keycode", 28},
+        {"lineOrder", 1},   {"m33f", 36},    {"m33d", 72},
+        {"m44f", 64},       {"m44d", 128},   {"rational", 8},
+        {"tiledesc", 9},    {"timecode", 8}, {"v2i", 8},
+        {"v2f", 8},         {"v2d", 16},     {"v3i", 12},
+        {"v3f", 12},        {"v3d", 24},     {"deepImageState", 1}};
+    const std::streamoff start = in.tellg();
+    uint64_t read = size;
+    for (const auto& [name, bytes] : kFixed) {
+        if (type == name) read = bytes;
+    }
+    if (type == "chlist") {
+        while (!HeaderString(in, limit).empty()) {
+            if (!in.seekg(16, std::ios::cur)) throw std::runtime_error("header ends early");
+        }
+        read = uint64_t(in.tellg() - start);
+    } else if (type == "preview") {
+        const uint64_t width = HeaderUint(in), height = HeaderUint(in);
+        read = 8 + 4 * width * height;
+    }
+    in.seekg(start + std::streamoff(size));
+    return read;
+}
+
 // OpenEXR's reader allocates the size an attribute declares before reading it, so that a few
 // bytes claiming 2 GiB cost 2 GiB (found by tests/fuzz/fuzz_exr.cpp). Every header's attribute
-// sizes are checked against what the file holds before OpenEXR sees it.
+// sizes are checked against what the file holds, and against what OpenEXR will read for the
+// value, before OpenEXR sees it.
 void CheckAttributeSizes(const std::filesystem::path& path) {
     std::ifstream in(path, std::ios::binary);
     const uint64_t fileSize = std::filesystem::file_size(path);
@@ -179,20 +220,20 @@ void CheckAttributeSizes(const std::filesystem::path& path) {
     do {
         for (std::string name = HeaderString(in, limit); !name.empty();
              name = HeaderString(in, limit)) {
-            HeaderString(in, limit);  // the attribute's type
-            unsigned char b[4];
-            if (!in.read(reinterpret_cast<char*>(b), sizeof(b))) {
-                throw std::runtime_error("header ends early");
-            }
-            const int32_t size = int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 |
-                                         uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24);
+            const std::string type = HeaderString(in, limit);
+            const int32_t size = int32_t(HeaderUint(in));
             const uint64_t left = fileSize - uint64_t(in.tellg());
             if (size < 0 || uint64_t(size) > left) {
                 throw std::runtime_error("header attribute '" + name + "' declares " +
                                          std::to_string(size) + " bytes, but " +
                                          std::to_string(left) + " remain in the file");
             }
-            in.seekg(size, std::ios::cur);
+            const uint64_t read = ValueBytes(in, type, limit, uint32_t(size));
+            if (read != uint64_t(size)) {
+                throw std::runtime_error("header attribute '" + name + "' of type '" + type +
+                                         "' declares " + std::to_string(size) +
+                                         " bytes, but its value takes " + std::to_string(read));
+            }
         }
     } while (multipart && in.peek() != 0 && in.peek() != std::ifstream::traits_type::eof());
 }

@@ -40,10 +40,14 @@ glm::vec<3, T> OffsetRayOrigin(const glm::vec<3, T>& p, const glm::vec<3, T>& n)
     using Int = typename C::Int;
     glm::vec<3, T> out;
     for (int i = 0; i < 3; ++i) {
+        if (std::abs(p[i]) < C::kOrigin) {
+            out[i] = p[i] + C::kFloatScale * n[i];
+            continue;
+        }
+        // Only here: near zero (-0 is INT_MIN's bits) the step could overflow the integer.
         const Int ulps = Int(C::kIntScale * n[i]);
         const Int bits = std::bit_cast<Int>(p[i]);
-        const T stepped = std::bit_cast<T>(bits + (p[i] < T(0) ? -ulps : ulps));
-        out[i] = std::abs(p[i]) < C::kOrigin ? p[i] + C::kFloatScale * n[i] : stepped;
+        out[i] = std::bit_cast<T>(bits + (p[i] < T(0) ? -ulps : ulps));
     }
     return out;
 }
