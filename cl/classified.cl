@@ -438,6 +438,8 @@ RC_SHADE_INLINE int16 rc_packet_quadric(const RcLanes16* L, __global const RcQua
     return valid & (in0 | in1);
 }
 
+#include "patch_packet.cl"
+
 /* One work-item per packet: packetLeaf[p] and packetFirst[p] (the packet's first ray within its
  * leaf); the packet holds min(16, rayCount - first) rays. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_fragment(
@@ -473,6 +475,10 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
             const float16 bound = fmin(L.tmax, nextafter(bestT, (float16)(INFINITY)));
             if (prim < nT + nS) {
                 inside = rc_packet_sphere(&L, spheres[prim - nT].centerRadius, bound, &t);
+            } else if (quadrics[prim - nT - nS].kind == RC_ANALYTIC_PATCH_BOX) {
+                inside = rc_packet_patch(&L, (__global const float4*)quadrics,
+                                         (__global const RcPatchBox*)(quadrics + (prim - nT - nS)),
+                                         bound, &t, &u, &v);
             } else {
                 inside = rc_packet_quadric(&L, quadrics + (prim - nT - nS), bound, &t);
             }
@@ -537,8 +543,13 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
             float16 t;
             hit |= ~beyond & rc_packet_sphere(&L, spheres[prim - nT].centerRadius, L.tmax, &t);
         } else {
-            float16 t;
-            hit |= ~beyond & rc_packet_quadric(&L, quadrics + (prim - nT - nS), L.tmax, &t);
+            __global const RcQuadric* q = quadrics + (prim - nT - nS);
+            float16 t, u, v;
+            hit |= ~beyond & (q->kind == RC_ANALYTIC_PATCH_BOX
+                                  ? rc_packet_patch(&L, (__global const float4*)quadrics,
+                                                    (__global const RcPatchBox*)q, L.tmax, &t,
+                                                    &u, &v)
+                                  : rc_packet_quadric(&L, q, L.tmax, &t));
         }
     }
     int h[16];

@@ -15,6 +15,8 @@
     ((float3)((a).y * (b).z - (b).y * (a).z, (a).z * (b).x - (b).z * (a).x, \
               (a).x * (b).y - (b).x * (a).y))
 
+#include "patch.cl"
+
 /* Moeller & Trumbore 1997. u, v: barycentrics of vertices 1 and 2. */
 inline int rc_intersect_triangle(float3 o, float3 d, float tmin, float tmax, float3 p0, float3 p1,
                                  float3 p2, float* t, float* u, float* v) {
@@ -214,7 +216,11 @@ inline int rc_intersect_primitive(uint id, float3 o, float3 d, float tmin, float
     } else if (id < nTriangles + nSpheres) {
         hit = rc_intersect_sphere(o, d, tmin, bound, spheres[id - nTriangles].centerRadius, &t);
     } else {
-        hit = rc_intersect_quadric(o, d, tmin, bound, quadrics + (id - nTriangles - nSpheres), &t);
+        __global const RcQuadric* q = quadrics + (id - nTriangles - nSpheres);
+        hit = q->kind == RC_ANALYTIC_PATCH_BOX
+                  ? rc_intersect_patch_box(o, d, tmin, bound, (__global const float4*)quadrics,
+                                           (__global const RcPatchBox*)q, &t, &u, &v)
+                  : rc_intersect_quadric(o, d, tmin, bound, q, &t);
     }
     if (!hit || !(t < best->t || (t == best->t && id < best->prim))) return 0;
     best->t = t;

@@ -52,6 +52,15 @@ RC_SHADE_INLINE RcSurface rc_surface(float3 o, float3 d, RcHit hit, __global con
         s.p = cr.xyz + cr.w * s.ng;
         s.ns = s.ng;
         s.material = spheres[id - nTriangles].material;
+    } else if (quadrics[id - nTriangles - nSpheres].kind == RC_ANALYTIC_PATCH_BOX) {
+        __global const RcPatchBox* box =
+            (__global const RcPatchBox*)(quadrics + (id - nTriangles - nSpheres));
+        const float3 n = rc_patch_normal_at((__global const float4*)quadrics + box->points,
+                                            hit.u, hit.v, &s.p);
+        const float len = length(n);
+        s.ng = len > 0.0f ? n / len : -d;
+        s.ns = s.ng;
+        s.material = box->material;
     } else {
         __global const RcQuadric* q = quadrics + (id - nTriangles - nSpheres);
         /* o + t d is off the surface by the root's error, which grows with t and can exceed the

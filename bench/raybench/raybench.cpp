@@ -101,7 +101,7 @@ RcRenderParams ParamsFor(const scene::Scene& s) {
     RcRenderParams p{};
     p.nTriangles = uint32_t(s.triangles.size());
     p.nSpheres = uint32_t(s.spheres.size());
-    p.nQuadrics = uint32_t(s.quadrics.size());
+    p.nQuadrics = render::AnalyticRecords(s);
     p.nLights = uint32_t(s.lights.size());
     p.maxDepth = 6;
     p.minWeight = 1e-3f;

@@ -36,8 +36,21 @@
     FIELD(RcQuadric, boxMax)             \
     FIELD(RcQuadric, material)           \
     FIELD(RcQuadric, object)             \
-    FIELD(RcQuadric, pad0)               \
+    FIELD(RcQuadric, kind)               \
     FIELD(RcQuadric, pad1)               \
+    STRUCT(RcPatchBox)                   \
+    FIELD(RcPatchBox, points)            \
+    FIELD(RcPatchBox, closedU)           \
+    FIELD(RcPatchBox, closedV)           \
+    FIELD(RcPatchBox, patch)             \
+    FIELD(RcPatchBox, range)             \
+    FIELD(RcPatchBox, pad2)              \
+    FIELD(RcPatchBox, boxMin)            \
+    FIELD(RcPatchBox, boxMax)            \
+    FIELD(RcPatchBox, material)          \
+    FIELD(RcPatchBox, object)            \
+    FIELD(RcPatchBox, kind)              \
+    FIELD(RcPatchBox, pad1)              \
     STRUCT(RcMaterial)                   \
     FIELD(RcMaterial, kd)                \
     FIELD(RcMaterial, ks)                \

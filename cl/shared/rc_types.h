@@ -21,7 +21,8 @@ struct alignas(16) rc_float4 {
 /* Marks "no primitive" in hits, id buffers and the id AOV. */
 #define RC_NO_HIT 0xFFFFFFFFu
 
-/* Primitive ids are global: triangles [0, nTriangles), then spheres, then quadrics. Equal hit
+/* Primitive ids are global: triangles [0, nTriangles), then spheres, then quadrics and patch
+ * boxes. Equal hit
  * distances are broken by the lower id in every query path. */
 
 /* A triangle's vertices in world space (w unused). 48 bytes. */
@@ -48,14 +49,43 @@ typedef struct RcSphere {
 } RcSphere;
 
 /* Q(p) = A x^2 + B y^2 + C z^2 + D xy + E xz + F yz + G x + H y + I z + J = 0, clipped to the box
- * [boxMin, boxMax]. c0 = (A, B, C, D), c1 = (E, F, G, H), c2 = (I, J, 0, 0). 96 bytes. */
+ * [boxMin, boxMax]. c0 = (A, B, C, D), c1 = (E, F, G, H), c2 = (I, J, 0, 0). kind =
+ * RC_ANALYTIC_QUADRIC. 96 bytes. */
 typedef struct RcQuadric {
     rc_float4 c0, c1, c2;
     rc_float4 boxMin, boxMax;
     rc_uint material;
     rc_uint object;
-    rc_uint pad0, pad1;
+    rc_uint kind;
+    rc_uint pad1;
 } RcQuadric;
+
+/* The analytic buffer the kernels get as `quadrics` holds 96-byte records, one per primitive id
+ * after the spheres (RcRenderParams.nQuadrics of them): the quadrics, then the patch boxes
+ * (RcPatchBox), told apart by kind at the same offset, and after the records the patch boxes'
+ * control points. So patches reach every query without a kernel argument of their own. */
+#define RC_ANALYTIC_QUADRIC 0u
+#define RC_ANALYTIC_PATCH_BOX 1u
+
+/* A patch box (scene::PatchBox): a rational bicubic Bezier patch of its own, whose 16 control
+ * points (w x, w y, w z, w), point (i, j) weighing B_i(u) B_j(v), are the rc_float4s
+ * [points + 4 i + j] of the analytic buffer, and whose control points' box [boxMin, boxMax] is
+ * the primitive the accelerations see. A hit counts for local u in [0, 1), or [0, 1] when
+ * closedU (the box reaches the far edge of its patch), v alike; RcHit.u, v are the local
+ * parameters. range = (u0, u1, v0, v1), the box's part of its patch. 96 bytes. */
+typedef struct RcPatchBox {
+    rc_uint points;
+    rc_uint closedU;
+    rc_uint closedV;
+    rc_uint patch;
+    rc_float4 range;
+    rc_float4 pad2;
+    rc_float4 boxMin, boxMax;
+    rc_uint material;
+    rc_uint object;
+    rc_uint kind;
+    rc_uint pad1;
+} RcPatchBox;
 
 /* Whitted material. kd, ks: Phong diffuse and specular (rgb); kr, kt: mirror reflection and
  * transmission (rgb); emission (rgb). With fresnel != 0 the reflected share of kt follows the
@@ -142,7 +172,7 @@ typedef struct RcHit {
 typedef struct RcRenderParams {
     rc_uint nTriangles;
     rc_uint nSpheres;
-    rc_uint nQuadrics;
+    rc_uint nQuadrics; /* records of the analytic buffer: quadrics and patch boxes */
     rc_uint nLights;
     rc_uint maxDepth;
     float minWeight;

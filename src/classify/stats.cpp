@@ -82,7 +82,7 @@ std::vector<Ray> MirrorRays(const scene::Scene& scene, std::span<const Ray> rays
         if (!hits[i].Valid()) continue;
         const Ray& r = rays[i];
         const glm::vec3 p = r.origin + hits[i].t * r.direction;
-        glm::vec3 n = geometry::GeometricNormal(scene, hits[i].prim, p);
+        glm::vec3 n = geometry::GeometricNormal(scene, hits[i].prim, p, {hits[i].u, hits[i].v});
         if (!(glm::length(n) > 0.0f)) continue;
         n = glm::normalize(n);
         if (glm::dot(n, r.direction) > 0.0f) n = -n;

@@ -8,6 +8,7 @@
 #include "rayclass/classify/params.h"
 #include "rayclass/cli/option_table.h"
 #include "rayclass/core/error.h"
+#include "rayclass/scene/patch.h"
 
 namespace rayclass::cli {
 
@@ -202,6 +203,11 @@ std::vector<Option> QueryOptions(RenderArgs& r) {
          "",
          "render with the double-precision host reference renderer",
          Flag(r.reference)},
+        {{"--patch-boxes"},
+         "N",
+         "boxes per Bezier or NURBS patch, the least flat halved first\n"
+         "(default: halved by the scene's patch_flatness)",
+         Number(r.patchBoxes, 1u, scene::kMaxPatchBoxes)},
     };
 }
 

@@ -32,6 +32,7 @@ struct RenderArgs {
     // The OpenCL device, as clrt::Context reads it where the context is made: a bad one is
     // reported after the scene, which loads meanwhile.
     std::string device = "auto";
+    uint32_t patchBoxes = 0;  // boxes per patch (scene::PatchSplit); 0: the scene's flatness split
     raster::EyeRayRequest eyeRays;
     render::RenderOptions options;
     // The part of the image to render: --crop's pixels or --tile's index and count (the window

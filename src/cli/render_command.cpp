@@ -18,6 +18,7 @@
 #include "rayclass/render/cl_renderer.h"
 #include "rayclass/render/reference.h"
 #include "rayclass/scene/loader.h"
+#include "rayclass/scene/patch.h"
 #include "render_args.h"
 #include "render_hash.h"
 
@@ -173,6 +174,7 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
                             [spec = r.device] { return std::make_unique<clrt::Context>(spec); });
     }
     scene::Scene scene = scene::LoadScene(r.scene);
+    if (r.patchBoxes) scene::SplitPatches(scene, {scene.patchFlatness, r.patchBoxes});
     if (r.width) scene.camera.width = r.width;
     if (r.height) scene.camera.height = r.height;
     const double loadSeconds = SecondsSince(t0);

@@ -12,6 +12,7 @@ static_assert(sizeof(RcTriangle) == 48);
 static_assert(sizeof(RcTriangleShading) == 64);
 static_assert(sizeof(RcSphere) == 32);
 static_assert(sizeof(RcQuadric) == 96);
+static_assert(sizeof(RcPatchBox) == 96);
 static_assert(sizeof(RcMaterial) == 96);
 static_assert(sizeof(RcLight) == 32);
 static_assert(sizeof(RcCamera) == 96);
@@ -36,6 +37,9 @@ static_assert(alignof(RcHit) == 4);
 static_assert(offsetof(RcTriangleShading, material) == 48);
 static_assert(offsetof(RcSphere, material) == 16);
 static_assert(offsetof(RcQuadric, material) == 80);
+// The analytic buffer's records tell their kind at one offset.
+static_assert(offsetof(RcPatchBox, kind) == offsetof(RcQuadric, kind));
+static_assert(offsetof(RcPatchBox, boxMin) == offsetof(RcQuadric, boxMin));
 static_assert(offsetof(RcMaterial, shininess) == 80);
 static_assert(offsetof(RcCamera, tanHalfFovX) == 64);
 static_assert(offsetof(RcRayInfo, depth) == 16);

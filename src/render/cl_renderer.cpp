@@ -40,7 +40,7 @@ RcRenderParams MakeRenderParams(const scene::Scene& scene, const RenderOptions& 
     RcRenderParams params{};
     params.nTriangles = uint32_t(scene.triangles.size());
     params.nSpheres = uint32_t(scene.spheres.size());
-    params.nQuadrics = uint32_t(scene.quadrics.size());
+    params.nQuadrics = AnalyticRecords(scene);
     params.nLights = uint32_t(scene.lights.size());
     params.maxDepth = options.maxDepth;
     params.minWeight = options.minWeight;

@@ -1,6 +1,7 @@
 #include "rayclass/render/device_scene.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "rayclass/core/error.h"
@@ -105,7 +106,36 @@ RcQuadric ToDevice(const scene::Quadric& q) {
     d.boxMax = F4(q.boxMax);
     d.material = q.material;
     d.object = q.object;
+    d.kind = RC_ANALYTIC_QUADRIC;
     return d;
+}
+
+std::vector<rc_float4> AnalyticArray(const scene::Scene& scene) {
+    constexpr size_t kRecord = sizeof(RcQuadric) / sizeof(rc_float4);
+    std::vector<rc_float4> out((scene.quadrics.size() + scene.patchBoxes.size()) * kRecord);
+    for (size_t i = 0; i < scene.quadrics.size(); ++i) {
+        const RcQuadric d = ToDevice(scene.quadrics[i]);
+        std::memcpy(&out[i * kRecord], &d, sizeof d);
+    }
+    for (size_t i = 0; i < scene.patchBoxes.size(); ++i) {
+        const scene::PatchBox& box = scene.patchBoxes[i];
+        RcPatchBox d{};
+        d.points = uint32_t(out.size());
+        d.closedU = box.closedU ? 1u : 0u;
+        d.closedV = box.closedV ? 1u : 0u;
+        d.patch = box.patch;
+        d.range = {float(box.u[0]), float(box.u[1]), float(box.v[0]), float(box.v[1])};
+        d.boxMin = F4(box.bounds.lo);
+        d.boxMax = F4(box.bounds.hi);
+        d.material = scene.patches[box.patch].material;
+        d.object = scene.patches[box.patch].object;
+        d.kind = RC_ANALYTIC_PATCH_BOX;
+        for (const glm::dvec4& p : box.p) {
+            out.push_back({float(p.x), float(p.y), float(p.z), float(p.w)});
+        }
+        std::memcpy(&out[(scene.quadrics.size() + i) * kRecord], &d, sizeof d);
+    }
+    return out;
 }
 
 RcMaterial ToDevice(const scene::Material& m) {

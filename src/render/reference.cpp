@@ -167,6 +167,13 @@ class Tracer {
             s.p = V(sp.center) + double(sp.radius) * s.ng;
             s.ns = s.ng;
             s.material = sp.material;
+        } else if (id >= scene_.PatchBoxBase()) {
+            const scene::PatchBox& box = scene_.patchBoxes[id - scene_.PatchBoxBase()];
+            const V n = geometry::PatchNormal(box.p, hit.u, hit.v, &s.p);
+            const double len = glm::length(n);
+            s.ng = len > 0.0 ? n / len : -ray.d;
+            s.ns = s.ng;
+            s.material = scene_.patches[box.patch].material;
         } else {
             const auto& q = scene_.quadrics[id - scene_.QuadricBase()];
             // Newton step back onto the surface, as in cl/shade.cl.

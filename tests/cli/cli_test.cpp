@@ -157,7 +157,7 @@ TEST_F(Cli, RenderHelpDescribesEveryOption) {
          {"-o, --output", "--width", "--height", "--aov", "--max-depth", "--min-weight", "--device",
           "--reference", "--stats", "--exposure", "--exr-compression", "--png-compression",
           "--batch-rays", "--cl-options", "--depth-bits", "--depth-scale", "-q, --quiet",
-          "RAYCLASS_CACHE_DIR"}) {
+          "--patch-boxes", "RAYCLASS_CACHE_DIR"}) {
         EXPECT_NE(r.out.find(option), std::string::npos) << option;
     }
     EXPECT_EQ(r.err, "");
@@ -812,6 +812,24 @@ TEST_F(Cli, FramesFollowTheCameraPathToNumberedFiles) {
     EXPECT_EQ(still.err, "rayclass render: error: " + Cornell() +
                              ": --frame and --frames need a camera 'path' in the scene\n");
     EXPECT_EQ(Entries(), std::vector<std::string>{});
+}
+
+// Scenes with patches: --patch-boxes is checked, and the raster pass, which draws no patches,
+// gives the eye rays to the kernel and says so.
+TEST_F(Cli, PatchScenesTakeBoxCountsAndFallBackFromRaster) {
+    const std::string teapot = EnvOr("RAYCLASS_SOURCE_DIR", ".") + "/scenes/teapot.json";
+    const Result bad = Run({"render", teapot, "-o", "x.png", "--patch-boxes", "0"});
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_EQ(bad.err, "rayclass render: --patch-boxes expects a number in [1, 4096], not '0'\n");
+    EXPECT_EQ(Entries(), std::vector<std::string>{});
+    const Result r = Run({"render", teapot, "-o", "x.png", "--width", "16", "--height", "12",
+                          "--patch-boxes", "2", "--eye-rays", "raster", "--stats", "s.json", "-q"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err,
+              "rayclass: the raster pass draws no Bezier or NURBS patches: eye rays by kernel\n");
+    const auto stats = nlohmann::json::parse(ReadText(Work("s.json")));
+    EXPECT_EQ(stats.at("eye_rays_choice"), "kernel: the raster pass draws no patches");
+    EXPECT_EQ(stats.at("primitives"), 2 * 33 + 1);  // 33 patches, one sphere
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 // Spheres: the cancellation-free discriminant of Haines et al., "Precision Improvements for
 // Ray/Sphere Intersection", Ray Tracing Gems ch. 7 (2019).
 // Quadrics: the implicit quadratic along the ray with the stable root pair, clipped to a box.
+// Patch boxes: geometry/patch_intersect.h (Newton in float, subdivision in double).
 //
 // Every routine accepts only hits with tMin < t < tMax. Among equal distances the lower primitive
 // id wins (HitIsBetter), in every query path, so all paths agree exactly.
@@ -15,12 +16,12 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <limits>
 #include <type_traits>
 #include <utility>
 
-#include <glm/glm.hpp>
-
+#include "rayclass/geometry/patch_intersect.h"
 #include "rayclass/scene/scene.h"
 #include "rc_types.h"
 
@@ -204,8 +205,13 @@ std::array<T, 10> QuadricCoefficients(const scene::Quadric& q) {
 }
 
 // The (unnormalised) geometric normal of primitive `prim` at its surface point p: the triangle's
-// edge cross product, the sphere's radius vector, the quadric's gradient.
-inline glm::vec3 GeometricNormal(const scene::Scene& scene, uint32_t prim, const glm::vec3& p) {
+// edge cross product, the sphere's radius vector, the quadric's gradient, the patch's derivative
+// cross product at the hit's local (u, v).
+inline glm::vec3 GeometricNormal(const scene::Scene& scene, uint32_t prim, const glm::vec3& p,
+                                 const glm::vec2& uv = glm::vec2(0.0f)) {
+    if (prim >= scene.PatchBoxBase()) {
+        return glm::vec3(PatchNormal(scene.patchBoxes[prim - scene.PatchBoxBase()].p, uv.x, uv.y));
+    }
     if (prim < scene.SphereBase()) {
         const auto& v = scene.triangles[prim].p;
         return glm::cross(v[1] - v[0], v[2] - v[0]);
@@ -234,6 +240,14 @@ bool IntersectPrimitive(const scene::Scene& scene, uint32_t id, const Ray<T>& ra
     } else if (id < scene.QuadricBase()) {
         const auto& s = scene.spheres[id - scene.SphereBase()];
         hit = IntersectSphere(r, V(s.center), T(s.radius), t);
+    } else if (id >= scene.PatchBoxBase()) {
+        const scene::PatchBox& box = scene.patchBoxes[id - scene.PatchBoxBase()];
+        if constexpr (std::is_same_v<T, double>) {
+            hit = IntersectPatchReference(r.o, r.d, r.tMin, r.tMax, box, t, u, v);
+        } else {
+            hit = IntersectPatchNewton(r.o, r.d, r.tMin, r.tMax, DevicePoints(box), box.closedU,
+                                       box.closedV, t, u, v);
+        }
     } else {
         const auto& q = scene.quadrics[id - scene.QuadricBase()];
         hit = IntersectQuadric(r, QuadricCoefficients<T>(q), V(q.boxMin), V(q.boxMax), t);

@@ -35,7 +35,9 @@ struct EyeRays {
     std::string choice;                          // what decided, for RenderStats::eyeRaysChoice
 };
 
-// The eye-ray path for a render of `scene` with `encoding`. Auto takes the kernel for polar16
+// The eye-ray path for a render of `scene` with `encoding`. A scene with patches takes the kernel
+// whatever was asked (the raster pass has no patch hulls; a notice goes to `err` when the raster
+// pass was asked for). Auto takes the kernel for polar16
 // directions (the raster pass traces exact ones) and on a software OpenGL renderer (slower
 // there), the raster pass on a hardware one or when a raster option asks for it. Depth-buffer
 // warnings and the notice of a missing OpenGL context go to `err`; throws GlError when the raster

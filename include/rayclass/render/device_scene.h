@@ -42,6 +42,14 @@ RcQuadric ToDevice(const scene::Quadric& q);
 RcMaterial ToDevice(const scene::Material& m);
 RcLight ToDevice(const scene::PointLight& l);
 
+// The analytic buffer (rc_types.h): the quadrics' and patch boxes' records, then the patch
+// boxes' control points, as rc_float4s; AnalyticRecords counts its records (RcRenderParams'
+// nQuadrics).
+std::vector<rc_float4> AnalyticArray(const scene::Scene& scene);
+inline uint32_t AnalyticRecords(const scene::Scene& scene) {
+    return uint32_t(scene.quadrics.size() + scene.patchBoxes.size());
+}
+
 // ToDevice as one callable, for any element type.
 inline constexpr auto kToDevice = [](const auto& x) { return ToDevice(x); };
 

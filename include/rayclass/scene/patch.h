@@ -51,7 +51,7 @@ std::vector<BezierNet> ParseBpt(std::string_view text, const std::filesystem::pa
 // boxesPerPatch (1..kMaxPatchBoxes) every patch gets exactly that many boxes instead, the least
 // flat halved first.
 struct PatchSplit {
-    float flatness = 0.2f;
+    float flatness = 0.1f;
     uint32_t boxesPerPatch = 0;
 };
 inline constexpr uint32_t kMaxFlatnessBoxes = 256;

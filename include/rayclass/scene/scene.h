@@ -107,7 +107,7 @@ struct Scene {
     std::vector<Quadric> quadrics;
     std::vector<Patch> patches;
     std::vector<PatchBox> patchBoxes;  // scene/patch.h SplitPatches
-    float patchFlatness = 0.2f;        // see scene/patch.h PatchSplit
+    float patchFlatness = 0.1f;        // see scene/patch.h PatchSplit
     std::vector<PointLight> lights;
     std::vector<Object> objects;
     glm::vec3 ambient{0.0f};     // ambient light, times kd

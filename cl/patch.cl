@@ -1,0 +1,159 @@
+/* Ray-patch intersection by Newton iteration (Martin, Cohen, Fish and Shirley 2000, "Practical
+ * Ray Tracing of Trimmed NURBS Surfaces"): the ray as the meet of two planes, the patch box's
+ * control points as their signed distances (a, b) from the two planes, and Newton's method on
+ * F(u, v) = (a(u, v), b(u, v)) / w(u, v) = 0 from the box's parameter centre. A singular Jacobian
+ * moves (u, v) by a fixed step towards the centre; the iteration stops when |F| < eps (a hit
+ * when (u, v) is the box's own), when |F| grows (divergence) or at RC_PATCH_ITERATIONS. The
+ * float16 twin rc_packet_patch (classified.cl's fragment style) and the host twin
+ * (geometry/patch_intersect.h) do the same operations lane by lane. */
+#include "rc_types.h"
+
+#pragma OPENCL FP_CONTRACT OFF
+
+#define RC_PATCH_ITERATIONS 12
+/* |F| below this share of the control points' spread around the ray is a hit. */
+#define RC_PATCH_EPS (1.0f / 262144.0f)
+
+/* The two planes through the ray (unit normals n1, n2, both orthogonal to d). */
+inline void rc_patch_planes(float3 d, float3* n1, float3* n2) {
+    float3 n = fabs(d.x) > fabs(d.y) && fabs(d.x) > fabs(d.z) ? (float3)(d.y, -d.x, 0.0f)
+                                                              : (float3)(0.0f, d.z, -d.y);
+    n = n / sqrt(RC_DOT3(n, n));
+    *n1 = n;
+    *n2 = RC_CROSS3(d, n);
+}
+
+/* Cubic Bernstein weights and their derivatives at s. */
+inline void rc_bernstein3(float s, float* b, float* db) {
+    const float r = 1.0f - s;
+    b[0] = r * r * r;
+    b[1] = 3.0f * s * r * r;
+    b[2] = 3.0f * s * s * r;
+    b[3] = s * s * s;
+    db[0] = -3.0f * r * r;
+    db[1] = 3.0f * r * (r - 2.0f * s);
+    db[2] = 3.0f * s * (2.0f * r - s);
+    db[3] = 3.0f * s * s;
+}
+
+/* Value and derivatives of one channel c[16] at the weights (bu, dbu) x (bv, dbv). */
+inline float3 rc_patch_channel(const float* c, const float* bu, const float* dbu, const float* bv,
+                               const float* dbv) {
+    float x = 0.0f, xs = 0.0f, xt = 0.0f;
+    for (int i = 0; i < 4; ++i) {
+        const float row =
+            bv[0] * c[4 * i] + bv[1] * c[4 * i + 1] + bv[2] * c[4 * i + 2] + bv[3] * c[4 * i + 3];
+        const float rowD = dbv[0] * c[4 * i] + dbv[1] * c[4 * i + 1] + dbv[2] * c[4 * i + 2] +
+                           dbv[3] * c[4 * i + 3];
+        x += bu[i] * row;
+        xs += dbu[i] * row;
+        xt += bu[i] * rowD;
+    }
+    return (float3)(x, xs, xt);
+}
+
+/* The nearest hit of the ray with the patch box in (tmin, tmax): t and the local (u, v). */
+inline int rc_intersect_patch_box(float3 o, float3 d, float tmin, float tmax,
+                                  __global const float4* analytic, __global const RcPatchBox* box,
+                                  float* tOut, float* uOut, float* vOut) {
+    float3 n1, n2;
+    rc_patch_planes(d, &n1, &n2);
+    __global const float4* pts = analytic + box->points;
+    float a[16], b[16], w[16];
+    float spread = 0.0f, wMin = INFINITY;
+    int signs = 0;
+    for (int k = 0; k < 16; ++k) {
+        const float4 p = pts[k];
+        const float3 r = p.xyz - o * p.w;
+        a[k] = RC_DOT3(n1, r);
+        b[k] = RC_DOT3(n2, r);
+        w[k] = p.w;
+        spread = fmax(spread, fabs(a[k]) + fabs(b[k]));
+        wMin = fmin(wMin, p.w);
+        signs |= (a[k] > 0.0f ? 1 : 0) | (a[k] < 0.0f ? 2 : 0) | (b[k] > 0.0f ? 4 : 0) |
+                 (b[k] < 0.0f ? 8 : 0);
+    }
+    /* All control points on one side of a plane: the ray misses the convex hull. */
+    if ((signs & 3) != 3 || (signs & 12) != 12) return 0;
+    const float eps = spread / wMin * RC_PATCH_EPS;
+    float s = 0.5f, t = 0.5f, prev = INFINITY;
+    float bu[4], dbu[4], bv[4], dbv[4];
+    int converged = 0;
+    for (int it = 0;; ++it) {
+        rc_bernstein3(s, bu, dbu);
+        rc_bernstein3(t, bv, dbv);
+        const float3 A = rc_patch_channel(a, bu, dbu, bv, dbv);
+        const float3 B = rc_patch_channel(b, bu, dbu, bv, dbv);
+        const float3 W = rc_patch_channel(w, bu, dbu, bv, dbv);
+        const float f1 = A.x / W.x, f2 = B.x / W.x;
+        const float err = fmax(fabs(f1), fabs(f2));
+        if (err < eps) {
+            converged = 1;
+            break;
+        }
+        if (!(err <= prev) || it == RC_PATCH_ITERATIONS) break;
+        prev = err;
+        const float j11 = (A.y - f1 * W.y) / W.x, j12 = (A.z - f1 * W.z) / W.x;
+        const float j21 = (B.y - f2 * W.y) / W.x, j22 = (B.z - f2 * W.z) / W.x;
+        const float det = j11 * j22 - j12 * j21;
+        if (fabs(det) > 1e-7f * (fabs(j11 * j22) + fabs(j12 * j21))) {
+            s -= (j22 * f1 - j12 * f2) / det;
+            t -= (j11 * f2 - j21 * f1) / det;
+        } else {
+            s += s <= 0.5f ? 0.125f : -0.125f;
+            t += t <= 0.5f ? 0.0625f : -0.0625f;
+            prev = INFINITY;
+        }
+        if (!(s > -0.5f && s < 1.5f && t > -0.5f && t < 1.5f)) break;
+    }
+    if (!converged) return 0;
+    if (!(s >= 0.0f && (s < 1.0f || (box->closedU && s == 1.0f)))) return 0;
+    if (!(t >= 0.0f && (t < 1.0f || (box->closedV && t == 1.0f)))) return 0;
+    float c[16];
+    for (int k = 0; k < 16; ++k) {
+        const float4 p = pts[k];
+        const float3 r = p.xyz - o * p.w;
+        c[k] = RC_DOT3(d, r);
+    }
+    const float3 C = rc_patch_channel(c, bu, dbu, bv, dbv);
+    const float3 W = rc_patch_channel(w, bu, dbu, bv, dbv);
+    const float th = C.x / W.x;
+    if (!(th > tmin && th < tmax)) return 0;
+    *tOut = th;
+    *uOut = s;
+    *vOut = t;
+    return 1;
+}
+
+/* The surface point and its unnormalised normal at local (s, t) of a patch box. Where the
+ * derivatives are parallel or vanish (a collapsed edge, like the teapot's lid and bottom, whose
+ * edge rows meet in one point) the normal is taken a little inside, where it tends to the
+ * limit normal. */
+inline float3 rc_patch_normal_at(__global const float4* pts, float s, float t, float3* point) {
+    for (int attempt = 0; attempt < 3; ++attempt) {
+        float bu[4], dbu[4], bv[4], dbv[4];
+        rc_bernstein3(s, bu, dbu);
+        rc_bernstein3(t, bv, dbv);
+        float c[4][16];
+        for (int k = 0; k < 16; ++k) {
+            const float4 p = pts[k];
+            c[0][k] = p.x;
+            c[1][k] = p.y;
+            c[2][k] = p.z;
+            c[3][k] = p.w;
+        }
+        const float3 X = rc_patch_channel(c[0], bu, dbu, bv, dbv);
+        const float3 Y = rc_patch_channel(c[1], bu, dbu, bv, dbv);
+        const float3 Z = rc_patch_channel(c[2], bu, dbu, bv, dbv);
+        const float3 W = rc_patch_channel(c[3], bu, dbu, bv, dbv);
+        const float3 p = (float3)(X.x, Y.x, Z.x) / W.x;
+        if (attempt == 0) *point = p;
+        const float3 ds = (float3)(X.y, Y.y, Z.y) - p * W.y;
+        const float3 dt = (float3)(X.z, Y.z, Z.z) - p * W.z;
+        const float3 n = cross(ds, dt);
+        if (dot(n, n) > 1e-10f * dot(ds, ds) * dot(dt, dt)) return n;
+        s += (0.5f - s) * (attempt == 0 ? 0.001f : 0.01f);
+        t += (0.5f - t) * (attempt == 0 ? 0.001f : 0.01f);
+    }
+    return (float3)(0.0f);
+}

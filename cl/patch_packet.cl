@@ -1,0 +1,148 @@
+/* rc_intersect_patch_box (patch.cl) for the 16 rays of a fragment-style packet (classified.cl's
+ * RcLanes16) against one patch box: the same operations lane by lane, each lane's iteration
+ * frozen by select once it has stopped, so every lane ends where the scalar routine ends. */
+#include "patch.cl"
+#include "rc_types.h"
+
+#pragma OPENCL FP_CONTRACT OFF
+
+RC_SHADE_INLINE void rc_bernstein3_16(float16 s, float16* b, float16* db) {
+    const float16 r = 1.0f - s;
+    b[0] = r * r * r;
+    b[1] = 3.0f * s * r * r;
+    b[2] = 3.0f * s * s * r;
+    b[3] = s * s * s;
+    db[0] = -3.0f * r * r;
+    db[1] = 3.0f * r * (r - 2.0f * s);
+    db[2] = 3.0f * s * (2.0f * r - s);
+    db[3] = 3.0f * s * s;
+}
+
+/* rc_patch_channel per lane: value, derivative along s, along t. */
+RC_SHADE_INLINE void rc_patch_channel16(const float16* c, const float16* bu, const float16* dbu,
+                                        const float16* bv, const float16* dbv, float16* x,
+                                        float16* xs, float16* xt) {
+    *x = 0.0f;
+    *xs = 0.0f;
+    *xt = 0.0f;
+    for (int i = 0; i < 4; ++i) {
+        const float16 row =
+            bv[0] * c[4 * i] + bv[1] * c[4 * i + 1] + bv[2] * c[4 * i + 2] + bv[3] * c[4 * i + 3];
+        const float16 rowD = dbv[0] * c[4 * i] + dbv[1] * c[4 * i + 1] + dbv[2] * c[4 * i + 2] +
+                             dbv[3] * c[4 * i + 3];
+        *x += bu[i] * row;
+        *xs += dbu[i] * row;
+        *xt += bu[i] * rowD;
+    }
+}
+
+/* The same for the weights, which every lane shares. */
+RC_SHADE_INLINE void rc_patch_weights16(const float* c, const float16* bu, const float16* dbu,
+                                        const float16* bv, const float16* dbv, float16* x,
+                                        float16* xs, float16* xt) {
+    *x = 0.0f;
+    *xs = 0.0f;
+    *xt = 0.0f;
+    for (int i = 0; i < 4; ++i) {
+        const float16 row =
+            bv[0] * c[4 * i] + bv[1] * c[4 * i + 1] + bv[2] * c[4 * i + 2] + bv[3] * c[4 * i + 3];
+        const float16 rowD = dbv[0] * c[4 * i] + dbv[1] * c[4 * i + 1] + dbv[2] * c[4 * i + 2] +
+                             dbv[3] * c[4 * i + 3];
+        *x += bu[i] * row;
+        *xs += dbu[i] * row;
+        *xt += bu[i] * rowD;
+    }
+}
+
+/* The lanes that hit the box in (tmin, tmax), with t and the local (u, v). */
+RC_SHADE_INLINE int16 rc_packet_patch(const RcLanes16* L, __global const float4* analytic,
+                                      __global const RcPatchBox* box, float16 tmax, float16* tOut,
+                                      float16* uOut, float16* vOut) {
+    const float16 Dx = L->dx, Dy = L->dy, Dz = L->dz;
+    /* rc_patch_planes */
+    const int16 alongX = (fabs(Dx) > fabs(Dy)) & (fabs(Dx) > fabs(Dz));
+    float16 nx = select((float16)(0.0f), Dy, alongX);
+    float16 ny = select(Dz, -Dx, alongX);
+    float16 nz = select(-Dy, (float16)(0.0f), alongX);
+    const float16 len = sqrt(nx * nx + ny * ny + nz * nz);
+    nx = nx / len;
+    ny = ny / len;
+    nz = nz / len;
+    const float16 mx = Dy * nz - ny * Dz, my = Dz * nx - nz * Dx, mz = Dx * ny - nx * Dy;
+    __global const float4* pts = analytic + box->points;
+    float16 a[16], b[16];
+    float w[16];
+    float16 spread = 0.0f;
+    float wMin = INFINITY;
+    int16 aPos = 0, aNeg = 0, bPos = 0, bNeg = 0;
+    for (int k = 0; k < 16; ++k) {
+        const float4 p = pts[k];
+        const float16 rx = p.x - L->ox * p.w, ry = p.y - L->oy * p.w, rz = p.z - L->oz * p.w;
+        a[k] = nx * rx + ny * ry + nz * rz;
+        b[k] = mx * rx + my * ry + mz * rz;
+        w[k] = p.w;
+        spread = fmax(spread, fabs(a[k]) + fabs(b[k]));
+        wMin = fmin(wMin, p.w);
+        aPos |= a[k] > 0.0f;
+        aNeg |= a[k] < 0.0f;
+        bPos |= b[k] > 0.0f;
+        bNeg |= b[k] < 0.0f;
+    }
+    int16 run = aPos & aNeg & bPos & bNeg;
+    if (!any(run)) return run;
+    const float16 eps = spread / wMin * RC_PATCH_EPS;
+    float16 s = 0.5f, t = 0.5f, prev = INFINITY;
+    int16 converged = 0;
+    float16 bu[4], dbu[4], bv[4], dbv[4];
+    for (int it = 0;; ++it) {
+        rc_bernstein3_16(s, bu, dbu);
+        rc_bernstein3_16(t, bv, dbv);
+        float16 A, As, At, B, Bs, Bt, W, Ws, Wt;
+        rc_patch_channel16(a, bu, dbu, bv, dbv, &A, &As, &At);
+        rc_patch_channel16(b, bu, dbu, bv, dbv, &B, &Bs, &Bt);
+        rc_patch_weights16(w, bu, dbu, bv, dbv, &W, &Ws, &Wt);
+        const float16 f1 = A / W, f2 = B / W;
+        const float16 err = fmax(fabs(f1), fabs(f2));
+        const int16 conv = run & (err < eps);
+        converged |= conv;
+        run &= ~conv;
+        run &= ~(~(err <= prev) | (it == RC_PATCH_ITERATIONS ? (int16)(-1) : (int16)(0)));
+        if (!any(run)) break;
+        prev = select(prev, err, run);
+        const float16 j11 = (As - f1 * Ws) / W, j12 = (At - f1 * Wt) / W;
+        const float16 j21 = (Bs - f2 * Ws) / W, j22 = (Bt - f2 * Wt) / W;
+        const float16 det = j11 * j22 - j12 * j21;
+        const int16 regular = fabs(det) > 1e-7f * (fabs(j11 * j22) + fabs(j12 * j21));
+        const float16 sNewton = s - (j22 * f1 - j12 * f2) / det;
+        const float16 tNewton = t - (j11 * f2 - j21 * f1) / det;
+        const float16 sNudge = s + select((float16)(-0.125f), (float16)(0.125f), s <= 0.5f);
+        const float16 tNudge = t + select((float16)(-0.0625f), (float16)(0.0625f), t <= 0.5f);
+        s = select(s, select(sNudge, sNewton, regular), run);
+        t = select(t, select(tNudge, tNewton, regular), run);
+        prev = select(prev, (float16)(INFINITY), run & ~regular);
+        run &= (s > -0.5f) & (s < 1.5f) & (t > -0.5f) & (t < 1.5f);
+        if (!any(run)) break;
+    }
+    const int16 inU =
+        (s >= 0.0f) & ((s < 1.0f) | ((box->closedU ? (int16)(-1) : (int16)(0)) & (s == 1.0f)));
+    const int16 inV =
+        (t >= 0.0f) & ((t < 1.0f) | ((box->closedV ? (int16)(-1) : (int16)(0)) & (t == 1.0f)));
+    int16 hit = converged & inU & inV;
+    if (!any(hit)) return hit;
+    rc_bernstein3_16(s, bu, dbu);
+    rc_bernstein3_16(t, bv, dbv);
+    float16 c[16];
+    for (int k = 0; k < 16; ++k) {
+        const float4 p = pts[k];
+        const float16 rx = p.x - L->ox * p.w, ry = p.y - L->oy * p.w, rz = p.z - L->oz * p.w;
+        c[k] = Dx * rx + Dy * ry + Dz * rz;
+    }
+    float16 C, Cs, Ct, W, Ws, Wt;
+    rc_patch_channel16(c, bu, dbu, bv, dbv, &C, &Cs, &Ct);
+    rc_patch_weights16(w, bu, dbu, bv, dbv, &W, &Ws, &Wt);
+    const float16 th = C / W;
+    *tOut = th;
+    *uOut = s;
+    *vOut = t;
+    return hit & (th > L->tmin) & (th < tmax);
+}
