@@ -124,6 +124,9 @@
     FIELD(RcBvh8Node, pad)               \
     STRUCT(RcKdNode)                     \
     FIELD(RcKdNode, word)                \
-    FIELD(RcKdNode, data)
+    FIELD(RcKdNode, data)                \
+    STRUCT(RcCone)                       \
+    FIELD(RcCone, apex)                  \
+    FIELD(RcCone, axis)
 
 #endif

@@ -93,7 +93,8 @@ std::vector<Option> QueryOptions(RenderArgs& r) {
          "ray query: classify (5D ray classification, default), bvh\n"
          "(binned-SAH BVH, same kernels' routines), auto (per generation,\n"
          "the classification until a sample shows the BVH cheaper), brute,\n"
-         "kdtree (SAH kd-tree) or grid (uniform grid, 3D-DDA)",
+         "kdtree (SAH kd-tree), grid (uniform grid, 3D-DDA) or cones\n"
+         "(hierarchical ray engine: rays in cones, primitives culled per cone)",
          Choice(r.options.accel, render::kAccels)},
         {{"--kernel"},
          "K",
