@@ -1,6 +1,6 @@
 // rayclass's side of scripts/bench: times each ray query (classified kernels per style, the BVH,
-// the seed documents' structures (kdtree, grid), brute force on small scenes) on the ray sets of
-// bench/common/raysets.h, one kind at a time.
+// the seed documents' structures: kdtree, grid, and cones and brute force on small scenes) on
+// the ray sets of bench/common/raysets.h, one kind at a time.
 //
 //   raybench SCENE --camera NAME --light SPEC [--width W --height H] [--runs N] [--warmup N]
 //            [--methods LIST] [--brute-max-prims N] [--save-rays FILE] [--cl-options S]
@@ -50,6 +50,7 @@
 #include "rayclass/render/brute_query.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
+#include "rayclass/render/cones_query.h"
 #include "rayclass/render/device_scene.h"
 #include "rayclass/render/grid_query.h"
 #include "rayclass/render/kdtree_query.h"
@@ -129,6 +130,7 @@ struct Bench {
         if (method == "bvh") return render::MakeBvhQuery(ctx, program, buffers, scene);
         if (method == "kdtree") return render::MakeKdTreeQuery(ctx, program, buffers, scene);
         if (method == "grid") return render::MakeGridQuery(ctx, program, buffers, scene);
+        if (method == "cones") return render::MakeConesQuery(ctx, program, buffers, scene);
         const auto style = method.starts_with("classify/")
                                ? render::FindChoice(render::kKernelStyles, method.substr(9))
                                : std::nullopt;
@@ -365,6 +367,7 @@ struct Args {
                                      "bvh",
                                      "kdtree",
                                      "grid",
+                                     "cones",
                                      "brute"};
 };
 
@@ -600,7 +603,9 @@ int main(int argc, char** argv) try {
             continue;
         const KindRays kr = UploadKind(ctx, set, k, nLights, eyeCamera);
         for (const std::string& method : a.methods) {
-            if (method == "brute" && sc.PrimitiveCount() > a.bruteMaxPrims) continue;
+            // The hierarchical ray engine costs brute force's on rays its cones cannot bound.
+            if ((method == "brute" || method == "cones") && sc.PrimitiveCount() > a.bruteMaxPrims)
+                continue;
             const Timings t = Measure(b, a, method, kr);
             PrintRow(kr, method, t, SummarizeHits(ctx, kr));
         }

@@ -152,6 +152,9 @@
     FIELD(RcBvhLeafBlock8, e2x)          \
     FIELD(RcBvhLeafBlock8, e2y)          \
     FIELD(RcBvhLeafBlock8, e2z)          \
-    FIELD(RcBvhLeafBlock8, prim)
+    FIELD(RcBvhLeafBlock8, prim)         \
+    STRUCT(RcCone)                       \
+    FIELD(RcCone, apex)                  \
+    FIELD(RcCone, axis)
 
 #endif

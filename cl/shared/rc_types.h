@@ -263,4 +263,13 @@ typedef struct RcBvhLeafBlock8 {
     rc_uint prim[8];
 } RcBvhLeafBlock8;
 
+/* A cone enclosing a tile of rays (--accel cones; include/rayclass/accel/cones.h): every ray's
+ * origin inside it and every direction within its half-angle phi of its axis, so the cone holds
+ * every point of every ray. apex.w = tan^2 phi, or -1 for a cone of 90 degrees or more, which
+ * culls nothing; axis is a unit vector, axis.w = 1 / sin phi. 32 bytes. */
+typedef struct RcCone {
+    rc_float4 apex;
+    rc_float4 axis;
+} RcCone;
+
 #endif

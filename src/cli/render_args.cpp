@@ -171,7 +171,9 @@ std::vector<Option> QueryOptions(RenderArgs& r) {
          "ray query: auto (default: per generation, the classification\n"
          "until a sample shows the BVH cheaper), classify (5D ray\n"
          "classification), bvh (binned-SAH BVH, same kernels' routines),\n"
-         "brute, kdtree (SAH kd-tree) or grid (uniform grid, 3D-DDA)",
+         "brute, kdtree (SAH kd-tree), grid (uniform grid, 3D-DDA) or\n"
+         "cones (hierarchical ray engine: rays in cones, primitives culled\n"
+         "per cone)",
          Choice(r.options.accel, render::kAccels)},
         {{"--kernel"},
          "K",

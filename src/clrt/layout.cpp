@@ -26,6 +26,7 @@ static_assert(sizeof(RcTriangleBlock16) == 704);
 static_assert(sizeof(RcBvh8Node) == 256);
 static_assert(sizeof(RcKdNode) == 8);
 static_assert(sizeof(RcBvhLeafBlock8) == 320);
+static_assert(sizeof(RcCone) == 32 && alignof(RcCone) == 16);
 
 static_assert(alignof(RcTriangle) == 16 && alignof(RcTriangleShading) == 16 &&
               alignof(RcSphere) == 16 && alignof(RcQuadric) == 16 && alignof(RcMaterial) == 16 &&

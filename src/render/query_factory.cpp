@@ -7,6 +7,7 @@
 #include "rayclass/render/brute_query.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
+#include "rayclass/render/cones_query.h"
 #include "rayclass/render/grid_query.h"
 #include "rayclass/render/kdtree_query.h"
 
@@ -39,6 +40,7 @@ std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& progr
         stats.timeS["kdtree_build"] = SecondsSince(t0);
         return query;
     }
+    if (options.accel == Accel::kCones) return MakeConesQuery(ctx, program, buffers, scene);
     if (options.accel == Accel::kGrid) {
         const auto t0 = Clock::now();
         auto query = MakeGridQuery(ctx, program, buffers, scene);

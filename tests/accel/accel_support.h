@@ -9,6 +9,7 @@
 
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/brute_query.h"
+#include "rayclass/render/cones_query.h"
 #include "rayclass/render/device_scene.h"
 #include "rayclass/render/grid_query.h"
 #include "rayclass/render/kdtree_query.h"
@@ -54,6 +55,7 @@ struct Loaded {
     std::unique_ptr<render::RayQuery> Make(const std::string& method) const {
         if (method == "kdtree") return render::MakeKdTreeQuery(Ctx(), Program(), buffers, scene);
         if (method == "grid") return render::MakeGridQuery(Ctx(), Program(), buffers, scene);
+        if (method == "cones") return render::MakeConesQuery(Ctx(), Program(), buffers, scene);
         throw std::invalid_argument("unknown method " + method);
     }
 };

@@ -143,7 +143,7 @@ TEST_P(ExactHits, AxisParallelRaysInFacePlanesHitWhatBruteForceHits) {
     EXPECT_GT(blocked, rays.size() / 10);
 }
 
-INSTANTIATE_TEST_SUITE_P(Accel, ExactHits, ::testing::Values("kdtree", "grid"),
+INSTANTIATE_TEST_SUITE_P(Accel, ExactHits, ::testing::Values("kdtree", "grid", "cones"),
                          [](const auto& info) { return info.param; });
 
 }  // namespace

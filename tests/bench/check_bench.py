@@ -41,7 +41,7 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
         results = list(csv.DictReader(f))
     methods = {r["method"] for r in results}
     for m in ("classify/scalar", "classify/vertex", "classify/fragment", "classify/auto", "bvh",
-              "kdtree", "grid", "brute"):
+              "kdtree", "grid", "cones", "brute"):
         if m not in methods:
             failures.append("results.csv has no rows for " + m)
     kinds = {r["kind"] for r in results}

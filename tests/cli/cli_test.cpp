@@ -280,7 +280,7 @@ TEST_F(CliFailure, UsageErrorsExitWith2AndNameTheProblem) {
          "x"},
         {{"SCENE", "-o", "x.exr", "--accel", "octree"},
          2,
-         "rayclass render: --accel must be classify, bvh, auto, brute, kdtree or grid, not "
+         "rayclass render: --accel must be classify, bvh, auto, brute, kdtree, grid or cones, not "
          "'octree'\n",
          "x.exr"},
         {{"SCENE", "-o", "x.exr", "--exr-compression", "dwaa"},
@@ -428,8 +428,8 @@ TEST_F(CliFailure, FailuresAfterLoadingLeaveNoOutput) {
           "-cl-no-such-option"},
          1,
          "rayclass render: error: building OpenCL program (camera.cl, intersect.cl, encoding.cl, "
-         "shade.cl, generation.cl, brute.cl, classified.cl, bvh.cl, kdtree.cl, grid.cl) with "
-         "options "
+         "shade.cl, generation.cl, brute.cl, classified.cl, bvh.cl, kdtree.cl, grid.cl, "
+         "cones.cl) with options "
          "'-cl-std=CL1.2 "
          "-DRC_LOCAL_SIZE=64 -cl-no-such-option' failed "
          "with CL_INVALID_BUILD_OPTIONS (-43)\nbuild log:\n",

@@ -41,12 +41,13 @@ constexpr std::string_view NameOf(const Named<E> (&names)[N], E value) {
 }
 
 // The ray query: the ray classification, a BVH, auto (per generation, auto_query.h), brute
-// force, or one of the seed documents' structures: a SAH kd-tree (kdtree_query.h) or a uniform
-// grid (grid_query.h).
-enum class Accel : uint8_t { kClassify, kBvh, kAuto, kBrute, kKdTree, kGrid };
+// force, or one of the seed documents' structures: a SAH kd-tree (kdtree_query.h), a uniform
+// grid (grid_query.h) or Szecsi's hierarchical ray engine (cones_query.h).
+enum class Accel : uint8_t { kClassify, kBvh, kAuto, kBrute, kKdTree, kGrid, kCones };
 inline constexpr Named<Accel> kAccels[] = {{"classify", Accel::kClassify}, {"bvh", Accel::kBvh},
                                            {"auto", Accel::kAuto},         {"brute", Accel::kBrute},
-                                           {"kdtree", Accel::kKdTree},     {"grid", Accel::kGrid}};
+                                           {"kdtree", Accel::kKdTree},     {"grid", Accel::kGrid},
+                                           {"cones", Accel::kCones}};
 
 // The classified query's kernels (cl/classified.cl).
 enum class KernelStyle : uint8_t {

@@ -1,0 +1,42 @@
+// The host side of Szecsi's hierarchical ray engine (--accel cones): rays sorted so that each
+// tile of consecutive rays is coherent, a cone enclosing each tile (and each group of tiles, the
+// level above), and a bounding sphere per primitive for the kernels' cone-sphere culling
+// (cl/cones.cl).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "rayclass/scene/scene.h"
+#include "rc_types.h"
+
+namespace rayclass::accel {
+
+// Rays per tile, and tiles per cone of the level above.
+constexpr uint32_t kConeTileRays = 64;
+constexpr uint32_t kConeGroupTiles = 16;
+
+// Indices of rays[0, n) in the order of a Morton code over their origins (in `box`) and their
+// directions together, so that runs of consecutive indices are coherent rays: for eye rays,
+// compact screen tiles.
+std::vector<uint32_t> CoherentOrder(std::span<const RcRay> rays, const Bounds3f& box);
+
+// The cone enclosing rays[order[i]] for i in [first, last): the paper's incremental step (a)
+// gives the axis and the smallest half-angle holding every direction (checked against every
+// ray, then widened by a margin for the kernels' float arithmetic), then the apex slides back
+// along the axis until every origin lies inside (the remedy our notes give for the printed
+// step (b)); a cone of 89 degrees or more is marked unbounded. Rays without a direction (empty
+// shadow slots) are left out. `margin` is an absolute distance the apex backs off further.
+RcCone EnclosingCone(std::span<const RcRay> rays, std::span<const uint32_t> order, size_t first,
+                     size_t last, double margin);
+
+// Bounding spheres of every primitive (global ids) as structure of arrays, x, y, z and radius,
+// each padded to a multiple of 16 entries; radii grown by `pad`.
+struct PrimitiveSpheres {
+    std::vector<float> x, y, z, r;
+    uint32_t count = 0;
+};
+PrimitiveSpheres BoundingSpheres(const scene::Scene& scene, float pad);
+
+}  // namespace rayclass::accel
