@@ -1,6 +1,6 @@
 /* Eye rays: one per pixel, the formula documented at RcCamera in rc_types.h. A launch writes the
- * rays of pixels [first, first + n) so big images go through in batches; they get no RcRayInfo
- * (see there). */
+ * rays of the camera window's pixels [first, first + n) so big images go through in batches;
+ * they get no RcRayInfo (see there). */
 #include "rc_types.h"
 #include "encoding.cl"
 
@@ -17,7 +17,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_gene
     const uint i = get_global_id(0);
     if (i >= n) return;
     const uint pixel = first + i;
-    const uint x = pixel % cam->width, y = pixel / cam->width;
+    const uint x = cam->windowX + pixel % cam->windowWidth,
+               y = cam->windowY + pixel / cam->windowWidth;
     RcRay r;
     r.origin = (float4)(cam->position.xyz, 0.0f);
     r.direction = (float4)(rc_encode_direction(rc_eye_direction(cam, x, y)), INFINITY);

@@ -68,9 +68,12 @@ std::vector<BenchRay> EyeRays(const scene::Camera& camera) {
 }
 
 RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
-                    const std::vector<BenchHit>& hits, const glm::vec3& light, uint32_t seed) {
+                    const std::vector<BenchHit>& hits, const glm::vec3& light, uint32_t seed,
+                    uint32_t width) {
     RaySets out;
+    out.width = width;
     out.sets[0] = eye;
+    for (size_t i = 0; i < eye.size(); ++i) out.pixels[0].push_back(uint32_t(i));
     const float offset = 1e-4f * scene.Bounds().Diagonal();
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> uni(0.0f, 1.0f);
@@ -95,6 +98,7 @@ RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
                 s.tMax = glm::length(toLightFromOrigin);
                 s.direction = toLightFromOrigin / s.tMax;
                 out.sets[1].push_back(s);
+                out.pixels[1].push_back(uint32_t(i));
             }
         }
         BenchRay m;
@@ -102,6 +106,7 @@ RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
         m.direction = glm::normalize(d - 2.0f * glm::dot(d, n) * n);
         m.tMax = INFINITY;
         out.sets[2].push_back(m);
+        out.pixels[2].push_back(uint32_t(i));
         // Refraction into glass (n faces the incoming ray): Snell with eta = 1 / ior.
         {
             const float eta = 1.0f / kIor, cosi = -glm::dot(d, n);
@@ -112,6 +117,7 @@ RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
                 t.direction = glm::normalize(eta * d + (eta * cosi - std::sqrt(k)) * n);
                 t.tMax = INFINITY;
                 out.sets[3].push_back(t);
+                out.pixels[3].push_back(uint32_t(i));
             }
         }
         // Cosine-distributed about n (Malley's method on an orthonormal basis of n).
@@ -126,6 +132,7 @@ RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
             g.direction = glm::normalize(r * std::cos(phi) * b1 + r * std::sin(phi) * b2 + z * n);
             g.tMax = INFINITY;
             out.sets[4].push_back(g);
+            out.pixels[4].push_back(uint32_t(i));
         }
     }
     return out;
@@ -134,7 +141,8 @@ RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
 void SaveRaySets(const std::filesystem::path& file, const RaySets& sets) {
     std::ofstream f(file, std::ios::binary);
     if (!f) throw std::runtime_error("cannot write " + file.string());
-    f.write("RCRAYS1", 8);
+    f.write("RCRAYS2", 8);
+    f.write(reinterpret_cast<const char*>(&sets.width), sizeof sets.width);
     for (const auto& s : sets.sets) {
         const uint64_t n = s.size();
         f.write(reinterpret_cast<const char*>(&n), sizeof n);
@@ -143,22 +151,32 @@ void SaveRaySets(const std::filesystem::path& file, const RaySets& sets) {
         f.write(reinterpret_cast<const char*>(s.data()),
                 std::streamsize(s.size() * sizeof(BenchRay)));
     }
+    for (const auto& p : sets.pixels) {
+        f.write(reinterpret_cast<const char*>(p.data()),
+                std::streamsize(p.size() * sizeof(uint32_t)));
+    }
     if (!f) throw std::runtime_error("error writing " + file.string());
 }
 
 RaySets LoadRaySets(const std::filesystem::path& file) {
     std::ifstream f(file, std::ios::binary);
     char magic[8];
-    if (!f.read(magic, 8) || std::memcmp(magic, "RCRAYS1", 8) != 0) {
-        throw std::runtime_error(file.string() + ": not a ray-set file");
+    if (!f.read(magic, 8) || std::memcmp(magic, "RCRAYS2", 8) != 0) {
+        throw std::runtime_error(file.string() + ": not a ray-set file (RCRAYS2)");
     }
     RaySets sets;
+    f.read(reinterpret_cast<char*>(&sets.width), sizeof sets.width);
     uint64_t counts[kNumKinds];
     f.read(reinterpret_cast<char*>(counts), sizeof counts);
     for (int k = 0; k < kNumKinds; ++k) {
         sets.sets[k].resize(counts[k]);
         f.read(reinterpret_cast<char*>(sets.sets[k].data()),
                std::streamsize(counts[k] * sizeof(BenchRay)));
+    }
+    for (int k = 0; k < kNumKinds; ++k) {
+        sets.pixels[k].resize(counts[k]);
+        f.read(reinterpret_cast<char*>(sets.pixels[k].data()),
+               std::streamsize(counts[k] * sizeof(uint32_t)));
     }
     if (!f) throw std::runtime_error(file.string() + ": truncated");
     return sets;

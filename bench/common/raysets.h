@@ -34,8 +34,12 @@ inline const char* const kKinds[] = {"eye", "shadow", "reflection", "refraction"
 constexpr int kNumKinds = 5;
 inline bool IsShadowKind(int kind) { return kind == 1; }
 
+// Each ray's pixel (y * width + x of the eye ray it descends from), so a peer can lay every set
+// out in the same pixel-tile order.
 struct RaySets {
+    uint32_t width = 0;
     std::vector<BenchRay> sets[kNumKinds];
+    std::vector<uint32_t> pixels[kNumKinds];
 };
 
 // Named cameras: "scene" (the scene's own; a bare OBJ's framing camera), "orbit" (the scene
@@ -60,10 +64,13 @@ struct BenchHit {
 
 // The secondary sets from the eye rays' hits. Origins are the hit point moved 1e-4 of the scene
 // box's diagonal along the geometric normal (to the side the ray leaves towards), tMin 0.
+// `eye` holds the rays of an image `width` pixels wide, row by row.
 RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
-                    const std::vector<BenchHit>& hits, const glm::vec3& light, uint32_t seed);
+                    const std::vector<BenchHit>& hits, const glm::vec3& light, uint32_t seed,
+                    uint32_t width);
 
-// Binary file of the five sets: "RCRAYS1\0", five uint64 counts, then the rays.
+// Binary file of the five sets: "RCRAYS2\0", the uint32 width, five uint64 counts, the rays, then
+// their pixels.
 void SaveRaySets(const std::filesystem::path& file, const RaySets& sets);
 RaySets LoadRaySets(const std::filesystem::path& file);
 

@@ -15,13 +15,15 @@
 // faulted in, as a render's later batches see it (a fresh query's scratch pages
 // are faulted in inside the timed stage). CSV on stdout, one row per kind x method:
 //   kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,setup_s,
-//   tests_per_ray,hits
+//   tests_per_ray,hits,hits_digest
 // median_s: wall time of the query stage (host classification + copies + query kernels), the
 // medians of host_s/copy_s/kernel_s split it; shade_s: separate shading kernels the classified
 // styles launch (excluded from median_s; the vertex style's shading is fused into its query
 // kernel and cannot be excluded); setup_s: query construction (BVH build and upload, the
 // classification's presorted lists); mrays_s = rays / median_s; hits: rays that hit / are
-// blocked (equal across methods). The rays of the classified query are read back from the device
+// blocked; hits_digest: FNV-1a over every ray's answer in ray order (primitive id and the bits of
+// t for a hit, the blocked byte for a shadow ray), equal across methods exactly when every
+// ray's answer is. The rays of the classified query are read back from the device
 // inside the timed stage, as the renderer does, but for eye rays, which it classifies from their
 // camera (Hierarchy::ClassifyPinhole) as the renderer does too. --classify sets a cost-function
 // parameter of the classified methods as `rayclass render --classify` does (classify::SetParam),
@@ -503,33 +505,56 @@ Timings Measure(Bench& b, const Args& a, const std::string& method, const KindRa
     return t;
 }
 
-// Rays that hit or are blocked (outside the timing): equal across methods.
-uint64_t CountHits(clrt::Context& ctx, const KindRays& kr) {
+// Rays that hit or are blocked, and the digest of every ray's answer (outside the timing): both
+// equal across methods.
+struct HitSummary {
     uint64_t hits = 0;
+    uint64_t digest = 14695981039346656037ull;  // FNV-1a offset basis
+
+    void Add(const void* data, size_t size) {
+        for (size_t i = 0; i < size; ++i) {
+            digest = (digest ^ static_cast<const uint8_t*>(data)[i]) * 1099511628211ull;
+        }
+    }
+};
+
+HitSummary SummarizeHits(clrt::Context& ctx, const KindRays& kr) {
+    HitSummary s;
     if (kr.shadow) {
         std::vector<uint8_t> blocked(kr.n);
         clrt::Check("clEnqueueReadBuffer", [&] {
             ctx.queue().enqueueReadBuffer(kr.out, CL_TRUE, 0, kr.n, blocked.data());
         });
-        for (uint8_t x : blocked) hits += x != 0;
-        return hits;
+        for (uint8_t x : blocked) {
+            const uint8_t b = x != 0;
+            s.hits += b;
+            s.Add(&b, 1);
+        }
+        return s;
     }
     std::vector<RcHit> h(kr.n);
     clrt::Check("clEnqueueReadBuffer", [&] {
         ctx.queue().enqueueReadBuffer(kr.out, CL_TRUE, 0, kr.n * sizeof(RcHit), h.data());
     });
-    for (const auto& x : h) hits += x.prim != RC_NO_HIT;
-    return hits;
+    for (const auto& x : h) {
+        s.Add(&x.prim, sizeof(x.prim));
+        if (x.prim == RC_NO_HIT) continue;
+        ++s.hits;
+        s.Add(&x.t, sizeof(x.t));
+    }
+    return s;
 }
 
-void PrintRow(const KindRays& kr, const std::string& method, const Timings& t, uint64_t hits) {
+void PrintRow(const KindRays& kr, const std::string& method, const Timings& t,
+              const HitSummary& hits) {
     const double med = Median(t.wall);
-    std::printf("%s,%s,%u,%.6g,%.6g,%.6g,%.4g,%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%llu\n",
+    std::printf("%s,%s,%u,%.6g,%.6g,%.6g,%.4g,%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%llu,%016llx\n",
                 bench::kKinds[kr.kind], method.c_str(), kr.n, med,
                 *std::min_element(t.wall.begin(), t.wall.end()),
                 *std::max_element(t.wall.begin(), t.wall.end()), kr.n / med * 1e-6, Median(t.host),
                 Median(t.copy), Median(t.kern), Median(t.shade), Median(t.setup),
-                double(t.tests) / kr.n, (unsigned long long)hits);
+                double(t.tests) / kr.n, (unsigned long long)hits.hits,
+                (unsigned long long)hits.digest);
     std::fflush(stdout);
 }
 
@@ -558,7 +583,7 @@ int main(int argc, char** argv) try {
     const glm::vec3 lightPos = bench::NamedLight(sc, a.light);
     const std::vector<bench::BenchRay> eye = bench::EyeRays(cam);
     const RcCamera eyeCamera = render::CameraBasis(cam).ToDevice();
-    const bench::RaySets sets = bench::MakeRaySets(sc, eye, EyeHits(b, eye), lightPos, a.seed);
+    const bench::RaySets sets = bench::MakeRaySets(sc, eye, EyeHits(b, eye), lightPos, a.seed, a.width);
     if (!a.saveRays.empty()) bench::SaveRaySets(a.saveRays, sets);
     std::fprintf(stderr,
                  "raybench: %s, %u primitives, camera %s, load %.3f s, program build %.3f s; "
@@ -569,7 +594,7 @@ int main(int argc, char** argv) try {
 
     std::printf(
         "kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,"
-        "setup_s,tests_per_ray,hits\n");
+        "setup_s,tests_per_ray,hits,hits_digest\n");
     const uint32_t nLights = std::max<uint32_t>(1, uint32_t(sc.lights.size()));
     for (int k = 0; k < bench::kNumKinds; ++k) {
         const auto& set = sets.sets[k];
@@ -582,7 +607,7 @@ int main(int argc, char** argv) try {
             if ((method == "brute" || method == "cones") && sc.PrimitiveCount() > a.bruteMaxPrims)
                 continue;
             const Timings t = Measure(b, a, method, kr);
-            PrintRow(kr, method, t, CountHits(ctx, kr));
+            PrintRow(kr, method, t, SummarizeHits(ctx, kr));
         }
     }
     return 0;

@@ -60,6 +60,10 @@
     FIELD(RcCamera, tanHalfFovY)         \
     FIELD(RcCamera, width)               \
     FIELD(RcCamera, height)              \
+    FIELD(RcCamera, windowX)             \
+    FIELD(RcCamera, windowY)             \
+    FIELD(RcCamera, windowWidth)         \
+    FIELD(RcCamera, windowHeight)        \
     STRUCT(RcRay)                        \
     FIELD(RcRay, origin)                 \
     FIELD(RcRay, direction)              \
@@ -122,6 +126,17 @@
     FIELD(RcBvh8Node, child)             \
     FIELD(RcBvh8Node, nChildren)         \
     FIELD(RcBvh8Node, pad)               \
+    STRUCT(RcBvhLeafBlock8)              \
+    FIELD(RcBvhLeafBlock8, v0x)          \
+    FIELD(RcBvhLeafBlock8, v0y)          \
+    FIELD(RcBvhLeafBlock8, v0z)          \
+    FIELD(RcBvhLeafBlock8, e1x)          \
+    FIELD(RcBvhLeafBlock8, e1y)          \
+    FIELD(RcBvhLeafBlock8, e1z)          \
+    FIELD(RcBvhLeafBlock8, e2x)          \
+    FIELD(RcBvhLeafBlock8, e2y)          \
+    FIELD(RcBvhLeafBlock8, e2z)          \
+    FIELD(RcBvhLeafBlock8, prim)         \
     STRUCT(RcKdNode)                     \
     FIELD(RcKdNode, word)                \
     FIELD(RcKdNode, data)                \

@@ -77,7 +77,10 @@ typedef struct RcLight {
 /* Pinhole camera. The eye ray of pixel (x, y) (row 0 at the top) is
  * normalize(forward + sx * right + sy * up), sx = (2 (x + 0.5) / width - 1) * tanHalfFovX,
  * sy = (1 - 2 (y + 0.5) / height) * tanHalfFovY: the same formula in every eye-ray path.
- * right/up/forward are unit vectors. 80 bytes. */
+ * right/up/forward are unit vectors. The render covers the window of windowWidth x windowHeight
+ * pixels at (windowX, windowY) of the width x height image (all of it unless it is a crop or
+ * tile): ray i of a generation-0 batch is the window's pixel i, row-major, and its direction is
+ * the full image's, so a crop's pixels are those of a whole render. 96 bytes. */
 typedef struct RcCamera {
     rc_float4 position;
     rc_float4 forward, right, up;
@@ -85,6 +88,10 @@ typedef struct RcCamera {
     float tanHalfFovY;
     rc_uint width;
     rc_uint height;
+    rc_uint windowX;
+    rc_uint windowY;
+    rc_uint windowWidth;
+    rc_uint windowHeight;
 } RcCamera;
 
 /* Kinds of rays, for statistics and shading decisions. */
@@ -201,6 +208,19 @@ typedef struct RcBvh8Node {
     rc_uint nChildren;
     rc_uint pad[7];
 } RcBvh8Node;
+
+/* The primitives of a leaf of the 8-wide hierarchy in blocks of eight lanes, structure of arrays,
+ * so that one float8 Moller-Trumbore test covers a block (cl/bvh.cl). Triangle lanes hold v0 and
+ * the edges e1 = v1 - v0, e2 = v2 - v0; sphere, quadric and unused lanes hold zero edges, which
+ * the triangle test rejects (det = 0). prim: the lanes' global ids, RC_NO_HIT in unused lanes.
+ * The kernels' leaf references name the leaf's first block in place of its primIndex position
+ * (include/rayclass/bvh/leaf_blocks.h). 320 bytes. */
+typedef struct RcBvhLeafBlock8 {
+    float v0x[8], v0y[8], v0z[8];
+    float e1x[8], e1y[8], e1z[8];
+    float e2x[8], e2y[8], e2z[8];
+    rc_uint prim[8];
+} RcBvhLeafBlock8;
 
 /* A node of the SAH kd-tree that cl/kdtree.cl walks (--accel kdtree; include/rayclass/accel/
  * kdtree.h). word & 3 is the split axis of an inner node, 3 for a leaf; word >> 2 is the index

@@ -49,23 +49,24 @@ bool Finite(const rc_float4& v) {
 struct PinholeSubdivision::Camera {
     glm::dvec3 position, forward, right, up;
     double tanX = 1.0, tanY = 1.0;
-    uint32_t width = 1, height = 1;
-    uint64_t first = 0, last = 0;  // the batch: pixels [first, last)
-    float eye[kFaceCount][3];      // the position in each face's frame, as Convert maps it
-    float end[kFaceCount];         // where each face's X leaves the scene box
+    uint32_t width = 1, height = 1;     // the camera window's: pixels are numbered in the window
+    uint32_t originX = 0, originY = 0;  // the window's place in the image
+    uint64_t first = 0, last = 0;       // the batch: pixels [first, last)
+    float eye[kFaceCount][3];           // the position in each face's frame, as Convert maps it
+    float end[kFaceCount];              // where each face's X leaves the scene box
 
-    double perWidth = 1.0, perHeight = 1.0;  // 2 / width, 2 / height
+    double perWidth = 1.0, perHeight = 1.0;  // 2 / the image's width, 2 / its height
     // From a camera outside the scene box, rays that miss `reachable` (the box grown by
     // kMissMargin of its diagonal, which float rays cannot cross while their double twins here
     // miss) get no leaf.
     bool outside = false;
     glm::dvec3 reachableLo{0.0}, reachableHi{0.0};
 
-    // cl/camera.cl's direction of pixel (x, y) in double, before normalising (reciprocals for
-    // its divisions: errors of an ulp of a double, far inside kSlopePad).
+    // cl/camera.cl's direction of the window's pixel (x, y) in double, before normalising
+    // (reciprocals for its divisions: errors of an ulp of a double, far inside kSlopePad).
     glm::dvec3 Direction(uint32_t x, uint32_t y) const {
-        const double sx = ((double(x) + 0.5) * perWidth - 1.0) * tanX;
-        const double sy = (1.0 - (double(y) + 0.5) * perHeight) * tanY;
+        const double sx = ((double(originX) + x + 0.5) * perWidth - 1.0) * tanX;
+        const double sy = (1.0 - (double(originY) + y + 0.5) * perHeight) * tanY;
         return forward + sx * right + sy * up;
     }
 
@@ -172,9 +173,9 @@ struct PinholeSubdivision::Camera {
             half[0].y1 = half[1].y0 = r.y0 + h / 2;
         }
     }
-    // The camera of `camera`'s pixels [firstPixel, firstPixel + n), in the face frames of scene
-    // box `box`; false when its basis is degenerate or not finite, the pixels run past the
-    // image, or it lies more than kCameraReach box sizes outside the box.
+    // The camera of `camera`'s pixels [firstPixel, firstPixel + n) of its window, in the face
+    // frames of scene box `box`; false when its basis is degenerate or not finite, the window or
+    // the pixels run past the image, or it lies more than kCameraReach box sizes outside the box.
     bool Set(const RcCamera& camera, uint32_t firstPixel, uint32_t n, const Bounds3f& box);
 };
 
@@ -185,11 +186,14 @@ bool PinholeSubdivision::Camera::Set(const RcCamera& camera, uint32_t firstPixel
     const glm::dvec3 r(camera.right.x, camera.right.y, camera.right.z);
     const glm::dvec3 u(camera.up.x, camera.up.y, camera.up.z);
     // No pixel's direction is zero while forward is off the plane of right and up.
-    const bool sane = Finite(camera.position) && Finite(camera.forward) && Finite(camera.right) &&
-                      Finite(camera.up) && std::isfinite(camera.tanHalfFovX) &&
-                      std::isfinite(camera.tanHalfFovY) && camera.width > 0 && camera.height > 0 &&
-                      glm::dot(f, glm::cross(r, u)) != 0.0 &&
-                      uint64_t(firstPixel) + n <= uint64_t(camera.width) * camera.height;
+    const bool sane =
+        Finite(camera.position) && Finite(camera.forward) && Finite(camera.right) &&
+        Finite(camera.up) && std::isfinite(camera.tanHalfFovX) &&
+        std::isfinite(camera.tanHalfFovY) && camera.width > 0 && camera.height > 0 &&
+        glm::dot(f, glm::cross(r, u)) != 0.0 && camera.windowWidth > 0 && camera.windowHeight > 0 &&
+        uint64_t(camera.windowX) + camera.windowWidth <= camera.width &&
+        uint64_t(camera.windowY) + camera.windowHeight <= camera.height &&
+        uint64_t(firstPixel) + n <= uint64_t(camera.windowWidth) * camera.windowHeight;
     // The rays are not clipped to the scene box, as Convert clips rays: the beams start at the
     // camera, which is exact for them too, and ProcessRect answers the rays that cannot reach
     // the box as misses.
@@ -203,8 +207,10 @@ bool PinholeSubdivision::Camera::Set(const RcCamera& camera, uint32_t firstPixel
     up = u;
     tanX = camera.tanHalfFovX;
     tanY = camera.tanHalfFovY;
-    width = camera.width;
-    height = camera.height;
+    width = camera.windowWidth;
+    height = camera.windowHeight;
+    originX = camera.windowX;
+    originY = camera.windowY;
     perWidth = 2.0 / double(camera.width);
     perHeight = 2.0 / double(camera.height);
     first = firstPixel;

@@ -49,8 +49,8 @@ RcCamera AnchorCamera(const scene::Scene& scene, uint32_t width, uint32_t height
     c.up = {0.0f, 1.0f, 0.0f, 0.0f};
     c.tanHalfFovY = std::tan(glm::radians(60.0f) * 0.5f);
     c.tanHalfFovX = c.tanHalfFovY * float(width) / float(height);
-    c.width = width;
-    c.height = height;
+    c.width = c.windowWidth = width;
+    c.height = c.windowHeight = height;
     return c;
 }
 
@@ -59,7 +59,7 @@ std::vector<Ray> CameraRays(const RcCamera& c, uint32_t first, uint32_t n) {
     std::vector<Ray> rays;
     rays.reserve(n);
     for (uint32_t p = first; p < first + n; ++p) {
-        const uint32_t x = p % c.width, y = p / c.width;
+        const uint32_t x = c.windowX + p % c.windowWidth, y = c.windowY + p / c.windowWidth;
         const float sx = (2.0f * (float(x) + 0.5f) / float(c.width) - 1.0f) * c.tanHalfFovX;
         const float sy = (1.0f - 2.0f * (float(y) + 0.5f) / float(c.height)) * c.tanHalfFovY;
         Ray r;

@@ -1,6 +1,7 @@
 #include "rayclass/cli/cli.h"
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <iostream>
 
@@ -15,6 +16,7 @@ constexpr const char* kUsage = R"(usage: rayclass <command> [options]
 
 commands:
   render SCENE -o OUT.{exr,png} [options]   render a JSON scene or a bare OBJ
+  merge -o OUT.{exr,png} TILE.exr...        put the tiles of a render together
   compare A.exr B.exr [options]             error statistics between two images
   devices                                   list OpenCL platforms and devices
   classify-stats SCENE [options]            ray-classification statistics of a scene
@@ -39,6 +41,7 @@ int Dispatch(const std::string& command, const std::vector<std::string>& rest) {
             return 0;
         }
         if (command == "render") return RenderCommand(rest, std::cout, std::cerr);
+        if (command == "merge") return MergeCommand(rest, std::cout, std::cerr);
         if (command == "compare") return CompareCommand(rest, std::cout, std::cerr);
         if (command == "devices") return DevicesCommand(rest, std::cout, std::cerr);
         if (command == "classify-stats") return ClassifyStatsCommand(rest, std::cout, std::cerr);
@@ -56,6 +59,11 @@ int Dispatch(const std::string& command, const std::vector<std::string>& rest) {
 }  // namespace
 
 int Main(int argc, char** argv) {
+    // A write error's errno is lost once the stream has failed: a buffer larger than any help
+    // text or report keeps the one write of a command's output in the final flush below, which
+    // can then name the error.
+    static char stdoutBuffer[1 << 16];
+    std::setvbuf(stdout, stdoutBuffer, _IOFBF, sizeof stdoutBuffer);
     std::vector<std::string> args(argv + 1, argv + argc);
     if (args.empty()) {
         std::cerr << kUsage;

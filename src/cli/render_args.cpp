@@ -1,5 +1,6 @@
 #include "render_args.h"
 
+#include <cstdio>
 #include <sstream>
 #include <utility>
 
@@ -83,6 +84,85 @@ std::vector<Option> OutputOptions(RenderArgs& r) {
          "OpenCL device: auto (first GPU, else CPU), gpu, cpu or an index\n"
          "from 'rayclass devices' (default auto)",
          Text(r.device)},
+    };
+}
+
+// "X0,Y0,X1,Y1": pixel bounds, end exclusive, of a non-empty rectangle.
+image::PixelRect ParseCrop(const std::string& option, const std::string& value) {
+    std::vector<std::string> parts(1);
+    for (char c : value) {
+        if (c == ',') {
+            parts.emplace_back();
+        } else {
+            parts.back() += c;
+        }
+    }
+    if (parts.size() != 4) {
+        throw UsageError(option + " expects X0,Y0,X1,Y1 (pixel bounds, end exclusive), not '" +
+                         value + "'");
+    }
+    uint32_t v[4];
+    for (int k = 0; k < 4; ++k) {
+        v[k] = ParseNumber<uint32_t>(option, parts[k], 0u, 16384u, "pixel bounds X0,Y0,X1,Y1");
+    }
+    const image::PixelRect crop{v[0], v[1], v[2], v[3]};
+    if (crop.Empty()) {
+        throw UsageError(option + " " + value + " is empty (X1 must exceed X0 and Y1 Y0)");
+    }
+    return crop;
+}
+
+// "I/N": tile I (from 0) of N.
+std::array<uint32_t, 2> ParseTile(const std::string& option, const std::string& value) {
+    const auto slash = value.find('/');
+    if (slash == std::string::npos) {
+        throw UsageError(option + " expects I/N (tile I of N, from 0), not '" + value + "'");
+    }
+    const uint32_t count =
+        ParseNumber<uint32_t>(option, value.substr(slash + 1), 1u, 65536u, "a tile count N");
+    const uint32_t index =
+        ParseNumber<uint32_t>(option, value.substr(0, slash), 0u, count - 1, "a tile index I");
+    return {index, count};
+}
+
+// "A:B": frames A to B, both included.
+std::array<uint32_t, 2> ParseFrames(const std::string& option, const std::string& value) {
+    const auto colon = value.find(':');
+    if (colon == std::string::npos) {
+        throw UsageError(option + " expects A:B (frames A to B, both included), not '" + value +
+                         "'");
+    }
+    const uint32_t first =
+        ParseNumber<uint32_t>(option, value.substr(0, colon), 0u, 999999u, "a first frame A");
+    const uint32_t last =
+        ParseNumber<uint32_t>(option, value.substr(colon + 1), first, 999999u, "a last frame B");
+    return {first, last};
+}
+
+std::vector<Option> PartOptions(RenderArgs& r) {
+    return {
+        {{"--crop"},
+         "X0,Y0,X1,Y1",
+         "render only these pixels (end exclusive), each as the whole render\n"
+         "has it; an EXR keeps them in its data window inside the full image",
+         [&r](const std::string& o, const std::string& v) { r.crop = ParseCrop(o, v); }},
+        {{"--tile"},
+         "I/N",
+         "render tile I (0..N-1) of N compact tiles, as --crop would; 'rayclass\n"
+         "merge' puts the tiles together",
+         [&r](const std::string& o, const std::string& v) { r.tile = ParseTile(o, v); }},
+        {{"--frame"},
+         "K",
+         "",
+         [&r](const std::string& o, const std::string& v) {
+             const uint32_t k = ParseNumber<uint32_t>(o, v, 0u, 999999u, "a frame");
+             r.frames = std::array<uint32_t, 2>{k, k};
+         }},
+        {{"--frames"},
+         "A:B",
+         "frame K, or frames A to B, of the scene camera's path, each to\n"
+         "OUT_####.exr (its --stats to FILE_####.json)",
+         [&r](const std::string& o, const std::string& v) { r.frames = ParseFrames(o, v); }},
     };
 }
 
@@ -201,7 +281,7 @@ std::vector<Option> EyeRayOptions(RenderArgs& r) {
 // Every option, in the order --help lists them, applied to `r`.
 OptionTable RenderOptionTable(RenderArgs& r) {
     std::vector<Option> options;
-    for (auto part : {OutputOptions, QueryOptions, FileOptions, EyeRayOptions}) {
+    for (auto part : {OutputOptions, PartOptions, QueryOptions, FileOptions, EyeRayOptions}) {
         for (Option& option : part(r)) options.push_back(std::move(option));
     }
     return OptionTable(std::move(options), " (see 'rayclass render --help')");
@@ -262,6 +342,7 @@ void ValidatePaths(const RenderArgs& r) {
 void Validate(const RenderArgs& r) {
     ValidateOutputs(r);
     ValidatePaths(r);
+    if (r.crop && r.tile) throw UsageError("--crop and --tile both choose the pixels: give one");
     if (!r.statsFile.empty() && Extension(r.statsFile) != ".json") {
         throw UsageError("--stats expects a .json file, not '" + r.statsFile + "'");
     }
@@ -275,6 +356,13 @@ void Validate(const RenderArgs& r) {
 }
 
 }  // namespace
+
+std::string FrameFile(const std::string& path, uint32_t frame) {
+    const std::string ext = Extension(path);
+    char number[16];
+    std::snprintf(number, sizeof number, "_%04u", frame);
+    return path.substr(0, path.size() - ext.size()) + number + ext;
+}
 
 RenderArgs ParseRenderArgs(const std::vector<std::string>& args) {
     RenderArgs r;

@@ -19,6 +19,7 @@
 #include "rayclass/render/reference.h"
 #include "rayclass/scene/loader.h"
 #include "render_args.h"
+#include "render_hash.h"
 
 namespace rayclass::cli {
 
@@ -74,12 +75,18 @@ class PendingTextFile {
 // The render on the OpenCL device of `ctx`, its eye rays' first hits from the path that
 // raster::ChooseEyeRays picks.
 image::Image RenderOnDevice(const RenderArgs& r, const scene::Scene& scene,
-                            std::unique_ptr<clrt::Context> ctx, render::RenderStats& stats,
-                            std::ostream& err) {
+                            const render::RenderOptions& options, clrt::Context& ctx,
+                            render::RenderStats& stats, std::ostream& err) {
     const raster::EyeRays eyeRays =
-        raster::ChooseEyeRays(r.eyeRays, r.options.rayEncoding, scene, err);
+        raster::ChooseEyeRays(r.eyeRays, options.rayEncoding, scene, err);
     stats.eyeRaysChoice = eyeRays.choice;
-    return render::ClRenderer(*ctx, scene, r.options, eyeRays.hits.get()).Render(stats);
+    return render::ClRenderer(ctx, scene, options, eyeRays.hits.get()).Render(stats);
+}
+
+// The pixels to render: --crop's, --tile's, or all of them.
+std::optional<image::PixelRect> WindowOf(const RenderArgs& r, const scene::Camera& camera) {
+    if (r.tile) return image::TileRect((*r.tile)[0], (*r.tile)[1], camera.width, camera.height);
+    return r.crop;
 }
 
 // Drops the first-hit layers that were not asked for.
@@ -97,6 +104,52 @@ image::WriteOptions WriteOptionsOf(const RenderArgs& r) {
     return options;
 }
 
+// One image of the scene as it stands: rendered, written to `output` and its stats to
+// `statsPath` (none when empty; the temporary is made before the render, see PendingTextFile).
+// `t0` is when this image's work began, `loadSeconds` what loading the scene took of it.
+void RenderImage(const RenderArgs& r, const scene::Scene& scene, clrt::Context* ctx,
+                 const std::string& output, const std::string& statsPath, render::RenderPart part,
+                 Clock::time_point t0, double loadSeconds, std::ostream& err) {
+    std::optional<PendingTextFile> statsFile;
+    if (!statsPath.empty()) statsFile.emplace(statsPath);
+    render::RenderOptions options = r.options;
+    options.window = WindowOf(r, scene.camera);
+    render::RenderStats stats;
+    stats.part = part;
+    if (r.tile) stats.part.tile = r.tile;
+    if (options.window) {
+        const image::PixelRect& w = *options.window;
+        stats.part.crop = {w.x0, w.y0, w.x1, w.y1};
+    }
+    image::Image img = r.reference ? render::RenderReference(scene, options, stats)
+                                   : RenderOnDevice(r, scene, options, *ctx, stats, err);
+    KeepAovs(r.aovs, img);
+    img.sceneHash = RenderHash(scene, options, r.reference);
+
+    // The total stops before the image is written: the stats are on disk first (see Write).
+    stats.timeS["scene_load"] = loadSeconds;
+    stats.timeS["total"] = SecondsSince(t0);
+    if (statsFile) statsFile->Write(stats.ToJson().dump(2) + "\n");
+    image::WriteImage(img, output, WriteOptionsOf(r));
+    if (statsFile) statsFile->Commit();
+    if (r.options.progress) {
+        err << "rayclass: " << output << " (" << img.width << "x" << img.height << ", "
+            << stats.RaysTotal() << " rays, " << stats.timeS["total"] << " s)\n";
+    }
+}
+
+// --frame / --frames: each frame's camera from the path, checked before any is rendered.
+std::vector<scene::Camera> FrameCameras(const RenderArgs& r, const scene::Scene& scene) {
+    if (scene.cameraPath.Empty()) {
+        throw Error(r.scene + ": --frame and --frames need a camera 'path' in the scene");
+    }
+    std::vector<scene::Camera> cameras;
+    for (uint32_t k = (*r.frames)[0]; k <= (*r.frames)[1]; ++k) {
+        cameras.push_back(scene.cameraPath.At(scene.camera, k));
+    }
+    return cameras;
+}
+
 }  // namespace
 
 int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
@@ -108,8 +161,8 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
     }
     const auto t0 = Clock::now();
     const RenderArgs r = ParseRenderArgs(args);
-    std::optional<PendingTextFile> statsFile;
-    if (!r.statsFile.empty()) statsFile.emplace(r.statsFile);
+    // A stats path that cannot be written fails before the scene loads.
+    if (!r.statsFile.empty() && !r.frames) PendingTextFile check(r.statsFile);
 
     // The OpenCL platform starts (a visible part of a one-frame render with PoCL) while the
     // scene loads on one core. Errors keep their order: a bad scene is reported before a bad
@@ -123,21 +176,23 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
     if (r.width) scene.camera.width = r.width;
     if (r.height) scene.camera.height = r.height;
     const double loadSeconds = SecondsSince(t0);
-
-    render::RenderStats stats;
-    image::Image img = r.reference ? render::RenderReference(scene, r.options, stats)
-                                   : RenderOnDevice(r, scene, device.get(), stats, err);
-    KeepAovs(r.aovs, img);
-
-    // The total stops before the image is written: the stats are on disk first (see Write).
-    stats.timeS["scene_load"] = loadSeconds;
-    stats.timeS["total"] = SecondsSince(t0);
-    if (statsFile) statsFile->Write(stats.ToJson().dump(2) + "\n");
-    image::WriteImage(img, r.output, WriteOptionsOf(r));
-    if (statsFile) statsFile->Commit();
-    if (r.options.progress) {
-        err << "rayclass: " << r.output << " (" << img.width << "x" << img.height << ", "
-            << stats.RaysTotal() << " rays, " << stats.timeS["total"] << " s)\n";
+    const std::vector<scene::Camera> cameras =
+        r.frames ? FrameCameras(r, scene) : std::vector<scene::Camera>{};
+    std::unique_ptr<clrt::Context> ctx = r.reference ? nullptr : device.get();
+    if (!r.frames) {
+        RenderImage(r, scene, ctx.get(), r.output, r.statsFile, {}, t0, loadSeconds, err);
+        return 0;
+    }
+    for (size_t i = 0; i < cameras.size(); ++i) {
+        const auto tFrame = i == 0 ? t0 : Clock::now();
+        const uint32_t k = (*r.frames)[0] + uint32_t(i);
+        scene.camera = cameras[i];
+        render::RenderPart part;
+        part.frame = k;
+        part.frameTime = scene.cameraPath.TimeOf(k);
+        RenderImage(r, scene, ctx.get(), FrameFile(r.output, k),
+                    r.statsFile.empty() ? "" : FrameFile(r.statsFile, k), part, tFrame,
+                    i == 0 ? loadSeconds : 0.0, err);
     }
     return 0;
 }

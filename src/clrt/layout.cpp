@@ -14,7 +14,7 @@ static_assert(sizeof(RcSphere) == 32);
 static_assert(sizeof(RcQuadric) == 96);
 static_assert(sizeof(RcMaterial) == 96);
 static_assert(sizeof(RcLight) == 32);
-static_assert(sizeof(RcCamera) == 80);
+static_assert(sizeof(RcCamera) == 96);
 static_assert(sizeof(RcRay) == 32);
 static_assert(sizeof(RcRayInfo) == 32);
 static_assert(sizeof(RcHit) == 16);
@@ -25,6 +25,7 @@ static_assert(sizeof(RcTriangleBlock16) == 704);
 static_assert(sizeof(RcBvh8Node) == 256);
 static_assert(sizeof(RcKdNode) == 8);
 static_assert(sizeof(RcCone) == 32 && alignof(RcCone) == 16);
+static_assert(sizeof(RcBvhLeafBlock8) == 320);
 
 static_assert(alignof(RcTriangle) == 16 && alignof(RcTriangleShading) == 16 &&
               alignof(RcSphere) == 16 && alignof(RcQuadric) == 16 && alignof(RcMaterial) == 16 &&

@@ -4,11 +4,14 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
 #include <ImfThreading.h>
 
 #include <algorithm>
 #include <climits>
 #include <cstddef>
+#include <cstdint>
+#include <fstream>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -21,6 +24,7 @@ namespace rayclass::image::detail {
 namespace {
 
 constexpr size_t kVec3Stride = sizeof(glm::vec3);
+constexpr const char* kSceneHashAttribute = "rayclassSceneHash";
 static_assert(kVec3Stride == 3 * sizeof(float), "glm::vec3 must be three packed floats");
 
 // Routes OpenEXR's output through OutFile so the OS error of a failed write is kept.
@@ -79,9 +83,21 @@ class ExrThreads {
 
 void WriteExr(const Image& image, OutFile& file, const std::string& name,
               ExrCompression compression) {
-    if (image.width > INT_MAX || image.height > INT_MAX)
+    if (uint64_t(image.originX) + image.width > image.DisplayWidth() ||
+        uint64_t(image.originY) + image.height > image.DisplayHeight()) {
+        throw std::runtime_error("pixels outside the display window");
+    }
+    if (image.DisplayWidth() > INT_MAX || image.DisplayHeight() > INT_MAX)
         throw std::runtime_error("image too large");
-    Imf::Header header(int(image.width), int(image.height));
+    const Imath::Box2i display({0, 0},
+                               {int(image.DisplayWidth()) - 1, int(image.DisplayHeight()) - 1});
+    const Imath::Box2i data(
+        {int(image.originX), int(image.originY)},
+        {int(image.originX + image.width) - 1, int(image.originY + image.height) - 1});
+    Imf::Header header(display, data);
+    if (!image.sceneHash.empty()) {
+        header.insert(kSceneHashAttribute, Imf::StringAttribute(image.sceneHash));
+    }
     header.compression() = compression == ExrCompression::kZip   ? Imf::ZIP_COMPRESSION
                            : compression == ExrCompression::kPiz ? Imf::PIZ_COMPRESSION
                                                                  : Imf::NO_COMPRESSION;
@@ -112,7 +128,79 @@ void WriteExr(const Image& image, OutFile& file, const std::string& name,
     output.writePixels(int(image.height));
 }
 
+namespace {
+
+// The scene hash, and a crop's place in the display window when the file's data window lies
+// inside a display window that starts at (0, 0); any other file is an image of its own.
+void ReadPlacement(const Imf::Header& header, Image& image) {
+    if (const auto* hash = header.findTypedAttribute<Imf::StringAttribute>(kSceneHashAttribute)) {
+        image.sceneHash = hash->value();
+    }
+    const Imath::Box2i& data = header.dataWindow();
+    const Imath::Box2i& display = header.displayWindow();
+    if (display.min.x != 0 || display.min.y != 0 || data.min.x < 0 || data.min.y < 0 ||
+        data.max.x > display.max.x || data.max.y > display.max.y) {
+        return;
+    }
+    image.originX = uint32_t(data.min.x);
+    image.originY = uint32_t(data.min.y);
+    image.displayWidth = uint32_t(display.max.x + 1);
+    image.displayHeight = uint32_t(display.max.y + 1);
+}
+
+// Reads a NUL-terminated header string of at most `limit` characters (31, or 255 in files that
+// declare long names: what OpenEXR reads, so that both walk the header alike).
+std::string HeaderString(std::ifstream& in, size_t limit) {
+    std::string s;
+    for (char c; in.get(c);) {
+        if (c == '\0') return s;
+        if (s.size() == limit) {
+            throw std::runtime_error("header name longer than " + std::to_string(limit) +
+                                     " characters");
+        }
+        s.push_back(c);
+    }
+    throw std::runtime_error("header ends early");
+}
+
+// OpenEXR's reader allocates the size an attribute declares before reading it, so that a few
+// bytes claiming 2 GiB cost 2 GiB (found by tests/fuzz/fuzz_exr.cpp). Every header's attribute
+// sizes are checked against what the file holds before OpenEXR sees it.
+void CheckAttributeSizes(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    const uint64_t fileSize = std::filesystem::file_size(path);
+    unsigned char version[8];
+    if (!in.read(reinterpret_cast<char*>(version), sizeof(version))) {
+        throw std::runtime_error("header ends early");
+    }
+    // Flag bits 10 (long names) and 12 (multipart) of the version field.
+    const size_t limit = (version[5] & 0x04) != 0 ? 255 : 31;
+    const bool multipart = (version[5] & 0x10) != 0;
+    do {
+        for (std::string name = HeaderString(in, limit); !name.empty();
+             name = HeaderString(in, limit)) {
+            HeaderString(in, limit);  // the attribute's type
+            unsigned char b[4];
+            if (!in.read(reinterpret_cast<char*>(b), sizeof(b))) {
+                throw std::runtime_error("header ends early");
+            }
+            const int32_t size = int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 |
+                                         uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24);
+            const uint64_t left = fileSize - uint64_t(in.tellg());
+            if (size < 0 || uint64_t(size) > left) {
+                throw std::runtime_error("header attribute '" + name + "' declares " +
+                                         std::to_string(size) + " bytes, but " +
+                                         std::to_string(left) + " remain in the file");
+            }
+            in.seekg(size, std::ios::cur);
+        }
+    } while (multipart && in.peek() != 0 && in.peek() != std::ifstream::traits_type::eof());
+}
+
+}  // namespace
+
 Image ReadExr(const std::filesystem::path& path) {
+    CheckAttributeSizes(path);
     const ExrThreads threads;
     Imf::InputFile input(path.c_str(), threads.Count());
     const Imf::Header& header = input.header();
@@ -123,6 +211,7 @@ Image ReadExr(const std::filesystem::path& path) {
     }
     Image image(uint32_t(window.max.x - window.min.x + 1),
                 uint32_t(window.max.y - window.min.y + 1));
+    ReadPlacement(header, image);
     Imf::FrameBuffer frame;
     auto insert = [&](const char* name, Imf::PixelType type, void* base, size_t xStride) {
         frame.insert(name, Imf::Slice::Make(type, base, window, xStride));

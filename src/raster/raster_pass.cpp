@@ -406,11 +406,21 @@ std::vector<RcHit> RasterEyeHits::FindHits(const scene::Scene& scene,
     RasterPass pass(gl_, scene, options_);
     stats.timeS["raster_setup"] = SecondsSince(t0);
     RasterStats rs;
+    // The pass draws the whole image, whatever the camera's window: a crop keeps the hits of its
+    // pixels, which are then the whole render's.
     std::vector<RcHit> hits = pass.Render(camera.ToDevice(), &rs);
     stats.timeS["raster_draw"] = rs.drawS;
     stats.timeS["raster_readback"] = rs.readbackS;
     stats.timeS["raster_total"] = rs.totalS;
-    return hits;
+    const image::PixelRect& w = camera.window;
+    if (w == image::PixelRect{0, 0, camera.width, camera.height}) return hits;
+    std::vector<RcHit> crop;
+    crop.reserve(w.PixelCount());
+    for (uint32_t y = w.y0; y < w.y1; ++y) {
+        const auto row = hits.begin() + ptrdiff_t(size_t(y) * camera.width);
+        crop.insert(crop.end(), row + w.x0, row + w.x1);
+    }
+    return crop;
 }
 
 }  // namespace rayclass::raster

@@ -1,5 +1,6 @@
 #include "rayclass/render/bvh_query.h"
 
+#include "rayclass/bvh/leaf_blocks.h"
 #include "rayclass/render/launch.h"
 
 namespace rayclass::render {
@@ -9,11 +10,11 @@ namespace {
 class BvhQuery final : public RayQuery {
   public:
     BvhQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene,
-             const bvh::Bvh& tree)
+             const bvh::BlockedBvh& tree)
         : ctx_(ctx),
           scene_(scene),
-          nodes_(UploadVector(ctx, bvh::Collapse(tree))),
-          primIndex_(UploadVector(ctx, tree.primIndex)),
+          nodes_(UploadVector(ctx, tree.nodes)),
+          blocks_(UploadVector(ctx, tree.blocks)),
           intersect_(program, "rc_intersect_bvh"),
           occluded_(program, "rc_occluded_bvh") {}
 
@@ -37,9 +38,8 @@ class BvhQuery final : public RayQuery {
     void Run(cl::Kernel& kernel, const cl::Buffer& rays, uint32_t n, const cl::Buffer& out,
              KernelTimer& timer) {
         if (n == 0) return;
-        SetArgs(kernel, rays, n, nodes_, primIndex_, scene_.triangles, scene_.spheres,
-                scene_.quadrics, scene_.params, out,
-                testsBuffer_.Reserve(ctx_, n * sizeof(uint32_t)));
+        SetArgs(kernel, rays, n, nodes_, blocks_, scene_.triangles, scene_.spheres, scene_.quadrics,
+                scene_.params, out, testsBuffer_.Reserve(ctx_, n * sizeof(uint32_t)));
         Launch(ctx_, kernel, n, timer);
     }
 
@@ -49,7 +49,7 @@ class BvhQuery final : public RayQuery {
 
     clrt::Context& ctx_;
     const SceneBuffers& scene_;
-    cl::Buffer nodes_, primIndex_;
+    cl::Buffer nodes_, blocks_;
     cl::Kernel intersect_, occluded_;
     GrowingBuffer testsBuffer_;
     std::vector<uint32_t> tests_;
@@ -60,7 +60,9 @@ class BvhQuery final : public RayQuery {
 std::unique_ptr<RayQuery> MakeBvhQuery(clrt::Context& ctx, const cl::Program& program,
                                        const SceneBuffers& buffers, const scene::Scene& scene,
                                        const bvh::BuildParams& params) {
-    return std::make_unique<BvhQuery>(ctx, program, buffers, bvh::Build(scene, params));
+    const bvh::Bvh tree = bvh::Build(scene, params);
+    return std::make_unique<BvhQuery>(ctx, program, buffers,
+                                      bvh::BlockLeaves(bvh::Collapse(tree), tree.primIndex, scene));
 }
 
 }  // namespace rayclass::render

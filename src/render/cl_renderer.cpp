@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <functional>
 #include <future>
-#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -48,16 +47,6 @@ RcRenderParams MakeRenderParams(const scene::Scene& scene, const RenderOptions& 
     params.ambient = {scene.ambient.x, scene.ambient.y, scene.ambient.z, 0.0f};
     params.background = {scene.background.x, scene.background.y, scene.background.z, 0.0f};
     return params;
-}
-
-image::Image NewImage(const CameraBasis& basis, bool aovs) {
-    image::Image img(basis.width, basis.height);
-    if (aovs) {
-        img.depth.assign(img.PixelCount(), std::numeric_limits<float>::infinity());
-        img.id.assign(img.PixelCount(), RC_NO_HIT);
-        img.normal.assign(img.PixelCount(), glm::vec3(0.0f));
-    }
-    return img;
 }
 
 // The render's program, its build time in stats.
@@ -186,11 +175,15 @@ class Preparer {
     std::future<std::unique_ptr<PreparedBatch>> next_;
 };
 
+std::unique_ptr<RayQuery> WrapQuery(std::unique_ptr<RayQuery> query, const QueryWrapper& wrap) {
+    return wrap ? wrap(std::move(query)) : std::move(query);
+}
+
 // One Render call: its device state, the generation in flight, and the stages that trace it.
 class Frame {
   public:
     Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
-          EyeHitSource* eyeHitSource, RenderStats& stats);
+          EyeHitSource* eyeHitSource, const QueryWrapper& wrapQuery, RenderStats& stats);
 
     // Every generation, from the eye rays until no ray is spawned.
     void Trace() {
@@ -266,29 +259,29 @@ class Frame {
 };
 
 Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
-             EyeHitSource* eyeHitSource, RenderStats& stats)
+             EyeHitSource* eyeHitSource, const QueryWrapper& wrapQuery, RenderStats& stats)
     : ctx_(ctx),
       options_(options),
       eyeHitSource_(eyeHitSource),
       stats_(stats),
-      basis_(scene.camera),
+      basis_(scene.camera, options.window),
       img_(NewImage(basis_, options.aovs)),
       program_(BuildProgram(ctx, options, stats)),
       params_(MakeRenderParams(scene, options)),
       sceneBuffers_(ctx, scene, params_),
-      query_(MakeQuery(ctx, program_, sceneBuffers_, scene, options, stats)),
+      query_(WrapQuery(MakeQuery(ctx, program_, sceneBuffers_, scene, options, stats), wrapQuery)),
       cam_(basis_.ToDevice()),
       camBuffer_(UploadVector(ctx, std::vector<RcCamera>{cam_})),
       eyeKernel_(program_, "rc_generate_eye_rays"),
       shadeKernel_(program_, "rc_shade"),
-      batch_(BatchRays(options.batchRays, size_t(basis_.width) * basis_.height, params_.nLights,
+      batch_(BatchRays(options.batchRays, basis_.window.PixelCount(), params_.nLights,
                        ctx.info().maxAllocBytes)),
       buffers_(ctx, batch_, params_.nLights),
       compactKernel_(program_, "rc_compact_rays"),
       pool_(ctx, batch_),
       readQueue_(clrt::Check("clCreateCommandQueue",
                              [&] { return cl::CommandQueue(ctx.context(), ctx.device()); })),
-      nEye_(size_t(basis_.width) * basis_.height) {
+      nEye_(basis_.window.PixelCount()) {
     stats.width = basis_.width;
     stats.height = basis_.height;
     stats.device = ctx.info().name;
@@ -504,12 +497,16 @@ image::Image Frame::Finish(Clock::time_point tStart) {
 }  // namespace
 
 ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
-                       EyeHitSource* eyeHits)
-    : ctx_(ctx), scene_(scene), options_(options), eyeHits_(eyeHits) {}
+                       EyeHitSource* eyeHits, QueryWrapper wrapQuery)
+    : ctx_(ctx),
+      scene_(scene),
+      options_(options),
+      eyeHits_(eyeHits),
+      wrapQuery_(std::move(wrapQuery)) {}
 
 image::Image ClRenderer::Render(RenderStats& stats) {
     const auto tStart = Clock::now();
-    Frame frame(ctx_, scene_, options_, eyeHits_, stats);
+    Frame frame(ctx_, scene_, options_, eyeHits_, wrapQuery_, stats);
     frame.Trace();
     return frame.Finish(tStart);
 }

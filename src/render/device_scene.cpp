@@ -1,6 +1,9 @@
 #include "rayclass/render/device_scene.h"
 
 #include <cmath>
+#include <limits>
+
+#include "rayclass/core/error.h"
 
 namespace rayclass::render {
 
@@ -10,8 +13,15 @@ rc_float4 F4(const glm::vec3& v, float w = 0.0f) { return {v.x, v.y, v.z, w}; }
 
 }  // namespace
 
-CameraBasis::CameraBasis(const scene::Camera& camera)
-    : position(camera.position), width(camera.width), height(camera.height) {
+CameraBasis::CameraBasis(const scene::Camera& camera, const std::optional<image::PixelRect>& crop)
+    : position(camera.position),
+      width(camera.width),
+      height(camera.height),
+      window(crop.value_or(image::PixelRect{0, 0, width, height})) {
+    if (window.Empty() || !window.Inside(width, height)) {
+        throw Error("crop " + window.ToString() + " is not a non-empty part of the " +
+                    std::to_string(width) + "x" + std::to_string(height) + " image");
+    }
     forward = glm::normalize(glm::dvec3(camera.lookAt) - position);
     right = glm::normalize(glm::cross(forward, glm::dvec3(camera.up)));
     up = glm::cross(right, forward);
@@ -42,7 +52,25 @@ RcCamera CameraBasis::ToDevice() const {
     c.tanHalfFovY = float(tanHalfFovY);
     c.width = width;
     c.height = height;
+    c.windowX = window.x0;
+    c.windowY = window.y0;
+    c.windowWidth = window.Width();
+    c.windowHeight = window.Height();
     return c;
+}
+
+image::Image NewImage(const CameraBasis& basis, bool aovs) {
+    image::Image img(basis.window.Width(), basis.window.Height());
+    img.originX = basis.window.x0;
+    img.originY = basis.window.y0;
+    img.displayWidth = basis.width;
+    img.displayHeight = basis.height;
+    if (aovs) {
+        img.depth.assign(img.PixelCount(), std::numeric_limits<float>::infinity());
+        img.id.assign(img.PixelCount(), RC_NO_HIT);
+        img.normal.assign(img.PixelCount(), glm::vec3(0.0f));
+    }
+    return img;
 }
 
 RcTriangle ToDevice(const scene::Triangle& t) { return {F4(t.p[0]), F4(t.p[1]), F4(t.p[2])}; }

@@ -4,11 +4,13 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <thread>
 
 #include "rayclass/geometry/intersect.h"
 #include "rayclass/geometry/offset.h"
 #include "rayclass/render/device_scene.h"
+#include "rayclass/render/reference_bvh.h"
 
 namespace rayclass::render {
 
@@ -40,14 +42,15 @@ double FresnelDielectric(double cosi, double eta) {
 
 class Tracer {
   public:
-    Tracer(const scene::Scene& scene, const RenderOptions& options)
-        : scene_(scene), options_(options) {}
+    Tracer(const scene::Scene& scene, const RenderOptions& options, ReferenceQuery query)
+        : scene_(scene), options_(options) {
+        if (query == ReferenceQuery::kBvh) bvh_.emplace(scene, options.triangleTest);
+    }
 
     // Adds the radiance along the ray, times `weight`, to `color`. For eye rays fills the AOVs.
     void Trace(const Ray& ray, const V& weight, uint32_t depth, V& color, Counters& counters,
                image::Image* aovImage, size_t pixel) const {
-        const auto hit = geometry::IntersectBruteForce(scene_, ray, options_.triangleTest);
-        counters.tests += scene_.PrimitiveCount();
+        const auto hit = Nearest(ray, counters);
         if (!hit.Valid()) {
             color += weight * V(scene_.background);
             return;
@@ -67,6 +70,18 @@ class Tracer {
     }
 
   private:
+    geometry::Hit<double> Nearest(const Ray& ray, Counters& counters) const {
+        if (bvh_) return bvh_->Nearest(ray, counters.tests);
+        counters.tests += scene_.PrimitiveCount();
+        return geometry::IntersectBruteForce(scene_, ray, options_.triangleTest);
+    }
+
+    bool Occluded(const Ray& ray, Counters& counters) const {
+        if (bvh_) return bvh_->Occluded(ray, counters.tests);
+        counters.tests += scene_.PrimitiveCount();
+        return geometry::Occluded(scene_, ray, options_.triangleTest);
+    }
+
     // Adds every light's direct contribution at `s` that no primitive blocks.
     void AddLights(const Ray& ray, const Surface& s, const scene::Material& m, const V& above,
                    const V& weight, V& color, Counters& counters) const {
@@ -87,11 +102,7 @@ class Tracer {
             const V toLightFromOrigin = V(light.position) - above;
             const double dist = glm::length(toLightFromOrigin);
             ++counters.shadow;
-            counters.tests += scene_.PrimitiveCount();
-            const Ray shadow{above, toLightFromOrigin / dist, 0.0, dist};
-            if (!geometry::Occluded(scene_, shadow, options_.triangleTest)) {
-                color += c;
-            }
+            if (!Occluded(Ray{above, toLightFromOrigin / dist, 0.0, dist}, counters)) color += c;
         }
     }
 
@@ -178,30 +189,28 @@ class Tracer {
 
     const scene::Scene& scene_;
     const RenderOptions& options_;
+    std::optional<ReferenceBvh> bvh_;
 };
 
 }  // namespace
 
 image::Image RenderReference(const scene::Scene& scene, const RenderOptions& options,
-                             RenderStats& stats) {
+                             RenderStats& stats, ReferenceQuery query) {
     const auto t0 = std::chrono::steady_clock::now();
-    const CameraBasis basis(scene.camera);
-    image::Image img(basis.width, basis.height);
-    if (options.aovs) {
-        img.depth.assign(img.PixelCount(), std::numeric_limits<float>::infinity());
-        img.id.assign(img.PixelCount(), RC_NO_HIT);
-        img.normal.assign(img.PixelCount(), glm::vec3(0.0f));
-    }
-    const Tracer tracer(scene, options);
+    const CameraBasis basis(scene.camera, options.window);
+    const image::PixelRect& window = basis.window;
+    image::Image img = NewImage(basis, options.aovs);
+    const Tracer tracer(scene, options, query);
     std::atomic<uint32_t> nextRow{0};
     const unsigned nThreads = std::max(1u, std::thread::hardware_concurrency());
     std::vector<Counters> counters(nThreads);
     std::vector<std::thread> threads;
     for (unsigned t = 0; t < nThreads; ++t) {
         threads.emplace_back([&, t] {
-            for (uint32_t y = nextRow++; y < basis.height; y = nextRow++) {
-                for (uint32_t x = 0; x < basis.width; ++x) {
-                    const size_t pixel = size_t(y) * basis.width + x;
+            for (uint32_t row = nextRow++; row < window.Height(); row = nextRow++) {
+                const uint32_t y = window.y0 + row;
+                for (uint32_t x = window.x0; x < window.x1; ++x) {
+                    const size_t pixel = size_t(row) * window.Width() + (x - window.x0);
                     V color(0.0);
                     ++counters[t].eye;
                     tracer.Trace(Ray{basis.position, basis.Direction(x, y)}, V(1.0), 0, color,
@@ -215,7 +224,7 @@ image::Image RenderReference(const scene::Scene& scene, const RenderOptions& opt
     stats.width = basis.width;
     stats.height = basis.height;
     stats.device = "host reference (double)";
-    stats.accel = "brute";
+    stats.accel = query == ReferenceQuery::kBvh ? "bvh" : "brute";
     stats.nPrimitives = scene.PrimitiveCount();
     for (const auto& c : counters) {
         stats.raysByKind["eye"] += c.eye;

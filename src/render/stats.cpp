@@ -12,6 +12,12 @@ nlohmann::json RenderStats::ToJson() const {
     nlohmann::json j;
     j["width"] = width;
     j["height"] = height;
+    if (part.frame) {
+        j["frame"] = *part.frame;
+        j["frame_time"] = part.frameTime;
+    }
+    if (part.tile) j["tile"] = {{"index", (*part.tile)[0]}, {"count", (*part.tile)[1]}};
+    if (part.crop) j["crop"] = *part.crop;
     j["device"] = device;
     j["accel"] = accel;
     j["eye_rays"] = eyeRays;

@@ -4,11 +4,11 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <stdexcept>
 #include <glm/gtc/matrix_transform.hpp>
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -17,6 +17,7 @@
 
 #include "rayclass/core/error.h"
 #include "rayclass/scene/obj.h"
+#include "rayclass/scene/patch.h"
 #include "text_input.h"
 
 namespace rayclass::scene {
@@ -271,8 +272,13 @@ class SceneFileReader {
         IndexLines(root, builder.lines(), next);
 
         if (!root.is_object()) Fail(root, "scene: the top level must be a JSON object");
-        CheckKeys(root, {"camera", "ambient", "background", "materials", "lights", "objects"},
+        CheckKeys(root,
+                  {"camera", "ambient", "background", "materials", "lights", "objects",
+                   "patch_flatness"},
                   "scene");
+        if (const Json* v = Find(root, "patch_flatness")) {
+            scene_.patchFlatness = Positive(*v, "patch_flatness", "scene");
+        }
         if (const Json* v = Find(root, "ambient")) scene_.ambient = Color(*v, "ambient", "scene");
         if (const Json* v = Find(root, "background")) {
             scene_.background = Color(*v, "background", "scene");
@@ -280,8 +286,10 @@ class SceneFileReader {
         if (const Json* v = Find(root, "materials")) Materials(*v);
         if (const Json* v = Find(root, "lights")) Lights(*v);
         if (const Json* v = Find(root, "objects")) Objects(*v);
+        SplitPatches(scene_, PatchSplit{scene_.patchFlatness, 0});
         if (const Json* v = Find(root, "camera")) {
             scene_.camera = ReadCamera(*v);
+            if (const Json* path = Find(*v, "path")) scene_.cameraPath = ReadCameraPath(*path);
         } else {
             const Bounds3f bounds = scene_.Bounds();
             if (bounds.Empty()) Fail(root, "scene: no 'camera' and nothing to frame");
@@ -498,9 +506,19 @@ class SceneFileReader {
                 if (const Json* e = Find(v, "material")) q.material = MaterialNamed(*e, context);
                 q.object = index;
                 scene_.quadrics.push_back(q);
+            } else if (type == "bezier") {
+                CheckKeys(v, {"type", "file", "patches", "degree", "transform", "material", "name"},
+                          context);
+                if (const std::string file = Bezier(v, context, index); !file.empty()) {
+                    defaultName = file;
+                }
+            } else if (type == "nurbs") {
+                CheckKeys(v, {"type", "degree", "knots", "points", "transform", "material", "name"},
+                          context);
+                Nurbs(v, context, index);
             } else {
                 Fail(*Find(v, "type"), context + ": unknown type " + Quoted(type) +
-                                           " (expected mesh, sphere or quadric)");
+                                           " (expected mesh, sphere, quadric, bezier or nurbs)");
             }
             const Json* name = Find(v, "name");
             scene_.objects.push_back({name ? String(*name, "name", context) : defaultName});
@@ -523,19 +541,146 @@ class SceneFileReader {
         try {
             far = AppendMesh(scene_, mesh, toWorld, material, index);
         } catch (const std::length_error& e) {
-            Fail(fileValue, context + ": mesh " + Quoted(path.string()) + ": the scene has " +
-                                e.what());
+            Fail(fileValue,
+                 context + ": mesh " + Quoted(path.string()) + ": the scene has " + e.what());
         }
         if (far) {
             const Json* t = Find(v, "transform");
-            Fail(t ? *t : fileValue,
-                 context + ": mesh " + Quoted(path.string()) + ": vertex " +
-                     std::to_string(*far + 1) + " (line " +
-                     std::to_string(StatementLine(obj.text, "v", *far)) +
-                     ") is out of range after the transform (magnitude above " +
-                     MaxCoordinateText() + ")");
+            Fail(t ? *t : fileValue, context + ": mesh " + Quoted(path.string()) + ": vertex " +
+                                         std::to_string(*far + 1) + " (line " +
+                                         std::to_string(StatementLine(obj.text, "v", *far)) +
+                                         ") is out of range after the transform (magnitude above " +
+                                         MaxCoordinateText() + ")");
         }
         return path.filename().string();
+    }
+
+    // Loads a bezier object from its .bpt file or inline patches; returns the file's name, or
+    // empty for inline patches.
+    std::string Bezier(const Json& v, const std::string& context, uint32_t index) {
+        const Json* fileValue = Find(v, "file");
+        const Json* inline_ = Find(v, "patches");
+        if ((fileValue != nullptr) == (inline_ != nullptr)) {
+            Fail(v, context + ": a bezier object needs either 'file' or 'patches'");
+        }
+        std::vector<BezierNet> nets;
+        std::string name;
+        if (fileValue) {
+            if (Find(v, "degree")) {
+                Fail(*Find(v, "degree"), context + ": 'degree' is given per patch in the file");
+            }
+            const fs::path path = file_.parent_path() / String(*fileValue, "file", context);
+            const FileText bpt = ReadFile(path);
+            if (!bpt.problem.empty()) {
+                Fail(*fileValue,
+                     context + ": patches " + Quoted(path.string()) + ": " + bpt.problem);
+            }
+            nets = ParseBpt(bpt.text, path);
+            name = path.filename().string();
+        } else {
+            int du = 3, dv = 3;
+            if (const Json* d = Find(v, "degree")) Degrees(*d, context, du, dv);
+            const size_t points = size_t(du + 1) * size_t(dv + 1);
+            if (!inline_->is_array() || inline_->empty()) {
+                Fail(*inline_, context + ": 'patches' must be a non-empty array of patches");
+            }
+            for (size_t k = 0; k < inline_->size(); ++k) {
+                const Json& patch = (*inline_)[k];
+                const std::string what = context + ": patch " + std::to_string(k + 1);
+                if (!patch.is_array() || patch.size() != points) {
+                    Fail(patch, what + " must be an array of " + std::to_string(points) +
+                                    " points for degrees " + std::to_string(du) + " and " +
+                                    std::to_string(dv));
+                }
+                BezierNet net{du, dv, {}};
+                for (const Json& p : patch) {
+                    const auto n = Numbers(p, 3);
+                    if (!n) Fail(p, what + ": a point must be an array of 3 finite numbers");
+                    net.p.emplace_back((*n)[0], (*n)[1], (*n)[2], 1.0);
+                }
+                nets.push_back(std::move(net));
+            }
+        }
+        AddPatches(v, context, index, nets);
+        return name;
+    }
+
+    void Degrees(const Json& d, const std::string& context, int& du, int& dv) const {
+        const auto n = Numbers(d, 2);
+        if (!n || (*n)[0] != std::floor((*n)[0]) || (*n)[1] != std::floor((*n)[1]) || (*n)[0] < 1 ||
+            (*n)[0] > 3 || (*n)[1] < 1 || (*n)[1] > 3) {
+            Fail(d, context + ": 'degree' must be two integers 1..3 (in u and v)");
+        }
+        du = int((*n)[0]);
+        dv = int((*n)[1]);
+    }
+
+    void Nurbs(const Json& v, const std::string& context, uint32_t index) {
+        scene::Nurbs n;
+        Degrees(Require(v, "degree", context), context, n.du, n.dv);
+        const Json& knots = Require(v, "knots", context);
+        if (!knots.is_array() || knots.size() != 2 || !knots[0].is_array() ||
+            !knots[1].is_array()) {
+            Fail(knots, context + ": 'knots' must be two arrays of numbers (in u and v)");
+        }
+        for (int a = 0; a < 2; ++a) {
+            for (const Json& k : knots[size_t(a)]) {
+                const auto f = Finite(k);
+                if (!f) Fail(k, context + ": knots must be finite numbers");
+                (a == 0 ? n.knotsU : n.knotsV).push_back(*f);
+            }
+        }
+        const Json& points = Require(v, "points", context);
+        const auto count = [](size_t knots, int degree) {
+            return knots > size_t(degree) + 1 ? knots - size_t(degree) - 1 : 0;
+        };
+        const size_t nu = count(n.knotsU.size(), n.du), nv = count(n.knotsV.size(), n.dv);
+        for (int a = 0; a < 2; ++a) {
+            const std::string problem =
+                a == 0 ? KnotProblem(n.knotsU, n.du, nu) : KnotProblem(n.knotsV, n.dv, nv);
+            if (!problem.empty()) {
+                Fail(knots[size_t(a)],
+                     context + ": the knots in " + (a == 0 ? "u " : "v ") + problem);
+            }
+        }
+        if (!points.is_array() || points.size() != nu * nv) {
+            Fail(points, context + ": 'points' must hold " + std::to_string(nu) + " x " +
+                             std::to_string(nv) + " = " + std::to_string(nu * nv) +
+                             " points for these knots and degrees, not " +
+                             std::to_string(points.is_array() ? points.size() : 0));
+        }
+        for (size_t k = 0; k < points.size(); ++k) {
+            const auto p = Numbers(points[k], 4);
+            const std::string what = context + ": point " + std::to_string(k + 1);
+            if (!p) Fail(points[k], what + " must be an array of 4 finite numbers [x, y, z, w]");
+            if (!((*p)[3] > 0.0f)) Fail(points[k], what + ": the weight w must be positive");
+            const double w = (*p)[3];
+            n.p.emplace_back(w * (*p)[0], w * (*p)[1], w * (*p)[2], w);
+        }
+        AddPatches(v, context, index, NurbsToBezier(n));
+    }
+
+    // Adds the nets as bicubic patches in world space (the object's transform, material).
+    void AddPatches(const Json& v, const std::string& context, uint32_t index,
+                    const std::vector<BezierNet>& nets) {
+        uint32_t material = 0;
+        if (const Json* e = Find(v, "material")) material = MaterialNamed(*e, context);
+        const glm::dmat4 toWorld(Transform(v, context));
+        for (const BezierNet& net : nets) {
+            Patch patch = ToBicubic(net);
+            for (glm::dvec4& h : patch.p) {
+                const glm::dvec3 world = glm::dvec3(toWorld * glm::dvec4(glm::dvec3(h) / h.w, 1.0));
+                if (!InRange(glm::vec3(world))) {
+                    const Json* t = Find(v, "transform");
+                    Fail(t ? *t : v, context + ": a control point is out of range after the " +
+                                         "transform (magnitude above " + MaxCoordinateText() + ")");
+                }
+                h = glm::dvec4(world * h.w, h.w);
+            }
+            patch.material = material;
+            patch.object = index;
+            scene_.patches.push_back(patch);
+        }
     }
 
     glm::mat4 Transform(const Json& object, const std::string& context) const {
@@ -579,8 +724,8 @@ class SceneFileReader {
             const auto degrees = Finite(degreesValue);
             if (!degrees) Fail(degreesValue, context + ": 'degrees' must be a finite number");
             // Scaled before normalising: the length of a huge axis overflows.
-            const glm::vec3 scaled = axis / glm::max(glm::max(std::fabs(axis.x), std::fabs(axis.y)),
-                                                     std::fabs(axis.z));
+            const glm::vec3 scaled =
+                axis / glm::max(glm::max(std::fabs(axis.x), std::fabs(axis.y)), std::fabs(axis.z));
             result = glm::rotate(result, glm::radians(*degrees), glm::normalize(scaled));
         }
         if (const Json* e = Find(*t, "scale")) {
@@ -601,7 +746,7 @@ class SceneFileReader {
     Camera ReadCamera(const Json& v) const {
         const std::string context = "camera";
         RequireObject(v, "scene: 'camera'");
-        CheckKeys(v, {"position", "look_at", "up", "fov_y", "width", "height"}, context);
+        CheckKeys(v, {"position", "look_at", "up", "fov_y", "width", "height", "path"}, context);
         Camera c;
         if (const Json* e = Find(v, "position")) c.position = Position(*e, "position", context);
         if (const Json* e = Find(v, "look_at")) c.lookAt = Position(*e, "look_at", context);
@@ -638,6 +783,55 @@ class SceneFileReader {
             Fail(v, "camera: 'up' must not be zero or parallel to the view direction");
         }
         return c;
+    }
+
+    // "path": {"interpolation": "linear" | "catmull-rom", "fps": F, "keyframes": [{"time": T,
+    // "position": P, "look_at": L}, ...]}: at least two keyframes, times strictly increasing.
+    CameraPath ReadCameraPath(const Json& v) const {
+        const std::string context = "camera path";
+        RequireObject(v, "camera: 'path'");
+        CheckKeys(v, {"interpolation", "fps", "keyframes"}, context);
+        CameraPath path;
+        if (const Json* e = Find(v, "interpolation")) {
+            if (*e == "linear") {
+                path.interpolation = Interpolation::kLinear;
+            } else if (*e == "catmull-rom") {
+                path.interpolation = Interpolation::kCatmullRom;
+            } else {
+                Fail(*e, context + ": 'interpolation' must be \"linear\" or \"catmull-rom\"");
+            }
+        }
+        if (const Json* e = Find(v, "fps")) {
+            const auto f = Finite(*e);
+            if (!f || *f <= 0.0f || *f > 1e6f) {
+                Fail(*e, context + ": 'fps' must be a number in (0, 1e6]");
+            }
+            path.fps = *f;
+        }
+        const Json& keys = Require(v, "keyframes", context);
+        if (!keys.is_array() || keys.size() < 2) {
+            Fail(keys, context + ": 'keyframes' must be an array of at least 2 keyframes");
+        }
+        for (const Json& k : keys) {
+            const std::string where =
+                "camera path keyframe " + std::to_string(path.keyframes.size() + 1);
+            RequireObject(k, where);
+            CheckKeys(k, {"time", "position", "look_at"}, where);
+            Keyframe key;
+            const Json& time = Require(k, "time", where);
+            const auto t = Finite(time);
+            if (!t || std::fabs(*t) > 1e9f) Fail(time, where + ": 'time' must be a finite number");
+            if (!path.keyframes.empty() && !(*t > path.keyframes.back().time)) {
+                Fail(time, where + ": 'time' must be later than the keyframe before");
+            }
+            key.time = *t;
+            key.position = Position(Require(k, "position", where), "position", where);
+            key.lookAt = Position(Require(k, "look_at", where), "look_at", where);
+            if (key.lookAt == key.position)
+                Fail(k, where + ": 'look_at' must differ from 'position'");
+            path.keyframes.push_back(key);
+        }
+        return path;
     }
 
     const fs::path& file_;

@@ -13,6 +13,8 @@ Bounds3f Scene::PrimitiveBounds(uint32_t id) const {
         const Sphere& s = spheres[id - SphereBase()];
         b.lo = s.center - glm::vec3(s.radius);
         b.hi = s.center + glm::vec3(s.radius);
+    } else if (id >= PatchBoxBase()) {
+        b = patchBoxes[id - PatchBoxBase()].bounds;
     } else {
         const Quadric& q = quadrics[id - QuadricBase()];
         b.lo = q.boxMin;

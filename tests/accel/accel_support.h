@@ -81,7 +81,7 @@ inline bench::RaySets SampledRaySets(const Loaded& l, uint32_t width, uint32_t h
     std::vector<bench::BenchHit> benchHits;
     for (const RcHit& h : hits) benchHits.push_back({h.t, h.prim});
     const glm::vec3 light = l.scene.lights.empty() ? cam.position : l.scene.lights[0].position;
-    return bench::MakeRaySets(l.scene, eye, benchHits, light, 7);
+    return bench::MakeRaySets(l.scene, eye, benchHits, light, 7, width);
 }
 
 }  // namespace rayclass::accel

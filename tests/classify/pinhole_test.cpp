@@ -23,8 +23,8 @@ RcCamera MakeCamera(glm::vec3 eye, glm::vec3 forward, glm::vec3 upHint, float fo
     c.up = F4(glm::cross(right, forward));
     c.tanHalfFovY = std::tan(glm::radians(fovYDegrees) * 0.5f);
     c.tanHalfFovX = c.tanHalfFovY * float(width) / float(height);
-    c.width = width;
-    c.height = height;
+    c.width = c.windowWidth = width;
+    c.height = c.windowHeight = height;
     return c;
 }
 
@@ -93,6 +93,34 @@ TEST(Pinhole, RaysLandOnceInsideTheirLeafAndHitAsBruteForce) {
     EXPECT_GE(nSplitAcrossFaces, 4);
     // Looking at the box from outside, some rays pass it.
     EXPECT_GT(nMissed[3], 0u);
+}
+
+TEST(Pinhole, AWindowClassifiesTheWholeImagesRaysOfItsPixels) {
+    const scene::Scene s = RandomScene(64, 500, 12, 4);
+    // Inside the box, and outside it looking at it (some rays pass the box).
+    for (RcCamera c :
+         {MakeCamera({-0.9f, 0.1f, 0.2f}, {1, 0, 0}, {0, 1, 0}, 60.0f, 64, 48),
+          MakeCamera({-2.4f, 0.5f, -1.9f}, {1, -0.2f, 0.8f}, {0, 1, 0}, 70.0f, 64, 48)}) {
+        const std::vector<Ray> whole = CameraRays(c, 0, c.width * c.height);
+        c.windowX = 13;
+        c.windowY = 7;
+        c.windowWidth = 35;
+        c.windowHeight = 33;
+        const uint32_t n = c.windowWidth * c.windowHeight;
+        const std::vector<Ray> rays = CameraRays(c, 0, n);
+        for (uint32_t i = 0; i < n; ++i) {
+            const Ray& w =
+                whole[(c.windowY + i / c.windowWidth) * c.width + c.windowX + i % c.windowWidth];
+            ASSERT_EQ(rays[i].direction, w.direction) << "window pixel " << i;
+        }
+        Hierarchy h(s, DeepParams(s));
+        LeafBatch batch;
+        ASSERT_TRUE(h.ClassifyPinhole(c, 0, n, batch));
+        ExpectValid(s, h, batch, rays);
+        // A window reaching past the image is refused.
+        c.windowX = c.width - c.windowWidth + 1;
+        EXPECT_FALSE(h.ClassifyPinhole(c, 0, n, batch));
+    }
 }
 
 TEST(Pinhole, ThreadCountDoesNotChangeTheResult) {

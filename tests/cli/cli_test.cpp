@@ -693,5 +693,124 @@ TEST_F(Cli, QuietPngRenderReplacesThePreviousOutput) {
     EXPECT_EQ(img.height, 12u);
 }
 
+// Every layer of `a` and `b`, bit for bit.
+bool SameLayers(const image::Image& a, const image::Image& b) {
+    auto same = [](const auto& x, const auto& y) {
+        return x.size() == y.size() &&
+               (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0);
+    };
+    return a.width == b.width && a.height == b.height && same(a.rgb, b.rgb) &&
+           same(a.depth, b.depth) && same(a.id, b.id) && same(a.normal, b.normal);
+}
+
+TEST_F(Cli, TilesMergeIntoTheWholeRenderAndSayWhichTheyAre) {
+    const std::vector<std::string> common = {
+        "render", Cornell(), "--width", "50", "--height", "36", "--aov", "depth,id,normal", "-q"};
+    auto render = [&](std::vector<std::string> extra) {
+        std::vector<std::string> args = common;
+        args.insert(args.end(), extra.begin(), extra.end());
+        const Result r = Run(args);
+        EXPECT_EQ(r.status, 0) << r.err;
+    };
+    render({"-o", "whole.exr"});
+    std::vector<std::string> merge = {"merge", "-o", "merged.exr"};
+    for (int i = 0; i < 3; ++i) {
+        const std::string n = std::string(1, 't').append(std::to_string(i));  // see Run
+        render(
+            {"-o", n + ".exr", "--tile", std::to_string(i).append("/3"), "--stats", n + ".json"});
+        const nlohmann::json stats = nlohmann::json::parse(ReadText(Work(n + ".json")));
+        EXPECT_EQ(stats.at("tile"), (nlohmann::json{{"index", i}, {"count", 3}}));
+        EXPECT_EQ(stats.at("width"), 50);
+        merge.push_back(n + ".exr");
+    }
+    const Result r = Run(merge);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(
+        SameLayers(image::ReadImage(Work("merged.exr")), image::ReadImage(Work("whole.exr"))));
+    // A tile left out: the merge names the pixels and writes nothing.
+    const Result partial = Run({"merge", "-o", "partial.exr", "t0.exr", "t2.exr"});
+    EXPECT_EQ(partial.status, 1);
+    EXPECT_EQ(partial.err,
+              "rayclass merge: error: no tile covers pixels 16,0,33,36 of the 50x36 image "
+              "(--allow-partial merges anyway)\n");
+    EXPECT_FALSE(fs::exists(Work("partial.exr")));
+}
+
+TEST_F(Cli, CropAndTileUsageErrors) {
+    const std::pair<std::vector<std::string>, std::string> cases[] = {
+        {{"--crop", "1,2,3"},
+         "--crop expects X0,Y0,X1,Y1 (pixel bounds, end exclusive), not '1,2,3'"},
+        {{"--crop", "4,2,4,9"}, "--crop 4,2,4,9 is empty (X1 must exceed X0 and Y1 Y0)"},
+        {{"--tile", "3"}, "--tile expects I/N (tile I of N, from 0), not '3'"},
+        {{"--tile", "4/4"}, "--tile expects a tile index I in [0, 3], not '4'"},
+        {{"--tile", "0/2", "--crop", "0,0,1,1"},
+         "--crop and --tile both choose the pixels: give one"},
+    };
+    for (const auto& [extra, message] : cases) {
+        std::vector<std::string> args = {"render", Cornell(), "-o", "x.exr"};
+        args.insert(args.end(), extra.begin(), extra.end());
+        const Result r = Run(args);
+        EXPECT_EQ(r.status, 2);
+        std::string expected = "rayclass render: ";  // appended: see Run
+        EXPECT_EQ(r.err, expected.append(message).append("\n"));
+    }
+    const Result r = Run({"render", Cornell(), "-o", "x.exr", "--crop", "0,0,801,10", "-q"});
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.err,
+              "rayclass render: error: crop 0,0,801,10 is not a non-empty part of the "
+              "800x600 image\n");
+    EXPECT_EQ(Entries(), std::vector<std::string>{});
+}
+
+TEST_F(Cli, FramesFollowTheCameraPathToNumberedFiles) {
+    const std::string source = EnvOr("RAYCLASS_SOURCE_DIR", ".");
+    const std::vector<std::string> common = {"--width", "40", "--height", "30",
+                                             "--aov",   "id", "-q"};
+    std::vector<std::string> args = {"render",   source + "/scenes/cornell_orbit.json",
+                                     "-o",       "f.exr",
+                                     "--frames", "11:12",
+                                     "--stats",  "s.json"};
+    args.insert(args.end(), common.begin(), common.end());
+    const Result r = Run(args);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(Entries(),
+              (std::vector<std::string>{"f_0011.exr", "f_0012.exr", "s_0011.json", "s_0012.json"}));
+    const nlohmann::json stats = nlohmann::json::parse(ReadText(Work("s_0012.json")));
+    EXPECT_EQ(stats.at("frame"), 12);
+    EXPECT_EQ(stats.at("frame_time"), 1.0);
+    // Frame 12 is keyframe 1 (12 fps): a still scene with that camera renders the same image.
+    nlohmann::json scene = nlohmann::json::parse(ReadText(source + "/scenes/cornell_orbit.json"));
+    nlohmann::json& camera = scene.at("camera");
+    camera["position"] = camera.at("path").at("keyframes").at(1).at("position");
+    camera["look_at"] = camera.at("path").at("keyframes").at(1).at("look_at");
+    camera.erase("path");
+    for (auto& object : scene.at("objects")) {
+        if (object.contains("file"))
+            object["file"] = source + "/scenes/" + object["file"].get<std::string>();
+    }
+    WriteText(Work("still.json"), scene.dump());
+    args = {"render", "still.json", "-o", "still.exr"};
+    args.insert(args.end(), common.begin(), common.end());
+    ASSERT_EQ(Run(args).status, 0);
+    EXPECT_TRUE(
+        SameLayers(image::ReadImage(Work("f_0012.exr")), image::ReadImage(Work("still.exr"))));
+    EXPECT_FALSE(
+        SameLayers(image::ReadImage(Work("f_0011.exr")), image::ReadImage(Work("still.exr"))));
+    // Frames past the path, or a scene without one: nothing is rendered.
+    fs::remove_all(Work());
+    fs::create_directories(Work());
+    const Result past = Run({"render", source + "/scenes/cornell_orbit.json", "-o", "f.exr",
+                             "--frames", "35:37", "-q"});
+    EXPECT_EQ(past.status, 1);
+    EXPECT_EQ(past.err,
+              "rayclass render: error: frame 37 (time 3.083333) lies past the camera path's last "
+              "keyframe (time 3.000000; frames 0..36)\n");
+    const Result still = Run({"render", Cornell(), "-o", "f.exr", "--frame", "0", "-q"});
+    EXPECT_EQ(still.status, 1);
+    EXPECT_EQ(still.err, "rayclass render: error: " + Cornell() +
+                             ": --frame and --frames need a camera 'path' in the scene\n");
+    EXPECT_EQ(Entries(), std::vector<std::string>{});
+}
+
 }  // namespace
 }  // namespace rayclass::cli

@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -429,6 +430,43 @@ TEST_F(ImageIoTest, ReadErrorsNameTheFile) {
         EXPECT_EQ(std::string(e.what()),
                   Path("text.exr").string() + ": not an OpenEXR or PNG image");
     }
+}
+
+// OpenEXR allocates what a header attribute declares before reading it: a declared size beyond
+// the file's end is refused first, with the attribute named.
+TEST_F(ImageIoTest, ExrAttributeLargerThanTheFileIsAnError) {
+    const char header[] =
+        "v/1\x01\x02\0\0\0x\0opaque\0\xff\xff\xff\x7f"
+        "abc";
+    std::ofstream(Path("huge.exr"), std::ios::binary).write(header, sizeof(header) - 1);
+    try {
+        ReadImage(Path("huge.exr"));
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  Path("huge.exr").string() +
+                      ": cannot read: header attribute 'x' declares 2147483647 bytes, but 3 "
+                      "remain in the file");
+    }
+}
+
+// The inputs fuzz_exr found (tests/fuzz/regressions/exr: a 2 GiB allocation, a timeout while
+// ASan filled one, and a name longer than OpenEXR reads, after which its reader and a plain walk
+// of the header disagree on where the next attribute starts) fail with the problem named.
+TEST_F(ImageIoTest, FuzzFindingsAreErrors) {
+    const char* source = std::getenv("RAYCLASS_SOURCE_DIR");
+    const fs::path dir = fs::path(source ? source : ".") / "tests/fuzz/regressions/exr";
+    size_t n = 0;
+    for (const auto& entry : fs::directory_iterator(dir)) {
+        ++n;
+        try {
+            ReadImage(entry.path());
+            ADD_FAILURE() << entry.path() << ": no error";
+        } catch (const Error& e) {
+            EXPECT_THAT(e.what(), StartsWith(entry.path().string() + ": cannot read: header "));
+        }
+    }
+    EXPECT_EQ(n, 3u);
 }
 
 TEST_F(ImageIoTest, TruncatedExrIsAnError) {

@@ -2,8 +2,8 @@
 // by a new query (BeginGeneration forgets the splits earlier generations made), while a later
 // batch of the same generation still lands in the hierarchy its earlier batches built. The
 // primitive tests a query reports tell the two apart: the same rays cost a different number of
-// tests when they are routed through splits made for other rays.
-#include "rayclass/render/brute_query.h"
+// tests when they are routed through splits made for other rays. Every answer is also checked
+// against the brute-force query's.
 #include "rayclass/render/classified_query.h"
 
 #include <gtest/gtest.h>
@@ -16,6 +16,7 @@
 #include "query_io.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/auto_query.h"
+#include "rayclass/render/brute_query.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/device_scene.h"
 
@@ -114,6 +115,19 @@ struct Fixture {
     }
 };
 
+// Same primitive and distance, ray by ray.
+void ExpectSameHits(const std::vector<RcHit>& got, const std::vector<RcHit>& want) {
+    ASSERT_EQ(got.size(), want.size());
+    size_t hits = 0;
+    for (size_t i = 0; i < want.size(); ++i) {
+        ASSERT_EQ(got[i].prim, want[i].prim) << "ray " << i;
+        if (want[i].prim == RC_NO_HIT) continue;
+        ++hits;
+        ASSERT_EQ(got[i].t, want[i].t) << "ray " << i;
+    }
+    EXPECT_GT(hits, want.size() / 2);
+}
+
 void BeginGeneration(RayQuery& q, uint32_t generation, const std::vector<RcRay>& rays) {
     KernelTimer timer;
     q.BeginGeneration(generation, UploadVector(Ctx(), rays), uint32_t(rays.size()), timer);
@@ -145,11 +159,13 @@ TEST(ClassifiedQuery, EachGenerationIsClassifiedAsByANewQuery) {
     BeginGeneration(*q, 1, second);
     EXPECT_EQ(f.Nearest(*q, second, &laterHits), fresh);
     EXPECT_EQ(f.Occluded(*q, secondShadow), freshShadow);
-    ASSERT_EQ(laterHits.size(), freshHits.size());
-    for (size_t i = 0; i < freshHits.size(); ++i) {
-        ASSERT_EQ(laterHits[i].prim, freshHits[i].prim) << "ray " << i;
-        ASSERT_EQ(laterHits[i].t, freshHits[i].t) << "ray " << i;
-    }
+    // Both answer as brute force does, hit for hit and shadow ray for shadow ray.
+    const std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(Ctx(), f.program, f.buffers);
+    const std::vector<RcHit> bruteHits = NearestHits(Ctx(), *brute, second);
+    ExpectSameHits(freshHits, bruteHits);
+    ExpectSameHits(laterHits, bruteHits);
+    const std::vector<uint8_t> bruteBlocked = BlockedAnswers(Ctx(), *brute, secondShadow);
+    EXPECT_EQ(BlockedAnswers(Ctx(), *f.NewQuery(), secondShadow), bruteBlocked);
 
     // --accel auto passes the new generation on to its classification. Its sample of the other
     // query is timed; brute force, some 3,840 tests a ray, never wins it, so the classification
@@ -160,7 +176,9 @@ TEST(ClassifiedQuery, EachGenerationIsClassifiedAsByANewQuery) {
     f.Nearest(*a, first);
     f.Occluded(*a, firstShadow);
     BeginGeneration(*a, 1, second);
-    EXPECT_EQ(f.Nearest(*a, second), fresh);
+    std::vector<RcHit> autoHits;
+    EXPECT_EQ(f.Nearest(*a, second, &autoHits), fresh);
+    ExpectSameHits(autoHits, bruteHits);
     EXPECT_EQ(f.Occluded(*a, secondShadow), freshShadow);
 }
 
@@ -238,9 +256,10 @@ ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
     return out;
 }
 
-// Generation 0 writes no ray infos: every shading kernel, given none, shades as if each ray
-// had an eye ray's (weight 1, depth 0), byte for byte, with one light (rays shaded whole) and
-// with two (the per-(ray, light) pass), in every kernel style and by rc_shade after a BVH query.
+// Generation 0 writes no ray infos: every shading kernel, given none or eye infos, shades
+// byte for byte as rc_shade shades brute force's hits from explicit eye infos (weight 1, depth
+// 0), with one light (rays shaded whole) and with two (the per-(ray, light) pass), in every
+// kernel style and by rc_shade after a BVH query.
 // Without the normals wanted, the same is shaded, and the normals are written only where the
 // per-(ray, light) pass reads them.
 TEST(ClassifiedQuery, EyeRaysWithoutInfosShadeAsWithEyeInfos) {
@@ -274,24 +293,29 @@ TEST(ClassifiedQuery, EyeRaysWithoutInfosShadeAsWithEyeInfos) {
                                                   classify::Params::ForScene(s), style));
         }
         queries.push_back(MakeBvhQuery(Ctx(), program, buffers, s));
+        // The oracle: brute-force hits shaded by rc_shade from explicit eye infos.
+        const std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(Ctx(), program, buffers);
+        const ShadeOutputs want = ShadeEyeRays(program, buffers, params, *brute, rays, true);
+        size_t spawned = 0, lit = 0;
+        for (uint8_t x : want.spawned) spawned += x;
+        for (const rc_float4& c : want.contribution) lit += c.w > 0.0f;
+        EXPECT_GT(spawned, rays.size() / 4);
+        EXPECT_GT(lit, rays.size() / 4);
         for (const auto& q : queries) {
             SCOPED_TRACE(q->Name() + ", " + std::to_string(nLights) + " lights");
             const ShadeOutputs with = ShadeEyeRays(program, buffers, params, *q, rays, true);
             q->Reset();
             const ShadeOutputs without = ShadeEyeRays(program, buffers, params, *q, rays, false);
-            size_t spawned = 0, lit = 0;
-            for (uint8_t x : with.spawned) spawned += x;
-            for (const rc_float4& c : with.contribution) lit += c.w > 0.0f;
-            EXPECT_GT(spawned, rays.size() / 4);
-            EXPECT_GT(lit, rays.size() / 4);
-            EXPECT_TRUE(SameBytes(with.hits, without.hits));
-            EXPECT_TRUE(SameBytes(with.radiance, without.radiance));
-            EXPECT_TRUE(SameBytes(with.normals, without.normals));
-            EXPECT_TRUE(SameBytes(with.shadow, without.shadow));
-            EXPECT_TRUE(SameBytes(with.contribution, without.contribution));
-            EXPECT_TRUE(SameBytes(with.secondary, without.secondary));
-            EXPECT_TRUE(SameBytes(with.secondaryInfo, without.secondaryInfo));
-            EXPECT_TRUE(SameBytes(with.spawned, without.spawned));
+            for (const ShadeOutputs* got : {&with, &without}) {
+                EXPECT_TRUE(SameBytes(got->hits, want.hits));
+                EXPECT_TRUE(SameBytes(got->radiance, want.radiance));
+                EXPECT_TRUE(SameBytes(got->normals, want.normals));
+                EXPECT_TRUE(SameBytes(got->shadow, want.shadow));
+                EXPECT_TRUE(SameBytes(got->contribution, want.contribution));
+                EXPECT_TRUE(SameBytes(got->secondary, want.secondary));
+                EXPECT_TRUE(SameBytes(got->secondaryInfo, want.secondaryInfo));
+                EXPECT_TRUE(SameBytes(got->spawned, want.spawned));
+            }
 
             q->Reset();
             const ShadeOutputs noNormals =

@@ -302,7 +302,7 @@ TEST(SceneErrors, Objects) {
     EXPECT_EQ(JsonError(WithObject(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1e300})")),
               "1: object 1: 'radius' must be a positive number");
     EXPECT_EQ(JsonError(WithObject(R"({"type": "cube"})")),
-              "1: object 1: unknown type 'cube' (expected mesh, sphere or quadric)");
+              "1: object 1: unknown type 'cube' (expected mesh, sphere, quadric, bezier or nurbs)");
     EXPECT_EQ(JsonError(WithObject(R"({"center": [0, 0, 0]})")), "1: object 1: missing 'type'");
     EXPECT_EQ(JsonError(WithObject(R"({"type": 3})")), "1: object 1: 'type' must be a string");
     EXPECT_EQ(JsonError(WithObject("7")), "1: object 1: must be a JSON object");

@@ -1,5 +1,5 @@
-// The rayclass command line: render, compare, devices, classify-stats. Main is the single place
-// where errors become a message on stderr and an exit status.
+// The rayclass command line: render, merge, compare, devices, classify-stats. Main is the single
+// place where errors become a message on stderr and an exit status.
 #pragma once
 
 #include <iosfwd>
@@ -14,6 +14,7 @@ int Main(int argc, char** argv);
 int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int ClassifyStatsCommand(const std::vector<std::string>& args, std::ostream& out,
                          std::ostream& err);
+int MergeCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int DevicesCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
 }  // namespace rayclass::cli

@@ -1,7 +1,8 @@
 // Rendered images: linear float RGB plus optional AOV layers, written as OpenEXR or PNG, read back
 // from OpenEXR (or PNG), and compared (see compare.h).
 //
-// OpenEXR channels, all full resolution, ZIP compressed unless WriteOptions say otherwise:
+// OpenEXR channels, all full resolution (over the data window: the whole display window, or a
+// crop's part of it), ZIP compressed unless WriteOptions say otherwise:
 //   R, G, B                       FLOAT  linear radiance
 //   depth.Z                       FLOAT  depth layer, when present
 //   id.ID                         UINT   id layer, when present
@@ -11,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <glm/glm.hpp>
+#include <string>
 #include <vector>
 
 namespace rayclass::image {
@@ -25,10 +27,21 @@ struct Image {
     std::vector<float> depth;
     std::vector<uint32_t> id;
     std::vector<glm::vec3> normal;
+    // Where these pixels lie in the whole image (OpenEXR's data window in its display window): a
+    // crop or tile of a displayWidth x displayHeight image has its top left pixel at (originX,
+    // originY). 0 x 0 stands for the image's own size.
+    uint32_t originX = 0, originY = 0;
+    uint32_t displayWidth = 0, displayHeight = 0;
+    // What was rendered (a hash of the scene and of the options that change pixels), so that
+    // tiles of different renders are not merged; OpenEXR keeps it in the header attribute
+    // "rayclassSceneHash". Empty: unknown.
+    std::string sceneHash;
 
     Image() = default;
     Image(uint32_t w, uint32_t h) : width(w), height(h), rgb(size_t(w) * h, glm::vec3(0.0f)) {}
     size_t PixelCount() const { return size_t(width) * height; }
+    uint32_t DisplayWidth() const { return displayWidth ? displayWidth : width; }
+    uint32_t DisplayHeight() const { return displayHeight ? displayHeight : height; }
 };
 
 // Lossless OpenEXR compressions. Float radiance compresses poorly: ZIP and PIZ save a little
@@ -44,7 +57,7 @@ struct WriteOptions {
     // PNG only: radiance is scaled by 2^exposure before it is clamped to [0, 1] and encoded with
     // the sRGB transfer function (rounded to the nearest 8-bit value). OpenEXR keeps raw radiance.
     float exposure = 0.0f;
-    ExrCompression exrCompression = ExrCompression::kZip;  // OpenEXR only
+    ExrCompression exrCompression = ExrCompression::kZip;   // OpenEXR only
     PngCompression pngCompression = PngCompression::kFast;  // PNG only
 };
 

@@ -96,10 +96,10 @@ class RasterPass {
     RasterPass(const RasterPass&) = delete;
     RasterPass& operator=(const RasterPass&) = delete;
 
-    // One frame seen from `camera` (its width x height): the nearest hit of every pixel's eye ray,
-    // row-major with row 0 at the top, as the eye-ray query would return it: t along the unit
-    // direction, the global primitive id (RC_NO_HIT and t = +inf on a miss), barycentrics for
-    // triangles (0 otherwise).
+    // One frame seen from `camera` (its width x height, whatever its window): the nearest hit of
+    // every pixel's eye ray, row-major with row 0 at the top, as the eye-ray query would return it:
+    // t along the unit direction, the global primitive id (RC_NO_HIT and t = +inf on a miss),
+    // barycentrics for triangles (0 otherwise).
     std::vector<RcHit> Render(const RcCamera& camera, RasterStats* stats = nullptr);
 
     // The factor of the last Render.

@@ -7,21 +7,29 @@
 // render is reproducible bit for bit.
 #pragma once
 
+#include <functional>
+#include <memory>
+
 #include "rayclass/clrt/context.h"
 #include "rayclass/image/image.h"
 #include "rayclass/render/eye_hits.h"
 #include "rayclass/render/options.h"
+#include "rayclass/render/ray_query.h"
 #include "rayclass/render/stats.h"
 #include "rayclass/scene/scene.h"
 
 namespace rayclass::render {
 
+// Takes the query a render builds and returns the one it uses: a decorator that sees every
+// generation's rays and answers (the tests' check of every hit against brute force).
+using QueryWrapper = std::function<std::unique_ptr<RayQuery>(std::unique_ptr<RayQuery>)>;
+
 class ClRenderer {
   public:
     // `eyeHits` (null: the ray query) answers generation 0; the eye rays themselves come from
-    // the kernel either way.
+    // the kernel either way. `wrapQuery` (empty: none) wraps the query of each Render.
     ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
-               EyeHitSource* eyeHits = nullptr);
+               EyeHitSource* eyeHits = nullptr, QueryWrapper wrapQuery = {});
     image::Image Render(RenderStats& stats);
 
   private:
@@ -29,6 +37,7 @@ class ClRenderer {
     const scene::Scene& scene_;
     RenderOptions options_;
     EyeHitSource* eyeHits_;
+    QueryWrapper wrapQuery_;
 };
 
 }  // namespace rayclass::render

@@ -16,8 +16,8 @@ class EyeHitSource {
   public:
     virtual ~EyeHitSource() = default;
     virtual std::string Name() const = 0;
-    // One RcHit per pixel, row-major, row 0 at the top, for the rays rc_generate_eye_rays makes
-    // from `camera`.
+    // One RcHit per pixel of the camera's window, row-major, row 0 at the top, for the rays
+    // rc_generate_eye_rays makes from `camera`.
     virtual std::vector<RcHit> FindHits(const scene::Scene& scene, const CameraBasis& camera,
                                         RenderStats& stats) = 0;
 };

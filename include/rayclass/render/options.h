@@ -11,6 +11,7 @@
 
 #include "rayclass/classify/params.h"
 #include "rayclass/geometry/intersect.h"
+#include "rayclass/image/tiles.h"
 
 namespace rayclass::render {
 
@@ -92,6 +93,8 @@ struct RenderOptions {
     // renderer; the 16-lane vertex/fragment kernels are Moeller only, so with watertight the
     // classified query runs the scalar kernels (auto) and --kernel vertex|fragment is an error.
     TriangleTest triangleTest = TriangleTest::kMoller;
+    // Only these pixels of the image (a crop or tile), each as the whole render has it.
+    std::optional<image::PixelRect> window;
 };
 
 }  // namespace rayclass::render

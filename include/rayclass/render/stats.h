@@ -1,9 +1,11 @@
 // Counters and timings of one render, written by --stats as JSON.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,8 +25,18 @@ struct GenerationStats {
     double classifiedNs = 0, bvhSampleNs = 0, shadowClassifiedNs = 0, shadowBvhSampleNs = 0;
 };
 
+// Which part of an animation and of its image a render is (rayclass render --frame, --tile,
+// --crop).
+struct RenderPart {
+    std::optional<uint32_t> frame;
+    double frameTime = 0;                         // the frame's time on the camera path
+    std::optional<std::array<uint32_t, 2>> tile;  // index, count
+    std::optional<std::array<uint32_t, 4>> crop;  // x0, y0, x1, y1 of a crop or tile
+};
+
 struct RenderStats {
-    uint32_t width = 0, height = 0;
+    uint32_t width = 0, height = 0;  // of the whole image, also for a crop
+    RenderPart part;
     std::string device;
     std::string accel = "brute";
     std::string eyeRays = "kernel";  // who found the eye rays' first hits: kernel or raster
@@ -39,7 +51,7 @@ struct RenderStats {
     uint64_t eyeRaysFromCamera = 0;    // classified from their camera (ClassifyPinhole)
     std::map<std::string, double> accelStats;  // the query's own figures (QueryStats::accel)
     bool programFromCache = false;     // the kernels' binary came from the program cache
-    double queryTimeS = 0;  // time of the ray-query kernels (nearest hit and shadow)
+    double queryTimeS = 0;             // time of the ray-query kernels (nearest hit and shadow)
     // Named stages in seconds: "scene_load", "program_build", "kernel_<name>", "host", "total".
     std::map<std::string, double> timeS;
 
