@@ -39,7 +39,10 @@ class ConesQuery final : public RayQuery {
           intersect_(program, "rc_intersect_cones"),
           occluded_(program, "rc_occluded_cones") {
         const accel::PrimitiveSpheres s = accel::BoundingSpheres(hostScene, float(margin_));
-        nPrims_ = s.count;
+        // Primitives the kernels have no routine for (patch boxes) never survive, as brute force
+        // skips them.
+        nPrims_ =
+            scene.hostParams.nTriangles + scene.hostParams.nSpheres + scene.hostParams.nQuadrics;
         sx_ = UploadVector(ctx, s.x);
         sy_ = UploadVector(ctx, s.y);
         sz_ = UploadVector(ctx, s.z);
