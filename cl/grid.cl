@@ -18,8 +18,8 @@ inline uint rc_grid_trace(float3 o, float3 d, float tmin, float tmax, int anyHit
                           __global const uint* cellStart, __global const uint* primIndex,
                           float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
                           __global const RcTriangle* triangles, __global const RcSphere* spheres,
-                          __global const RcQuadric* quadrics, uint nT, uint nS, uint nPrims,
-                          RcHit* best, uint* visits) {
+                          __global const RcQuadric* quadrics, uint nT, uint nS, RcHit* best,
+                          uint* visits) {
     const float slackAbs = boxLo.w;
     const float3 inv = rc_accel_inverse(d);
     float t0 = tmin, t1 = tmax;
@@ -37,9 +37,6 @@ inline uint rc_grid_trace(float3 o, float3 d, float tmin, float tmax, int anyHit
         const uint end = cellStart[c + 1];
         for (uint k = cellStart[c]; k < end; ++k) {
             const uint id = primIndex[k];
-            /* The grid holds every primitive of the scene; those the kernels have no routine
-             * for (patch boxes) are skipped, as brute force skips them. */
-            if (id >= nPrims) continue;
             ++tests;
             if (rc_intersect_primitive(id, o, d, tmin, tmax, triangles, spheres, quadrics, nT, nS,
                                        best) &&
@@ -80,9 +77,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     if (params->nTriangles + params->nSpheres + params->nQuadrics > 0)
         tests = rc_grid_trace(o, d, tmin, tmax, 0, cellStart, primIndex, boxLo, boxHi, cellSize,
                               res, triangles, spheres, quadrics, params->nTriangles,
-                              params->nSpheres,
-                              params->nTriangles + params->nSpheres + params->nQuadrics, &best,
-                              &visits);
+                              params->nSpheres, &best, &visits);
     if (best.prim == RC_NO_HIT) best.t = INFINITY;
     hits[i] = best;
     counters[i] = tests;
@@ -107,11 +102,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
     RcHit best = rc_no_hit(tmax);
     uint visits = 0;
-    counters[i] = rc_grid_trace(o, d, tmin, tmax, 1, cellStart, primIndex, boxLo, boxHi,
-                                cellSize, res, triangles, spheres, quadrics, params->nTriangles,
-                                params->nSpheres,
-                                params->nTriangles + params->nSpheres + params->nQuadrics, &best,
-                                &visits);
+    counters[i] = rc_grid_trace(o, d, tmin, tmax, 1, cellStart, primIndex, boxLo, boxHi, cellSize,
+                                res, triangles, spheres, quadrics, params->nTriangles,
+                                params->nSpheres, &best, &visits);
     counters[n + i] = visits;
     blocked[i] = best.prim != RC_NO_HIT;
 }

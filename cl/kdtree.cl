@@ -20,7 +20,7 @@ inline uint rc_kd_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
                         __global const RcKdNode* nodes, __global const uint* primIndex,
                         float4 boxLo, float4 boxHi, __global const RcTriangle* triangles,
                         __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-                        uint nT, uint nS, uint nPrims, RcHit* best, uint* visits) {
+                        uint nT, uint nS, RcHit* best, uint* visits) {
     const float slackAbs = boxLo.w;
     const float3 inv = rc_accel_inverse(d);
     float tn = tmin, tf = tmax;
@@ -64,9 +64,6 @@ inline uint rc_kd_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
         const uint first = nd.data, count = nd.word >> 2;
         for (uint k = 0; k < count; ++k) {
             const uint id = primIndex[first + k];
-            /* The tree holds every primitive of the scene; those the kernels have no routine
-             * for (patch boxes) are skipped, as brute force skips them. */
-            if (id >= nPrims) continue;
             ++tests;
             if (rc_intersect_primitive(id, o, d, tmin, tmax, triangles, spheres, quadrics, nT, nS,
                                        best) &&
@@ -97,10 +94,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     RcHit best = rc_no_hit(tmax);
     uint tests = 0, visits = 0;
     if (params->nTriangles + params->nSpheres + params->nQuadrics > 0)
-        tests = rc_kd_trace(o, d, tmin, tmax, 0, nodes, primIndex, boxLo, boxHi, triangles,
-                            spheres, quadrics, params->nTriangles, params->nSpheres,
-                            params->nTriangles + params->nSpheres + params->nQuadrics, &best,
-                            &visits);
+        tests = rc_kd_trace(o, d, tmin, tmax, 0, nodes, primIndex, boxLo, boxHi, triangles, spheres,
+                            quadrics, params->nTriangles, params->nSpheres, &best, &visits);
     if (best.prim == RC_NO_HIT) best.t = INFINITY;
     hits[i] = best;
     counters[i] = tests;
@@ -125,10 +120,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
     RcHit best = rc_no_hit(tmax);
     uint visits = 0;
-    counters[i] = rc_kd_trace(o, d, tmin, tmax, 1, nodes, primIndex, boxLo, boxHi, triangles,
-                              spheres, quadrics, params->nTriangles, params->nSpheres,
-                              params->nTriangles + params->nSpheres + params->nQuadrics, &best,
-                              &visits);
+    counters[i] =
+        rc_kd_trace(o, d, tmin, tmax, 1, nodes, primIndex, boxLo, boxHi, triangles, spheres,
+                    quadrics, params->nTriangles, params->nSpheres, &best, &visits);
     counters[n + i] = visits;
     blocked[i] = best.prim != RC_NO_HIT;
 }

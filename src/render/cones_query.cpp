@@ -39,8 +39,8 @@ class ConesQuery final : public RayQuery {
           intersect_(program, "rc_intersect_cones"),
           occluded_(program, "rc_occluded_cones") {
         const accel::PrimitiveSpheres s = accel::BoundingSpheres(hostScene, float(margin_));
-        // Primitives the kernels have no routine for (patch boxes) never survive, as brute force
-        // skips them.
+        // Patch boxes count among the quadric records (AnalyticRecords), so every primitive
+        // takes part in the culling.
         nPrims_ =
             scene.hostParams.nTriangles + scene.hostParams.nSpheres + scene.hostParams.nQuadrics;
         sx_ = UploadVector(ctx, s.x);

@@ -39,7 +39,7 @@ inline RcRenderParams ParamsOf(const scene::Scene& s) {
     RcRenderParams p{};
     p.nTriangles = uint32_t(s.triangles.size());
     p.nSpheres = uint32_t(s.spheres.size());
-    p.nQuadrics = uint32_t(s.quadrics.size());
+    p.nQuadrics = render::AnalyticRecords(s);  // quadrics, then patch boxes
     return p;
 }
 

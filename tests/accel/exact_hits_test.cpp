@@ -25,7 +25,8 @@ struct Case {
 const Case kCases[] = {
     {"scenes/cornell.json", 48, 36},        {"scenes/tests/glass.json", 48, 36},
     {"scenes/tests/quadrics.json", 48, 36}, {"scenes/tests/spheres.json", 48, 36},
-    {"scenes/tests/floor.obj", 48, 36},     {"scenes/bench/bunny.obj", 24, 18}};
+    {"scenes/tests/floor.obj", 48, 36},     {"scenes/teapot.json", 48, 36},
+    {"scenes/bench/bunny.obj", 24, 18}};
 
 // Mismatches of `q` against brute force on `rays` as nearest-hit rays; `hits` counts brute
 // force's hits.
