@@ -23,6 +23,9 @@ class Fnv1a {
         Add(v.y);
         Add(v.z);
     }
+    void Add(const glm::dvec4& v) {
+        for (int k = 0; k < 4; ++k) Add(v[k]);
+    }
     uint64_t Value() const { return hash_; }
 
   private:
@@ -68,6 +71,21 @@ void AddScene(Fnv1a& h, const scene::Scene& s) {
         h.Add(q.boxMax);
         h.Add(q.material);
         h.Add(q.object);
+    }
+    // The patches and the boxes they were split into: --patch-boxes and the flatness change the
+    // boxes, and with them the hits.
+    h.Add(s.patches.size());
+    for (const scene::Patch& pt : s.patches) {
+        for (const glm::dvec4& c : pt.p) h.Add(c);
+        h.Add(pt.material);
+        h.Add(pt.object);
+    }
+    h.Add(s.patchBoxes.size());
+    for (const scene::PatchBox& b : s.patchBoxes) {
+        h.Add(b.patch);
+        for (double k : {b.u.x, b.u.y, b.v.x, b.v.y}) h.Add(k);
+        h.Add(b.closedU);
+        h.Add(b.closedV);
     }
     h.Add(s.lights.size());
     for (const scene::PointLight& l : s.lights) {
