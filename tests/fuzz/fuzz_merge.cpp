@@ -5,7 +5,10 @@
 // rayclass::Error may leave the reader or the merge; anything else (another exception, a crash,
 // a sanitizer report) is a finding. A merged image must hold every tile's pixels, in every
 // layer, bit for bit at its place; without --allow-partial the tiles' areas must add up to the
-// whole image.
+// whole image. Merges into images over kMaxMergedPixels are not run: a one-tile header may name
+// any display window up to ReadImage's 16384 pixels a side, and --allow-partial then makes a
+// black image that large (8.6 GB with every layer), as a render of that size would, beyond the
+// fuzzer's memory limit.
 #include <unistd.h>
 
 #include <cstddef>
@@ -28,6 +31,7 @@ namespace image = rayclass::image;
 
 constexpr std::string_view kSeparator = "RCTILE";
 constexpr size_t kMaxTiles = 4;
+constexpr size_t kMaxMergedPixels = size_t(1) << 22;
 
 std::filesystem::path TilePath(size_t k) {
     return std::filesystem::temp_directory_path() /
@@ -107,6 +111,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     } catch (const rayclass::Error&) {
         return 0;
     }
+    const image::Image& first = tiles.front().image;
+    if (size_t(first.DisplayWidth()) * first.DisplayHeight() > kMaxMergedPixels) return 0;
     try {
         CheckMerged(tiles, image::MergeTiles(tiles, allowPartial), allowPartial);
     } catch (const rayclass::Error&) {
