@@ -827,6 +827,13 @@ TEST_F(Cli, PatchScenesTakeBoxCounts) {
     EXPECT_EQ(r.err, "");
     const auto stats = nlohmann::json::parse(ReadText(Work("s.json")));
     EXPECT_EQ(stats.at("primitives"), 2 * 33 + 1);  // 33 patches, one sphere
+    const auto& newton = stats.at("patch_newton");
+    EXPECT_GT(newton.at("tests"), 0);
+    EXPECT_EQ(newton.at("tests"), newton.at("culled").get<double>() +
+                                      newton.at("converged").get<double>() +
+                                      newton.at("diverged").get<double>() +
+                                      newton.at("left_box").get<double>() +
+                                      newton.at("on_cap").get<double>());
 }
 
 }  // namespace
