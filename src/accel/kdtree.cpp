@@ -225,7 +225,7 @@ KdTree BuildKdTree(const scene::Scene& scene, const KdBuildParams& params) {
     root.lo = {Down(root.lo.x), Down(root.lo.y), Down(root.lo.z)};
     root.hi = {Up(root.hi.x), Up(root.hi.y), Up(root.hi.z)};
     tree.box = {glm::vec3(root.lo), glm::vec3(root.hi)};
-    const uint32_t depthRule = uint32_t(8 + 2 * std::log2(std::max(1u, n)));
+    const uint32_t depthRule = uint32_t(8 + 1.5 * std::log2(std::max(1u, n)));
     // Two subtrees a thread until every hardware thread has about two to build.
     const uint32_t threads = std::max(1u, std::thread::hardware_concurrency());
     const Builder b{scene, params, pad,
