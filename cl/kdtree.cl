@@ -18,8 +18,8 @@
  * live). */
 #include "rc_types.h"
 #include "intersect.cl"
-#include "accel_common.cl"
 #include "bvh.cl"
+#include "accel_common.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -86,40 +86,6 @@ inline uint rc_kd_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
         tn = stackNear[sp];
         tf = stackFar[sp];
     }
-}
-
-/* The triangle in lane `lane` of block b against every lane of the packet, with
- * rc_intersect_triangle's operations lane by lane: where a live lane hits it before its nearest
- * hit (or at the same distance with a lower id), that hit replaces the lane's. Returns the lanes
- * that hit it. */
-inline int16 rc_kd_triangle16(const RcBvhPacket* p, int16 live,
-                              __global const RcBvhLeafBlock8* b, uint lane, float16* bt,
-                              uint16* bp, float16* bu, float16* bv) {
-    const float e1x = b->e1x[lane], e1y = b->e1y[lane], e1z = b->e1z[lane];
-    const float e2x = b->e2x[lane], e2y = b->e2y[lane], e2z = b->e2z[lane];
-    const float16 pvx = p->dy * e2z - e2y * p->dz;
-    const float16 pvy = p->dz * e2x - e2z * p->dx;
-    const float16 pvz = p->dx * e2y - e2x * p->dy;
-    const float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
-    const float16 invDet = 1.0f / det;
-    const float16 tvx = p->ox - b->v0x[lane];
-    const float16 tvy = p->oy - b->v0y[lane];
-    const float16 tvz = p->oz - b->v0z[lane];
-    const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
-    const float16 qvx = tvy * e1z - e1y * tvz;
-    const float16 qvy = tvz * e1x - e1z * tvx;
-    const float16 qvz = tvx * e1y - e1x * tvy;
-    const float16 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
-    const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
-    const uint16 prim16 = (uint16)(b->prim[lane]);
-    const int16 hit = live & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
-                      (u + v <= 1.0f) & (t > p->tmin) & (t < p->tmax) &
-                      ((t < *bt) | ((t == *bt) & (prim16 < *bp)));
-    *bt = select(*bt, t, hit);
-    *bp = select(*bp, prim16, as_uint16(hit));
-    *bu = select(*bu, u, hit);
-    *bv = select(*bv, v, hit);
-    return hit;
 }
 
 /* Walks the tree once for a coherent packet (triangles only): nearest hits in (bt, bp, bu, bv),
@@ -191,7 +157,13 @@ inline uint16 rc_kd_trace_packet(const RcBvhPacket* p, int anyHit, __global cons
             for (uint k = 0; k < count; ++k) {
                 const int16 lanes = (tn <= reach) & (tn <= tf);
                 tests += as_uint16(lanes) & (uint16)(1);
-                const int16 hit = rc_kd_triangle16(p, lanes, blk + k / 8, k % 8, bt, bp, bu, bv);
+                __global const RcBvhLeafBlock8* b = blk + k / 8;
+                const uint lane = k % 8;
+                const int16 hit = rc_accel_triangle16(
+                    p, lanes, (float3)(b->v0x[lane], b->v0y[lane], b->v0z[lane]),
+                    (float3)(b->e1x[lane], b->e1y[lane], b->e1z[lane]),
+                    (float3)(b->e2x[lane], b->e2y[lane], b->e2z[lane]), b->prim[lane], bt, bp, bu,
+                    bv);
                 if (anyHit) {
                     *blocked |= hit;
                     reach = select(reach, (float16)(-INFINITY), hit);
@@ -246,13 +218,6 @@ inline void rc_kd_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
     }
 }
 
-/* The largest spread of a packet's origins that walks as one, squared: as the BVH's rule, a
- * 32nd of the scene box's diagonal. */
-inline float rc_kd_max_spread2(float4 boxLo, float4 boxHi) {
-    const float3 e = (boxHi.xyz - boxLo.xyz) * (1.0f / 32.0f);
-    return dot(e, e);
-}
-
 /* One work-item per 16 rays rays[16 i, 16 i + 16). */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_kdtree(
     __global const RcRay* rays, uint n, __global const RcKdNode* nodes,
@@ -266,7 +231,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     const int hasPrims = nT + nS + params->nQuadrics > 0;
     RcBvhPacket p;
     if (hasPrims && rc_packets_allowed(params) &&
-        rc_bvh_load_packet(rays, first, n, 0, rc_kd_max_spread2(boxLo, boxHi), &p)) {
+        rc_bvh_load_packet(rays, first, n, 0, rc_accel_max_spread2(boxLo, boxHi), &p)) {
         rc_kd_packet(&p, 0, first, n, nodes, blocks, boxLo, boxHi, hits, 0, counters);
         return;
     }
@@ -298,7 +263,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const int hasPrims = nT + nS + params->nQuadrics > 0;
     RcBvhPacket p;
     if (hasPrims && rc_packets_allowed(params) &&
-        rc_bvh_load_packet(rays, first, n, 1, rc_kd_max_spread2(boxLo, boxHi), &p)) {
+        rc_bvh_load_packet(rays, first, n, 1, rc_accel_max_spread2(boxLo, boxHi), &p)) {
         rc_kd_packet(&p, 1, first, n, nodes, blocks, boxLo, boxHi, 0, blocked, counters);
         return;
     }
