@@ -107,15 +107,19 @@ class ConesQuery final : public RayQuery {
         const auto t0 = Clock::now();
         auto b = std::make_unique<ConeBatch>();
         b->order = accel::CoherentOrder(rays, box_);
+        // The rays in tile order once, so that the cones read them in place.
+        std::vector<RcRay> sorted(rays.size());
+        for (size_t j = 0; j < rays.size(); ++j) sorted[j] = rays[b->order[j]];
+        const std::span<const RcRay> all(sorted);
         const size_t n = rays.size(), tileRays = accel::kConeTileRays;
         const size_t groupRays = tileRays * accel::kConeGroupTiles;
         for (size_t first = 0; first < n; first += tileRays) {
-            b->tiles.push_back(accel::EnclosingCone(rays, b->order, first,
-                                                    std::min(n, first + tileRays), margin_));
+            b->tiles.push_back(
+                accel::EnclosingCone(all.subspan(first, std::min(n - first, tileRays)), margin_));
         }
         for (size_t first = 0; first < n; first += groupRays) {
-            b->groups.push_back(accel::EnclosingCone(rays, b->order, first,
-                                                     std::min(n, first + groupRays), margin_));
+            b->groups.push_back(
+                accel::EnclosingCone(all.subspan(first, std::min(n - first, groupRays)), margin_));
         }
         std::lock_guard<std::mutex> lock(mutex_);
         stats_.hostSeconds += std::chrono::duration<double>(Clock::now() - t0).count();
