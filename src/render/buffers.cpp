@@ -43,6 +43,14 @@ SceneBuffers::SceneBuffers(clrt::Context& ctx, const scene::Scene& scene,
       params(UploadVector(ctx, std::vector<RcRenderParams>{renderParams})),
       hostParams(renderParams) {}
 
+uint64_t SceneBuffers::GeometryBytes() const {
+    uint64_t bytes = 0;
+    for (const cl::Buffer* b : {&triangles, &triangleShading, &spheres, &quadrics}) {
+        bytes += clrt::Check("clGetMemObjectInfo", [&] { return b->getInfo<CL_MEM_SIZE>(); });
+    }
+    return bytes;
+}
+
 ShadeBuffers MakeShadeBuffers(clrt::Context& ctx, size_t rays, uint32_t nLights) {
     ShadeBuffers shade;
     shade.radiance = DeviceBuffer(ctx, rays * sizeof(rc_float4));

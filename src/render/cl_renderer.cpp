@@ -255,7 +255,7 @@ class Frame {
     KernelTimer timer_;
     double hostSeconds_ = 0;  // the accumulation's
     const size_t nEye_;
-    std::vector<RcHit> eyeHits_;  // generation 0's, when the eye-hit source finds them
+    std::vector<RcHit> eyeHits_;           // generation 0's, when the eye-hit source finds them
     std::optional<NewtonSampler> newton_;  // options.newtonStats on a scene with patches
     Clock::time_point lastProgress_;
     bool printedProgress_ = false;
@@ -289,10 +289,11 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
     stats.height = basis_.height;
     stats.device = ctx.info().name;
     stats.nPrimitives = scene.PrimitiveCount();
+    stats.sceneBytes = sceneBuffers_.GeometryBytes();
     stats.accel = query_->Name();
     stats.eyeRays = eyeHitSource ? eyeHitSource->Name() : "kernel";
     if (options.newtonStats && !scene.patchBoxes.empty()) {
-        newton_.emplace(ctx, program_, sceneBuffers_, params_.nQuadrics);
+        newton_.emplace(ctx, program_, sceneBuffers_, params_.nQuadrics, scene.patchBoxes.size());
     }
     if (eyeHitSource) {
         const auto t0 = Clock::now();

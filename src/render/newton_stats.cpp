@@ -58,7 +58,7 @@ NewtonCounts CountNewton(clrt::Context& ctx, const cl::Program& program, const S
 
 void NewtonSampler::Sample(const cl::Buffer& rays, uint32_t n) {
     if (n == 0) return;
-    const uint32_t stride = (n + kSampleRays - 1) / kSampleRays;
+    const uint32_t stride = (n + sampleRays_ - 1) / sampleRays_;
     const uint32_t count = (n + stride - 1) / stride;
     std::vector<RcRay>& chunk = chunks_.emplace_back(count);
     const cl::array<size_t, 3> origin{0, 0, 0}, region{sizeof(RcRay), count, 1};

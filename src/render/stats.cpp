@@ -23,6 +23,7 @@ nlohmann::json RenderStats::ToJson() const {
     j["eye_rays"] = eyeRays;
     if (!eyeRaysChoice.empty()) j["eye_rays_choice"] = eyeRaysChoice;
     j["primitives"] = nPrimitives;
+    j["scene_bytes"] = sceneBytes;
     j["program_from_cache"] = programFromCache;
     j["rays_total"] = RaysTotal();
     j["rays_by_kind"] = raysByKind;

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """CTest smoke test of scripts/bench (label `bench`): runs `scripts/bench --quick` into a
 temporary folder and checks that every CSV row is complete, that the sweep, scene family,
-1-thread, FLIP, raster and micro-variant rows are there, and that every chart file exists.
+1-thread, FLIP, raster, micro-variant and patch rows are there, and that every chart file exists.
 usage: check_bench.py SOURCE_DIR BUILD_DIR"""
 import csv
 import os
@@ -20,7 +20,7 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
         machine = f.read()
     # raster.csv is left out only where raster_bench found no OpenGL context (said in machine.txt).
     raster_skipped = "raster experiments: skipped" in machine
-    csvs = ["results.csv", "sweep.csv", "family.csv", "accuracy.csv", "micro.csv"]
+    csvs = ["results.csv", "sweep.csv", "family.csv", "accuracy.csv", "micro.csv", "patches.csv"]
     if not raster_skipped:
         csvs.append("raster.csv")
     for name in csvs:
@@ -81,6 +81,17 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
         for e in ("depth", "hulls", "rotation", "layers"):
             if e not in experiments:
                 failures.append("raster.csv has no %s rows" % e)
+    patches = load("patches.csv")
+    for e in ("boxes", "tessellation") + (() if raster_skipped else ("raster",)):
+        if len([r for r in patches if r["experiment"] == e]) < 2:
+            failures.append("patches.csv has fewer than two %s rows" % e)
+    # The raster pass draws the patches' eye hits exactly as the kernel finds them.
+    for r in patches:
+        if r["experiment"] == "raster" and r["id_mismatch"] != "0":
+            failures.append("patches.csv: raster and kernel eye hits differ: %s" % r)
+        if r["experiment"] == "tessellation" and \
+                (is_number(r["flip"]) if flip_installed else r["flip"] == "missing") is False:
+            failures.append("patches.csv: flip of %s is %r" % (r["setting"], r["flip"]))
     micro_rows = load("micro.csv")
     micro = {(r["kind"], r["method"]) for r in micro_rows}
     # The variants are the same formulas: on the same rays they find the same number of hits.
@@ -109,7 +120,7 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
             failures.append("methods disagree on the hits of %s, ray by ray: %s" %
                             (key, sorted(values.values())))
     for name in ("styles.png", "sweep.png", "accel.png", "scaling.png", "speed_accuracy.png",
-                 "micro.png", "raster.png", "summary.md", "machine.txt"):
+                 "micro.png", "raster.png", "patches.png", "summary.md", "machine.txt"):
         path = os.path.join(out, name)
         if not os.path.exists(path) or os.path.getsize(path) == 0:
             failures.append("missing or empty " + name)

@@ -16,6 +16,10 @@ struct SceneBuffers {
     RcRenderParams hostParams{};
 
     SceneBuffers(clrt::Context& ctx, const scene::Scene& scene, const RcRenderParams& renderParams);
+
+    // Bytes of the geometry on the device: triangles and their shading data, spheres, and the
+    // analytic buffer (quadrics, patch boxes and their control points).
+    uint64_t GeometryBytes() const;
 };
 
 // A device array of rays as its two parallel arrays (rc_types.h): RcRay, all a query reads, and

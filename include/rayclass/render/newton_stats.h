@@ -1,11 +1,13 @@
 // --stats on scenes with patches: how the patch boxes' Newton iteration ends. A sample of each
-// nearest-hit batch's rays (at most kSampleRays, evenly spaced) is copied aside during the
-// render; after it, rc_patch_newton_stats (cl/patch_stats.cl) tests every sampled ray against
-// every patch box its segment enters, with the kernels' own iteration (rc_patch_box_newton), and
-// counts its steps and how each test ended. The tests are those of a query that culls by the
-// boxes alone, so the counts are the same under every --accel and --kernel.
+// nearest-hit batch's rays (evenly spaced; at most kSampleRays, and at most kSampleWork / boxes
+// so that many boxes do not make the pass slow) is copied aside during the render; after it,
+// rc_patch_newton_stats (cl/patch_stats.cl) tests every sampled ray against every patch box its
+// segment enters, with the kernels' own iteration (rc_patch_box_newton), and counts its steps and
+// how each test ended. The tests are those of a query that culls by the boxes alone, so the counts
+// are the same under every --accel and --kernel.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -39,10 +41,16 @@ NewtonCounts CountNewton(clrt::Context& ctx, const cl::Program& program, const S
 class NewtonSampler {
   public:
     static constexpr uint32_t kSampleRays = 2048;
+    static constexpr uint64_t kSampleWork = uint64_t(1) << 22;  // ray-box pairs a batch
 
     NewtonSampler(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene,
-                  uint32_t nAnalytic)
-        : ctx_(ctx), program_(program), scene_(scene), nAnalytic_(nAnalytic) {}
+                  uint32_t nAnalytic, size_t nBoxes)
+        : ctx_(ctx),
+          program_(program),
+          scene_(scene),
+          nAnalytic_(nAnalytic),
+          sampleRays_(uint32_t(
+              std::clamp<uint64_t>(kSampleWork / std::max<size_t>(nBoxes, 1), 1, kSampleRays))) {}
 
     // Enqueues, on ctx's queue after the kernels before it, a copy of the sample of rays[0, n).
     void Sample(const cl::Buffer& rays, uint32_t n);
@@ -54,6 +62,7 @@ class NewtonSampler {
     const cl::Program& program_;
     const SceneBuffers& scene_;
     uint32_t nAnalytic_;
+    uint32_t sampleRays_;                     // a batch's at most
     std::vector<std::vector<RcRay>> chunks_;  // one a batch; their storage stays put
 };
 

@@ -42,6 +42,7 @@ struct RenderStats {
     std::string eyeRays = "kernel";  // who found the eye rays' first hits: kernel or raster
     std::string eyeRaysChoice;       // why (rayclass render --eye-rays); empty: not recorded
     uint64_t nPrimitives = 0;
+    uint64_t sceneBytes = 0;  // SceneBuffers::GeometryBytes
     std::map<std::string, uint64_t> raysByKind{
         {"eye", 0}, {"shadow", 0}, {"reflection", 0}, {"refraction", 0}};
     std::vector<GenerationStats> generations;
