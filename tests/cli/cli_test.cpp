@@ -814,22 +814,26 @@ TEST_F(Cli, FramesFollowTheCameraPathToNumberedFiles) {
     EXPECT_EQ(Entries(), std::vector<std::string>{});
 }
 
-// Scenes with patches: --patch-boxes is checked, and the raster pass, which draws no patches,
-// gives the eye rays to the kernel and says so.
-TEST_F(Cli, PatchScenesTakeBoxCountsAndFallBackFromRaster) {
+// Scenes with patches: --patch-boxes is checked and sets the boxes per patch.
+TEST_F(Cli, PatchScenesTakeBoxCounts) {
     const std::string teapot = EnvOr("RAYCLASS_SOURCE_DIR", ".") + "/scenes/teapot.json";
     const Result bad = Run({"render", teapot, "-o", "x.png", "--patch-boxes", "0"});
     EXPECT_EQ(bad.status, 2);
     EXPECT_EQ(bad.err, "rayclass render: --patch-boxes expects a number in [1, 4096], not '0'\n");
     EXPECT_EQ(Entries(), std::vector<std::string>{});
     const Result r = Run({"render", teapot, "-o", "x.png", "--width", "16", "--height", "12",
-                          "--patch-boxes", "2", "--eye-rays", "raster", "--stats", "s.json", "-q"});
+                          "--patch-boxes", "2", "--stats", "s.json", "-q"});
     ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_EQ(r.err,
-              "rayclass: the raster pass draws no Bezier or NURBS patches: eye rays by kernel\n");
+    EXPECT_EQ(r.err, "");
     const auto stats = nlohmann::json::parse(ReadText(Work("s.json")));
-    EXPECT_EQ(stats.at("eye_rays_choice"), "kernel: the raster pass draws no patches");
     EXPECT_EQ(stats.at("primitives"), 2 * 33 + 1);  // 33 patches, one sphere
+    const auto& newton = stats.at("patch_newton");
+    EXPECT_GT(newton.at("tests"), 0);
+    EXPECT_EQ(newton.at("tests"), newton.at("culled").get<double>() +
+                                      newton.at("converged").get<double>() +
+                                      newton.at("diverged").get<double>() +
+                                      newton.at("left_box").get<double>() +
+                                      newton.at("on_cap").get<double>());
 }
 
 }  // namespace
