@@ -114,14 +114,16 @@ class ConesQuery final : public RayQuery {
         for (size_t j = 0; j < rays.size(); ++j) b->sorted[j] = rays[b->order[j]];
         const std::span<const RcRay> all(b->sorted);
         const size_t n = rays.size(), tileRays = accel::kConeTileRays;
-        const size_t groupRays = tileRays * accel::kConeGroupTiles;
         for (size_t first = 0; first < n; first += tileRays) {
             b->tiles.push_back(
                 accel::EnclosingCone(all.subspan(first, std::min(n - first, tileRays)), margin_));
         }
-        for (size_t first = 0; first < n; first += groupRays) {
-            b->groups.push_back(
-                accel::EnclosingCone(all.subspan(first, std::min(n - first, groupRays)), margin_));
+        const std::span<const RcCone> tiles(b->tiles);
+        for (size_t first = 0; first < tiles.size(); first += accel::kConeGroupTiles) {
+            b->groups.push_back(accel::EnclosingConeOfCones(
+                tiles.subspan(first,
+                              std::min(tiles.size() - first, size_t(accel::kConeGroupTiles))),
+                margin_));
         }
         std::lock_guard<std::mutex> lock(mutex_);
         stats_.hostSeconds += std::chrono::duration<double>(Clock::now() - t0).count();

@@ -72,6 +72,37 @@ TEST(EnclosingCone, OriginStepPutsTheApexWhereTheGeneratorsCross) {
     EXPECT_LE(WorstExcess(ConeOf(behind), behind), 0.0);
 }
 
+// The level above the tiles: a cone of the cones of four tiles holds every ray of the four.
+TEST(EnclosingCone, ConeOfConesHoldsEveryRayOfItsTiles) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    for (int set = 0; set < 100; ++set) {
+        const glm::vec3 axis = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+        const float spread = 0.02f * float(set % 5), origins = set % 2 == 0 ? 0.0f : 2.0f;
+        std::vector<RcRay> rays;
+        std::vector<RcCone> tiles;
+        for (int t = 0; t < 4; ++t) {
+            std::vector<RcRay> tile;
+            const glm::vec3 tileAxis = axis + 0.1f * glm::vec3(u(rng), u(rng), u(rng));
+            for (int i = 0; i < 64; ++i) {
+                const glm::vec3 o = origins * glm::vec3(u(rng), u(rng), u(rng));
+                tile.push_back(Ray(o, tileAxis + spread * glm::vec3(u(rng), u(rng), u(rng))));
+            }
+            tiles.push_back(ConeOf(tile));
+            rays.insert(rays.end(), tile.begin(), tile.end());
+        }
+        const RcCone c = EnclosingConeOfCones(tiles, 1e-6);
+        ASSERT_GE(c.apex.w, 0.0f) << "set " << set;
+        EXPECT_LE(WorstExcess(c, rays), 0.0) << "set " << set;
+    }
+    EXPECT_LT(
+        EnclosingConeOfCones(
+            std::vector<RcCone>{ConeOf({Ray({0, 0, 0}, {1, 0, 0}), Ray({0, 0, 0}, {-1, 0, 0})})},
+            1e-6)
+            .apex.w,
+        0.0f);
+}
+
 TEST(EnclosingCone, DirectionsOverTheWholeSphereAreUnbounded) {
     std::mt19937 rng(4);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);

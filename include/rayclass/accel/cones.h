@@ -33,6 +33,13 @@ std::vector<uint32_t> CoherentOrder(std::span<const RcRay> rays, const Bounds3f&
 // out. `margin` is an absolute distance the apex backs off further.
 RcCone EnclosingCone(std::span<const RcRay> rays, double margin);
 
+// A cone holding every one of `cones` (the level above the tiles): a cone holds another when its
+// directions hold the other's (the angle between their axes plus the other's half-angle, widened
+// by the margin) and the other's apex lies inside it (the apex backs off along the axis until
+// each does), so it holds every ray theirs hold. Unbounded when one of them is, or where no cone
+// under 89 degrees holds them.
+RcCone EnclosingConeOfCones(std::span<const RcCone> cones, double margin);
+
 // Bounding spheres of every primitive (global ids) as structure of arrays, x, y, z and radius,
 // each padded to a multiple of 16 entries; radii grown by `pad`.
 struct PrimitiveSpheres {
