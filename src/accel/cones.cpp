@@ -163,6 +163,21 @@ RcCone EnclosingCone(std::span<const RcRay> rays, double margin) {
             {float(x.x), float(x.y), float(x.z), float(1.0 / std::sin(phi))}};
 }
 
+bool CoherentAsGiven(std::span<const RcRay> rays) {
+    constexpr size_t kSampleEvery = 16;  // tiles
+    constexpr double kMeanHalfAngle = 0.05;
+    double sum = 0.0;
+    size_t sampled = 0;
+    for (size_t first = 0; first < rays.size(); first += kSampleEvery * kConeTileRays) {
+        const RcCone c = EnclosingCone(
+            rays.subspan(first, std::min<size_t>(kConeTileRays, rays.size() - first)), 0.0);
+        if (c.apex.w < 0.0f) return false;
+        sum += std::atan(std::sqrt(double(c.apex.w)));
+        ++sampled;
+    }
+    return sampled > 0 && sum <= kMeanHalfAngle * double(sampled);
+}
+
 RcCone EnclosingConeOfCones(std::span<const RcCone> cones, double margin) {
     glm::dvec3 sum(0.0);
     for (const RcCone& c : cones) {

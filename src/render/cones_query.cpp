@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <mutex>
+#include <numeric>
 
 #include "ray_counters.h"
 #include "rayclass/accel/cones.h"
@@ -108,7 +109,12 @@ class ConesQuery final : public RayQuery {
     std::unique_ptr<ConeBatch> Build(std::span<const RcRay> rays) {
         const auto t0 = Clock::now();
         auto b = std::make_unique<ConeBatch>();
-        b->order = accel::CoherentOrder(rays, box_);
+        if (accel::CoherentAsGiven(rays)) {
+            b->order.resize(rays.size());
+            std::iota(b->order.begin(), b->order.end(), 0u);
+        } else {
+            b->order = accel::CoherentOrder(rays, box_);
+        }
         // The rays in tile order once, so that the cones and the kernels read them in place.
         b->sorted.resize(rays.size());
         for (size_t j = 0; j < rays.size(); ++j) b->sorted[j] = rays[b->order[j]];

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -101,6 +102,23 @@ TEST(EnclosingCone, ConeOfConesHoldsEveryRayOfItsTiles) {
             1e-6)
             .apex.w,
         0.0f);
+}
+
+// A pinhole's rays in scanline order (rows of 1024 pixels over 40 degrees: a tile, 64 of them,
+// spans 2.4 degrees) keep their order; the same rays shuffled do not.
+TEST(CoherentAsGiven, ScanlinesAreCoherentShuffledRaysAreNot) {
+    std::vector<RcRay> rays;
+    for (int y = 0; y < 16; ++y) {
+        for (int x = 0; x < 1024; ++x) {
+            const float u = (float(x) / 1023.0f - 0.5f) * 0.7f,
+                        v = (float(y) / 15.0f - 0.5f) * 0.2f;
+            rays.push_back(Ray({0, 0, 0}, {u, v, 1}));
+        }
+    }
+    EXPECT_TRUE(CoherentAsGiven(rays));
+    std::mt19937 rng(5);
+    std::shuffle(rays.begin(), rays.end(), rng);
+    EXPECT_FALSE(CoherentAsGiven(rays));
 }
 
 TEST(EnclosingCone, DirectionsOverTheWholeSphereAreUnbounded) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "accel_support.h"
+#include "rayclass/accel/cones.h"
 #include "rayclass/scene/loader.h"
 
 namespace rayclass::accel {
@@ -118,6 +119,38 @@ TEST_P(ExactHits, CoherentPacketsHitWhatBruteForceHits) {
             if (k == 0) {
                 EXPECT_GT(hits, rays.size() / 4) << what;
             }
+        }
+    }
+}
+
+// Full-size scanlines, 16 rows of a 1024x768 image of the default scene and the rays spawned
+// from their hits: the cones keep such a batch in its own order (CoherentAsGiven) instead of
+// sorting it.
+TEST_P(ExactHits, FullSizeScanlinesHitWhatBruteForceHits) {
+    const Loaded l(scene::LoadScene(SourceDir() / "scenes/cornell.json"));
+    const scene::Camera cam = bench::NamedCamera(l.scene, "scene", 1024, 768);
+    const std::vector<bench::BenchRay> all = bench::EyeRays(cam);
+    const std::vector<bench::BenchRay> eye(all.begin() + 1024 * 376, all.begin() + 1024 * 392);
+    ASSERT_TRUE(accel::CoherentAsGiven(ToRc(eye)));
+    const std::vector<RcHit> eyeHits = render::NearestHits(Ctx(), *l.brute, ToRc(eye));
+    std::vector<bench::BenchHit> benchHits;
+    for (const RcHit& h : eyeHits) benchHits.push_back({h.t, h.prim});
+    const bench::RaySets sets =
+        bench::MakeRaySets(l.scene, eye, benchHits, l.scene.lights[0].position, 7, 1024);
+    const auto query = l.Make(GetParam());
+    for (int k = 0; k < bench::kNumKinds; ++k) {
+        const std::vector<RcRay> rays = ToRc(sets.sets[k]);
+        if (rays.empty()) continue;
+        const std::string what = std::string("cornell 1024x768 ") + bench::kKinds[k];
+        if (bench::IsShadowKind(k)) {
+            const auto got = render::BlockedAnswers(Ctx(), *query, rays);
+            const auto want = render::BlockedAnswers(Ctx(), *l.brute, rays);
+            uint32_t mismatches = 0;
+            for (size_t i = 0; i < rays.size(); ++i) mismatches += got[i] != want[i];
+            EXPECT_EQ(mismatches, 0u) << what;
+        } else {
+            uint32_t hits = 0;
+            EXPECT_EQ(NearestMismatches(l, *query, rays, &hits, what), 0u) << what;
         }
     }
 }

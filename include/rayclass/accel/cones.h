@@ -22,6 +22,11 @@ constexpr uint32_t kConeGroupTiles = 16;
 // compact screen tiles.
 std::vector<uint32_t> CoherentOrder(std::span<const RcRay> rays, const Bounds3f& box);
 
+// Whether the rays' own order already makes coherent tiles (eye rays in scanline order: a tile is
+// a run of a row): the cones of every 16th tile in that order average at most 0.05 radians of
+// half-angle, and none is unbounded. Such a batch keeps its order, and saves the sort.
+bool CoherentAsGiven(std::span<const RcRay> rays);
+
 // The cone enclosing `rays` (consecutive in CoherentOrder's order): the paper's incremental
 // construction, ray by ray step (a) (the smallest cone with the same apex holding the new
 // direction) then step (b) (the apex slides back along the far generator until the near one
