@@ -83,7 +83,7 @@ bool WidenToDirection(glm::dvec3* x, double* cosPhi, const glm::dvec3& r) {
     if (glm::length(e + r) < 1e-12) return false;
     *x = glm::normalize(e + r);
     *cosPhi = glm::dot(*x, r);
-    return std::acos(std::clamp(*cosPhi, -1.0, 1.0)) < kMaxHalfAngle;
+    return *cosPhi > std::cos(kMaxHalfAngle);  // acos(*cosPhi) < kMaxHalfAngle
 }
 
 // The paper's step (b): where p lies outside the cone (apex *a, axis x, half-angle with cosine
