@@ -116,17 +116,16 @@ inline uint rc_cones_tile_candidates(uint j, __global const uint* tileOffsets,
 
 /* The 16 rays at sorted positions [first, first + 16) (all of one tile), lanes beyond n inactive,
  * and lanes with tmax == 0 (empty shadow slots) inactive when skipEmpty. */
-inline void rc_cones_load_packet(__global const RcRay* rays, __global const uint* order,
-                                 uint first, uint n, int skipEmpty, RcBvhPacket* p) {
+inline void rc_cones_load_packet(__global const RcRay* sorted, uint first, uint n, int skipEmpty,
+                                 RcBvhPacket* p) {
     float o[3][RC_PACKET], dir[3][RC_PACKET], tn[RC_PACKET], tf[RC_PACKET];
     int act[RC_PACKET];
     for (int k = 0; k < RC_PACKET; ++k) {
         float4 ro = (float4)(0.0f), rd = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
         act[k] = first + k < n;
         if (act[k]) {
-            const uint i = order[first + k];
-            ro = rays[i].origin;
-            rd = rays[i].direction;
+            ro = sorted[first + k].origin;
+            rd = sorted[first + k].direction;
             act[k] = !skipEmpty || rd.w != 0.0f;
         }
         o[0][k] = ro.x, o[1][k] = ro.y, o[2][k] = ro.z;
@@ -206,11 +205,11 @@ inline uint16 rc_cones_packet(const RcBvhPacket* p, int anyHit, uint count,
     return tests;
 }
 
-/* One work-item per 16 sorted positions [16 w, 16 w + 16), rays order[j]: a tile's rays
- * (RC_CONE_TILE_RAYS, a multiple of 16) test its candidates together. counters[ray] counts
- * primitive tests. */
+/* One work-item per 16 sorted positions [16 w, 16 w + 16): the rays sorted[j], whose places in
+ * the batch are order[j]. A tile's rays (RC_CONE_TILE_RAYS, a multiple of 16) test its
+ * candidates together. counters[ray] counts primitive tests. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_cones(
-    __global const RcRay* rays, uint n, __global const uint* order,
+    __global const RcRay* sorted, uint n, __global const uint* order,
     __global const uint* tileOffsets, __global const uint* tileCounts,
     __global const uint* tileList, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
@@ -223,7 +222,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     const uint count =
         rc_cones_tile_candidates(first, tileOffsets, tileCounts, tileList, nPrims, &ids);
     RcBvhPacket p;
-    rc_cones_load_packet(rays, order, first, n, 0, &p);
+    rc_cones_load_packet(sorted, first, n, 0, &p);
     float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
     uint16 bp = (uint16)(RC_NO_HIT);
     int16 blocked = (int16)(0);
@@ -247,7 +246,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
 
 /* Any hit before the light ends a ray's search; one work-item per 16 sorted positions. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_cones(
-    __global const RcRay* rays, uint n, __global const uint* order,
+    __global const RcRay* sorted, uint n, __global const uint* order,
     __global const uint* tileOffsets, __global const uint* tileCounts,
     __global const uint* tileList, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
@@ -260,7 +259,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const uint count =
         rc_cones_tile_candidates(first, tileOffsets, tileCounts, tileList, nPrims, &ids);
     RcBvhPacket p;
-    rc_cones_load_packet(rays, order, first, n, 1, &p);
+    rc_cones_load_packet(sorted, first, n, 1, &p);
     float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
     uint16 bp = (uint16)(RC_NO_HIT);
     int16 hit = (int16)(0);

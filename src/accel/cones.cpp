@@ -83,7 +83,7 @@ bool WidenToDirection(glm::dvec3* x, double* cosPhi, const glm::dvec3& r) {
     if (glm::length(e + r) < 1e-12) return false;
     *x = glm::normalize(e + r);
     *cosPhi = glm::dot(*x, r);
-    return std::acos(std::clamp(*cosPhi, -1.0, 1.0)) < kMaxHalfAngle;
+    return *cosPhi > std::cos(kMaxHalfAngle);  // acos(*cosPhi) < kMaxHalfAngle
 }
 
 // The paper's step (b): where p lies outside the cone (apex *a, axis x, half-angle with cosine
@@ -159,6 +159,54 @@ RcCone EnclosingCone(std::span<const RcRay> rays, double margin) {
         back = std::max(back, across / tanInner - along);
     }
     const glm::dvec3 apex = a - (back + margin) * x;
+    return {{float(apex.x), float(apex.y), float(apex.z), float(tanPhi * tanPhi)},
+            {float(x.x), float(x.y), float(x.z), float(1.0 / std::sin(phi))}};
+}
+
+bool CoherentAsGiven(std::span<const RcRay> rays) {
+    constexpr size_t kSampleEvery = 16;  // tiles
+    constexpr double kMeanHalfAngle = 0.05;
+    double sum = 0.0;
+    size_t sampled = 0;
+    for (size_t first = 0; first < rays.size(); first += kSampleEvery * kConeTileRays) {
+        const RcCone c = EnclosingCone(
+            rays.subspan(first, std::min<size_t>(kConeTileRays, rays.size() - first)), 0.0);
+        if (c.apex.w < 0.0f) return false;
+        sum += std::atan(std::sqrt(double(c.apex.w)));
+        ++sampled;
+    }
+    return sampled > 0 && sum <= kMeanHalfAngle * double(sampled);
+}
+
+RcCone EnclosingConeOfCones(std::span<const RcCone> cones, double margin) {
+    glm::dvec3 sum(0.0);
+    for (const RcCone& c : cones) {
+        if (c.apex.w < 0.0f) return Unbounded();
+        sum += glm::dvec3(c.axis.x, c.axis.y, c.axis.z);
+    }
+    if (cones.empty() || glm::length(sum) < 1e-12) return Unbounded();
+    const glm::dvec3 x = glm::normalize(sum);
+    // Every cone's directions inside: the angle to its axis plus its half-angle, then the margin.
+    double phi = 0.0;
+    glm::dvec3 centroid(0.0);
+    for (const RcCone& c : cones) {
+        const glm::dvec3 axis = glm::normalize(glm::dvec3(c.axis.x, c.axis.y, c.axis.z));
+        const double toAxis = std::acos(std::clamp(glm::dot(x, axis), -1.0, 1.0));
+        phi = std::max(phi, toAxis + std::atan(std::sqrt(double(c.apex.w))));
+        centroid += glm::dvec3(c.apex.x, c.apex.y, c.apex.z);
+    }
+    phi = std::max(phi + kAngleMargin, kMinHalfAngle);
+    if (phi >= kMaxHalfAngle) return Unbounded();
+    centroid /= double(cones.size());
+    // Every apex inside, half the margin away from the surface, as EnclosingCone's origins.
+    const double tanPhi = std::tan(phi), tanInner = std::tan(phi - 0.5 * kAngleMargin);
+    double back = 0.0;
+    for (const RcCone& c : cones) {
+        const glm::dvec3 d = glm::dvec3(c.apex.x, c.apex.y, c.apex.z) - centroid;
+        const double along = glm::dot(d, x);
+        back = std::max(back, glm::length(d - along * x) / tanInner - along);
+    }
+    const glm::dvec3 apex = centroid - (back + margin) * x;
     return {{float(apex.x), float(apex.y), float(apex.z), float(tanPhi * tanPhi)},
             {float(x.x), float(x.y), float(x.z), float(1.0 / std::sin(phi))}};
 }

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <mutex>
+#include <numeric>
 
 #include "ray_counters.h"
 #include "rayclass/accel/cones.h"
@@ -23,9 +24,11 @@ constexpr uint32_t kPacketRays = 16;
 // primitive, which bounds the memory incoherent rays need.
 constexpr uint64_t kMaxListEntries = uint64_t(1) << 25;
 
-// A batch's rays in tile order and the cones of its groups and tiles.
+// A batch's rays in tile order (sorted[j] = rays[order[j]]) and the cones of its groups and
+// tiles.
 struct ConeBatch final : PreparedBatch {
     std::vector<uint32_t> order;
+    std::vector<RcRay> sorted;
     std::vector<RcCone> groups, tiles;
 };
 
@@ -92,34 +95,41 @@ class ConesQuery final : public RayQuery {
             own = Build(host);
             batch = own.get();
         }
-        return {Run(intersect_, rays, n, *batch, hits, timer), false};
+        return {Run(intersect_, n, *batch, hits, timer), false};
     }
 
-    uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
-                      const cl::Buffer& blocked, KernelTimer& timer) override {
+    uint64_t Occluded(const cl::Buffer&, std::span<const RcRay> hostRays, const cl::Buffer& blocked,
+                      KernelTimer& timer) override {
         if (hostRays.empty()) return 0;
         const auto batch = Build(hostRays);
-        return Run(occluded_, shadowRays, uint32_t(hostRays.size()), *batch, blocked, timer);
+        return Run(occluded_, uint32_t(hostRays.size()), *batch, blocked, timer);
     }
 
   private:
     std::unique_ptr<ConeBatch> Build(std::span<const RcRay> rays) {
         const auto t0 = Clock::now();
         auto b = std::make_unique<ConeBatch>();
-        b->order = accel::CoherentOrder(rays, box_);
-        // The rays in tile order once, so that the cones read them in place.
-        std::vector<RcRay> sorted(rays.size());
-        for (size_t j = 0; j < rays.size(); ++j) sorted[j] = rays[b->order[j]];
-        const std::span<const RcRay> all(sorted);
+        if (accel::CoherentAsGiven(rays)) {
+            b->order.resize(rays.size());
+            std::iota(b->order.begin(), b->order.end(), 0u);
+        } else {
+            b->order = accel::CoherentOrder(rays, box_);
+        }
+        // The rays in tile order once, so that the cones and the kernels read them in place.
+        b->sorted.resize(rays.size());
+        for (size_t j = 0; j < rays.size(); ++j) b->sorted[j] = rays[b->order[j]];
+        const std::span<const RcRay> all(b->sorted);
         const size_t n = rays.size(), tileRays = accel::kConeTileRays;
-        const size_t groupRays = tileRays * accel::kConeGroupTiles;
         for (size_t first = 0; first < n; first += tileRays) {
             b->tiles.push_back(
                 accel::EnclosingCone(all.subspan(first, std::min(n - first, tileRays)), margin_));
         }
-        for (size_t first = 0; first < n; first += groupRays) {
-            b->groups.push_back(
-                accel::EnclosingCone(all.subspan(first, std::min(n - first, groupRays)), margin_));
+        const std::span<const RcCone> tiles(b->tiles);
+        for (size_t first = 0; first < tiles.size(); first += accel::kConeGroupTiles) {
+            b->groups.push_back(accel::EnclosingConeOfCones(
+                tiles.subspan(first,
+                              std::min(tiles.size() - first, size_t(accel::kConeGroupTiles))),
+                margin_));
         }
         std::lock_guard<std::mutex> lock(mutex_);
         stats_.hostSeconds += std::chrono::duration<double>(Clock::now() - t0).count();
@@ -165,8 +175,8 @@ class ConesQuery final : public RayQuery {
         return offsets;
     }
 
-    uint64_t Run(cl::Kernel& kernel, const cl::Buffer& rays, uint32_t n, const ConeBatch& b,
-                 const cl::Buffer& out, KernelTimer& timer) {
+    uint64_t Run(cl::Kernel& kernel, uint32_t n, const ConeBatch& b, const cl::Buffer& out,
+                 KernelTimer& timer) {
         const uint32_t nGroups = uint32_t(b.groups.size()), nTiles = uint32_t(b.tiles.size());
         const cl::Buffer& groupCones = groupCones_.Upload(ctx_, b.groups);
         const cl::Buffer& tileCones = tileCones_.Upload(ctx_, b.tiles);
@@ -179,9 +189,10 @@ class ConesQuery final : public RayQuery {
                  tileCones, nTiles, groupOffsets_.Reserve(ctx_, 0), groupCounts_.Reserve(ctx_, 0),
                  groupList_.Reserve(ctx_, 0));
         const cl::Buffer& order = order_.Upload(ctx_, b.order);
-        SetArgs(kernel, rays, n, order, tileOffsets_.Reserve(ctx_, 0), tileCounts_.Reserve(ctx_, 0),
-                tileList_.Reserve(ctx_, 0), scene_.triangles, scene_.spheres, scene_.quadrics,
-                scene_.params, out, counters_.Reserve(ctx_, n));
+        const cl::Buffer& sorted = sorted_.Share(ctx_, b.sorted);
+        SetArgs(kernel, sorted, n, order, tileOffsets_.Reserve(ctx_, 0),
+                tileCounts_.Reserve(ctx_, 0), tileList_.Reserve(ctx_, 0), scene_.triangles,
+                scene_.spheres, scene_.quadrics, scene_.params, out, counters_.Reserve(ctx_, n));
         Launch(ctx_, kernel, (n + kPacketRays - 1) / kPacketRays, timer);
         const CounterSums sums = counters_.Sum(ctx_, n);
         Count(b, n, groupCounts, groupOffsets, tileCounts, tileOffsets);
@@ -215,7 +226,7 @@ class ConesQuery final : public RayQuery {
     uint32_t nPrims_ = 0;
     cl::Buffer sx_, sy_, sz_, sr_;
     cl::Kernel cullGroups_, cullTiles_, intersect_, occluded_;
-    GrowingBuffer groupCones_, tileCones_, order_;
+    GrowingBuffer groupCones_, tileCones_, order_, sorted_;
     GrowingBuffer groupCounts_, groupOffsets_, groupList_, tileCounts_, tileOffsets_, tileList_;
     RayCounters counters_;
     mutable std::mutex mutex_;

@@ -39,7 +39,8 @@ class KdTreeQuery final : public WalkQuery {
                      {"kdtree_leaves", double(tree.leaves)},
                      {"kdtree_empty_leaves", double(tree.emptyLeaves)},
                      {"kdtree_references", double(tree.primIndex.size())},
-                     {"kdtree_bytes", double(tree.Bytes())},
+                     {"kdtree_bytes", double(blocked.nodes.size() * sizeof(RcKdNode) +
+                                             blocked.blocks.size() * sizeof(RcBvhLeafBlock8))},
                      {"kdtree_max_depth", double(tree.maxDepth)},
                      {"kdtree_blocks", double(blocked.blocks.size())}},
                     kPacketRays),

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -70,6 +71,54 @@ TEST(EnclosingCone, OriginStepPutsTheApexWhereTheGeneratorsCross) {
     const std::vector<RcRay> behind = {Ray({0, 0, 0}, {0.1f, 0, 1}), Ray({0, 0, 0}, {-0.1f, 0, 1}),
                                        Ray({3, 0, -50}, {0, 0, 1})};
     EXPECT_LE(WorstExcess(ConeOf(behind), behind), 0.0);
+}
+
+// The level above the tiles: a cone of the cones of four tiles holds every ray of the four.
+TEST(EnclosingCone, ConeOfConesHoldsEveryRayOfItsTiles) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    for (int set = 0; set < 100; ++set) {
+        const glm::vec3 axis = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
+        const float spread = 0.02f * float(set % 5), origins = set % 2 == 0 ? 0.0f : 2.0f;
+        std::vector<RcRay> rays;
+        std::vector<RcCone> tiles;
+        for (int t = 0; t < 4; ++t) {
+            std::vector<RcRay> tile;
+            const glm::vec3 tileAxis = axis + 0.1f * glm::vec3(u(rng), u(rng), u(rng));
+            for (int i = 0; i < 64; ++i) {
+                const glm::vec3 o = origins * glm::vec3(u(rng), u(rng), u(rng));
+                tile.push_back(Ray(o, tileAxis + spread * glm::vec3(u(rng), u(rng), u(rng))));
+            }
+            tiles.push_back(ConeOf(tile));
+            rays.insert(rays.end(), tile.begin(), tile.end());
+        }
+        const RcCone c = EnclosingConeOfCones(tiles, 1e-6);
+        ASSERT_GE(c.apex.w, 0.0f) << "set " << set;
+        EXPECT_LE(WorstExcess(c, rays), 0.0) << "set " << set;
+    }
+    EXPECT_LT(
+        EnclosingConeOfCones(
+            std::vector<RcCone>{ConeOf({Ray({0, 0, 0}, {1, 0, 0}), Ray({0, 0, 0}, {-1, 0, 0})})},
+            1e-6)
+            .apex.w,
+        0.0f);
+}
+
+// A pinhole's rays in scanline order (rows of 1024 pixels over 40 degrees: a tile, 64 of them,
+// spans 2.4 degrees) keep their order; the same rays shuffled do not.
+TEST(CoherentAsGiven, ScanlinesAreCoherentShuffledRaysAreNot) {
+    std::vector<RcRay> rays;
+    for (int y = 0; y < 16; ++y) {
+        for (int x = 0; x < 1024; ++x) {
+            const float u = (float(x) / 1023.0f - 0.5f) * 0.7f,
+                        v = (float(y) / 15.0f - 0.5f) * 0.2f;
+            rays.push_back(Ray({0, 0, 0}, {u, v, 1}));
+        }
+    }
+    EXPECT_TRUE(CoherentAsGiven(rays));
+    std::mt19937 rng(5);
+    std::shuffle(rays.begin(), rays.end(), rng);
+    EXPECT_FALSE(CoherentAsGiven(rays));
 }
 
 TEST(EnclosingCone, DirectionsOverTheWholeSphereAreUnbounded) {

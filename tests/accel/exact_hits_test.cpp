@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "accel_support.h"
+#include "rayclass/accel/cones.h"
 #include "rayclass/scene/loader.h"
 
 namespace rayclass::accel {
@@ -80,6 +81,76 @@ TEST_P(ExactHits, EveryRayKindOfEveryTestSceneHitsWhatBruteForceHits) {
                     EXPECT_GT(hits, 0u) << what;
                 }
             }
+        }
+    }
+}
+
+// Eye rays fine enough that 16 consecutive ones make a coherent packet (rc_bvh_load_packet's
+// test), which the kd-tree and grid kernels walk together, and the rays spawned from their hits:
+// eight middle rows of a 96x72 image of the bunny (the small images above are too coarse for any
+// packet to pass the test). The cones need no such rays: their kernels answer every tile's rays
+// sixteen at a time whatever the rays.
+TEST_P(ExactHits, CoherentPacketsHitWhatBruteForceHits) {
+    if (GetParam() == "cones") GTEST_SKIP() << "the cones' packets are tested by every test";
+    const Loaded l(scene::LoadScene(SourceDir() / "scenes/bench/bunny.obj"));
+    const scene::Camera cam = bench::NamedCamera(l.scene, "scene", 96, 72);
+    const std::vector<bench::BenchRay> all = bench::EyeRays(cam);
+    const std::vector<bench::BenchRay> eye(all.begin() + 96 * 32, all.begin() + 96 * 40);
+    const std::vector<RcHit> eyeHits = render::NearestHits(Ctx(), *l.brute, ToRc(eye));
+    std::vector<bench::BenchHit> benchHits;
+    for (const RcHit& h : eyeHits) benchHits.push_back({h.t, h.prim});
+    const bench::RaySets sets = bench::MakeRaySets(
+        l.scene, eye, benchHits, l.scene.lights.empty() ? cam.position : l.scene.lights[0].position,
+        7, 96);
+    const auto query = l.Make(GetParam());
+    for (int k = 0; k < bench::kNumKinds; ++k) {
+        const std::vector<RcRay> rays = ToRc(sets.sets[k]);
+        if (rays.empty()) continue;
+        const std::string what = std::string("bunny 96x72 ") + bench::kKinds[k];
+        if (bench::IsShadowKind(k)) {
+            const auto got = render::BlockedAnswers(Ctx(), *query, rays);
+            const auto want = render::BlockedAnswers(Ctx(), *l.brute, rays);
+            uint32_t mismatches = 0;
+            for (size_t i = 0; i < rays.size(); ++i) mismatches += got[i] != want[i];
+            EXPECT_EQ(mismatches, 0u) << what;
+        } else {
+            uint32_t hits = 0;
+            EXPECT_EQ(NearestMismatches(l, *query, rays, &hits, what), 0u) << what;
+            if (k == 0) {
+                EXPECT_GT(hits, rays.size() / 4) << what;
+            }
+        }
+    }
+}
+
+// Full-size scanlines, 16 rows of a 1024x768 image of the default scene and the rays spawned
+// from their hits: the cones keep such a batch in its own order (CoherentAsGiven) instead of
+// sorting it.
+TEST_P(ExactHits, FullSizeScanlinesHitWhatBruteForceHits) {
+    const Loaded l(scene::LoadScene(SourceDir() / "scenes/cornell.json"));
+    const scene::Camera cam = bench::NamedCamera(l.scene, "scene", 1024, 768);
+    const std::vector<bench::BenchRay> all = bench::EyeRays(cam);
+    const std::vector<bench::BenchRay> eye(all.begin() + 1024 * 376, all.begin() + 1024 * 392);
+    ASSERT_TRUE(accel::CoherentAsGiven(ToRc(eye)));
+    const std::vector<RcHit> eyeHits = render::NearestHits(Ctx(), *l.brute, ToRc(eye));
+    std::vector<bench::BenchHit> benchHits;
+    for (const RcHit& h : eyeHits) benchHits.push_back({h.t, h.prim});
+    const bench::RaySets sets =
+        bench::MakeRaySets(l.scene, eye, benchHits, l.scene.lights[0].position, 7, 1024);
+    const auto query = l.Make(GetParam());
+    for (int k = 0; k < bench::kNumKinds; ++k) {
+        const std::vector<RcRay> rays = ToRc(sets.sets[k]);
+        if (rays.empty()) continue;
+        const std::string what = std::string("cornell 1024x768 ") + bench::kKinds[k];
+        if (bench::IsShadowKind(k)) {
+            const auto got = render::BlockedAnswers(Ctx(), *query, rays);
+            const auto want = render::BlockedAnswers(Ctx(), *l.brute, rays);
+            uint32_t mismatches = 0;
+            for (size_t i = 0; i < rays.size(); ++i) mismatches += got[i] != want[i];
+            EXPECT_EQ(mismatches, 0u) << what;
+        } else {
+            uint32_t hits = 0;
+            EXPECT_EQ(NearestMismatches(l, *query, rays, &hits, what), 0u) << what;
         }
     }
 }

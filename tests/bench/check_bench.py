@@ -20,7 +20,7 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
         machine = f.read()
     # raster.csv is left out only where raster_bench found no OpenGL context (said in machine.txt).
     raster_skipped = "raster experiments: skipped" in machine
-    csvs = ["results.csv", "sweep.csv", "family.csv", "accuracy.csv", "micro.csv", "patches.csv"]
+    csvs = ["results.csv", "sweep.csv", "family.csv", "accuracy.csv", "micro.csv", "patches.csv", "failure.csv"]
     if not raster_skipped:
         csvs.append("raster.csv")
     for name in csvs:
@@ -119,8 +119,22 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
         if len(values) != 1:
             failures.append("methods disagree on the hits of %s, ray by ray: %s" %
                             (key, sorted(values.values())))
+    failure = load("failure.csv")
+    for case in ("grid: teapot in a stadium", "cones: incoherent rays",
+                 "classify: diffuse bounces", "kdtree: build time and memory"):
+        if not any(r["case"] == case for r in failure):
+            failures.append("failure.csv has no rows for " + case)
+    failure_digests = {}
+    for r in failure:
+        if r["hits_digest"] != "-":
+            key = (r["case"], r["kind"])
+            failure_digests.setdefault(key, {}).setdefault(r["hits_digest"], []).append(r["method"])
+    for key, values in failure_digests.items():
+        if len(values) != 1:
+            failures.append("failure.csv: methods disagree on the hits of %s: %s" %
+                            (key, sorted(values.values())))
     for name in ("styles.png", "sweep.png", "accel.png", "scaling.png", "speed_accuracy.png",
-                 "micro.png", "raster.png", "patches.png", "summary.md", "machine.txt"):
+                 "micro.png", "raster.png", "patches.png", "failure.png", "summary.md", "machine.txt"):
         path = os.path.join(out, name)
         if not os.path.exists(path) or os.path.getsize(path) == 0:
             failures.append("missing or empty " + name)

@@ -22,6 +22,11 @@ constexpr uint32_t kConeGroupTiles = 16;
 // compact screen tiles.
 std::vector<uint32_t> CoherentOrder(std::span<const RcRay> rays, const Bounds3f& box);
 
+// Whether the rays' own order already makes coherent tiles (eye rays in scanline order: a tile is
+// a run of a row): the cones of every 16th tile in that order average at most 0.05 radians of
+// half-angle, and none is unbounded. Such a batch keeps its order, and saves the sort.
+bool CoherentAsGiven(std::span<const RcRay> rays);
+
 // The cone enclosing `rays` (consecutive in CoherentOrder's order): the paper's incremental
 // construction, ray by ray step (a) (the smallest cone with the same apex holding the new
 // direction) then step (b) (the apex slides back along the far generator until the near one
@@ -32,6 +37,13 @@ std::vector<uint32_t> CoherentOrder(std::span<const RcRay> rays, const Bounds3f&
 // degrees or more is marked unbounded. Rays without a direction (empty shadow slots) are left
 // out. `margin` is an absolute distance the apex backs off further.
 RcCone EnclosingCone(std::span<const RcRay> rays, double margin);
+
+// A cone holding every one of `cones` (the level above the tiles): a cone holds another when its
+// directions hold the other's (the angle between their axes plus the other's half-angle, widened
+// by the margin) and the other's apex lies inside it (the apex backs off along the axis until
+// each does), so it holds every ray theirs hold. Unbounded when one of them is, or where no cone
+// under 89 degrees holds them.
+RcCone EnclosingConeOfCones(std::span<const RcCone> cones, double margin);
 
 // Bounding spheres of every primitive (global ids) as structure of arrays, x, y, z and radius,
 // each padded to a multiple of 16 entries; radii grown by `pad`.

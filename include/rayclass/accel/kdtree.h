@@ -37,10 +37,6 @@ struct KdTree {
     float pad = 0;                    // see above
     uint32_t maxDepth = 0;            // deepest leaf (root = 0)
     uint32_t leaves = 0, emptyLeaves = 0;
-
-    size_t Bytes() const {
-        return nodes.size() * sizeof(RcKdNode) + primIndex.size() * sizeof(uint32_t);
-    }
 };
 
 // Builds over every primitive of the scene (global ids); pad = 1e-6 of the scene box's diagonal.
