@@ -431,7 +431,7 @@ std::vector<bench::BenchHit> EyeHits(Bench& b, const std::vector<bench::BenchRay
         b.ctx.queue().enqueueReadBuffer(hits, CL_TRUE, 0, h.size() * sizeof(RcHit), h.data());
     });
     std::vector<bench::BenchHit> out(eye.size());
-    for (size_t i = 0; i < h.size(); ++i) out[i] = {h[i].t, h[i].prim};
+    for (size_t i = 0; i < h.size(); ++i) out[i] = {h[i].t, h[i].prim, h[i].u, h[i].v};
     return out;
 }
 
