@@ -23,24 +23,39 @@ constexpr size_t kSampleRuns = 16, kSampleRunRays = 1024;
 
 // One kind of query (nearest hit or shadow) and what its choice is based on.
 struct Choice {
-    bool onBvh = false;  // once the BVH has won, it answers every later generation
+    bool onBvh = false;    // the BVH answers the current generation
     bool sampled = false;  // a sample of this kind has run (see TimeSample)
-    QueryCosts costs;  // what the current generation's choice compared
-    // The classification's cost on the current generation: seconds of the render thread's
+    QueryCosts costs;      // what the current generation's choice compared
+    // The current generation's cost to whichever answers it: seconds of the render thread's
     // time, and rays.
     double seconds = 0;
     uint64_t rays = 0;
 
-    // The current generation's measurements become the classification's cost; a new sample
-    // is to be taken.
+    // The current generation's measurements become the cost of whichever answered it; a new
+    // sample is to be taken.
     void NextGeneration() {
-        costs.classifiedBefore = costs.classified;
-        costs.classified = rays > 0 ? seconds / double(rays) : 0.0;
+        if (rays > 0 && onBvh) {
+            costs.bvhMeasured = seconds / double(rays);
+        } else if (rays > 0) {
+            costs.classifiedBefore = costs.classified;
+            costs.classified = seconds / double(rays);
+        }
         costs.bvhSample = 0;
         seconds = 0;
         rays = 0;
     }
 };
+
+// Seconds the classified query's separate shading kernels have run on `timer`. The BVH leaves
+// shading to the renderer, after its query returns, so these are not the classification's cost.
+double ShadingSeconds(const KernelTimer& timer) {
+    double s = 0;
+    for (const char* kernel : {"rc_shade_ids", "rc_shade_lights"}) {
+        const auto it = timer.Seconds().find(kernel);
+        if (it != timer.Seconds().end()) s += it->second;
+    }
+    return s;
+}
 
 class AutoQuery final : public RayQuery {
   public:
@@ -95,9 +110,11 @@ class AutoQuery final : public RayQuery {
     QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
                           const cl::Buffer& hits, const ShadeBuffers& shade,
                           KernelTimer& timer) override {
-        if (nearest_.onBvh) return bvh_->Intersect(rays, n, nullptr, hits, shade, timer);
-        const QueryResult result = classified_->Intersect(rays, n, prepared, hits, shade, timer);
-        nearest_.seconds += SecondsSince(lastReturn_);
+        const double shading = ShadingSeconds(timer);
+        const QueryResult result =
+            nearest_.onBvh ? bvh_->Intersect(rays, n, nullptr, hits, shade, timer)
+                           : classified_->Intersect(rays, n, prepared, hits, shade, timer);
+        nearest_.seconds += SecondsSince(lastReturn_) - (ShadingSeconds(timer) - shading);
         nearest_.rays += n;
         lastReturn_ = Clock::now();
         return result;
@@ -110,6 +127,10 @@ class AutoQuery final : public RayQuery {
         // nearest-hit sample has built the BVH. Classified from their light, shadow rays stay
         // cheap, and building the tree for them alone cost more than it saved (a render whose
         // shadow rays all stayed classified paid for the build).
+        if (shadow_.onBvh && !shadowSampled_ && n > 0) {
+            shadowSampled_ = true;
+            shadow_.onBvh = shadow_.costs.KeepBvh();
+        }
         if (bvh_ && !shadow_.onBvh && !shadowSampled_ && shadow_.costs.classified > 0 && n > 0) {
             shadowSampled_ = true;
             Pick(hostRays);
@@ -120,24 +141,26 @@ class AutoQuery final : public RayQuery {
             });
             shadow_.onBvh = shadow_.costs.PreferBvh();
         }
-        uint64_t tests;
-        if (shadow_.onBvh) {
-            tests = bvh_->Occluded(shadowRays, hostRays, blocked, timer);
-        } else {
-            const auto t0 = Clock::now();
-            tests = classified_->Occluded(shadowRays, hostRays, blocked, timer);
-            shadow_.seconds += SecondsSince(t0);
-            shadow_.rays += n;
-        }
+        const auto t0 = Clock::now();
+        const uint64_t tests = shadow_.onBvh
+                                   ? bvh_->Occluded(shadowRays, hostRays, blocked, timer)
+                                   : classified_->Occluded(shadowRays, hostRays, blocked, timer);
+        shadow_.seconds += SecondsSince(t0);
+        shadow_.rays += n;
         lastReturn_ = Clock::now();
         return tests;
     }
 
   private:
     // Times the BVH on a sample of the generation's first batch rays[0, n), once the
-    // classification has been measured and the BVH has not won yet.
+    // classification has been measured and unless the BVH answered the last generation, whose
+    // cost decides whether it keeps this one.
     void Sample(const cl::Buffer& rays, uint32_t n, KernelTimer& timer) {
-        if (nearest_.onBvh || nearest_.costs.classified == 0 || n == 0) return;
+        if (nearest_.onBvh) {
+            nearest_.onBvh = nearest_.costs.KeepBvh();
+            return;
+        }
+        if (nearest_.costs.classified == 0 || n == 0) return;
         Bvh();
         {
             clrt::MappedRead<RcRay> mapped(ctx_.queue(), rays, n);
