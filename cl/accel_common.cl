@@ -1,7 +1,9 @@
 /* What the kd-tree, grid and cone kernels share: a ray's inverse direction without infinities, the
  * slack by which they widen ray intervals so that float rounding never skips a cell a ray
- * touches, and a ray's interval inside a box. */
+ * touches, a ray's interval inside a box, and the test of one triangle against a packet of 16
+ * rays (the BVH's packets, bvh.cl). */
 #include "rc_types.h"
+#include "bvh.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -32,4 +34,42 @@ inline int rc_accel_clip(float3 o, float3 inv, float3 lo, float3 hi, float slack
 /* Component `axis` (0, 1, 2) of v. */
 inline float rc_accel_component(float3 v, uint axis) {
     return axis == 0 ? v.x : (axis == 1 ? v.y : v.z);
+}
+
+/* The triangle (v0, edges e1 = v1 - v0 and e2 = v2 - v0 as rc_intersect_triangle rounds them)
+ * against every lane of the packet, with rc_intersect_triangle's operations lane by lane: where
+ * a lane of `live` hits it before its nearest hit (or at the same distance with a lower id),
+ * that hit replaces the lane's. Returns the lanes that hit it. */
+inline int16 rc_accel_triangle16(const RcBvhPacket* p, int16 live, float3 v0, float3 e1, float3 e2,
+                                 uint prim, float16* bt, uint16* bp, float16* bu, float16* bv) {
+    const float16 pvx = p->dy * e2.z - e2.y * p->dz;
+    const float16 pvy = p->dz * e2.x - e2.z * p->dx;
+    const float16 pvz = p->dx * e2.y - e2.x * p->dy;
+    const float16 det = e1.x * pvx + e1.y * pvy + e1.z * pvz;
+    const float16 invDet = 1.0f / det;
+    const float16 tvx = p->ox - v0.x;
+    const float16 tvy = p->oy - v0.y;
+    const float16 tvz = p->oz - v0.z;
+    const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
+    const float16 qvx = tvy * e1.z - e1.y * tvz;
+    const float16 qvy = tvz * e1.x - e1.z * tvx;
+    const float16 qvz = tvx * e1.y - e1.x * tvy;
+    const float16 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
+    const float16 t = (e2.x * qvx + e2.y * qvy + e2.z * qvz) * invDet;
+    const uint16 prim16 = (uint16)(prim);
+    const int16 hit = live & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
+                      (u + v <= 1.0f) & (t > p->tmin) & (t < p->tmax) &
+                      ((t < *bt) | ((t == *bt) & (prim16 < *bp)));
+    *bt = select(*bt, t, hit);
+    *bp = select(*bp, prim16, as_uint16(hit));
+    *bu = select(*bu, u, hit);
+    *bv = select(*bv, v, hit);
+    return hit;
+}
+
+/* The largest spread of a packet's origins that walks as one, squared: as the BVH's rule, a
+ * 32nd of the scene box's diagonal. */
+inline float rc_accel_max_spread2(float4 boxLo, float4 boxHi) {
+    const float3 e = (boxHi.xyz - boxLo.xyz) * (1.0f / 32.0f);
+    return dot(e, e);
 }

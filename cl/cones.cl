@@ -4,11 +4,14 @@
  * cones, a group's cone against every primitive (sixteen spheres a step, float16 over structure
  * of arrays), a tile's cone against its group's survivors; each runs twice, first counting the
  * survivors, then, at the offsets the host summed, writing them. Then every ray tests only its
- * tile's survivors (the fragment-unit step) with the routines of intersect.cl (lower id wins
- * ties), so the hits equal brute force's. A list of RC_CONES_ALL entries stands for every
+ * tile's survivors (the fragment-unit step), sixteen rays of a tile together, with the routines
+ * of intersect.cl or their float16 twin for triangles (lower id wins ties), so the hits equal
+ * brute force's. A list of RC_CONES_ALL entries stands for every
  * primitive (an unbounded cone, or a list that did not fit). */
 #include "rc_types.h"
 #include "intersect.cl"
+#include "bvh.cl"
+#include "accel_common.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -111,63 +114,164 @@ inline uint rc_cones_tile_candidates(uint j, __global const uint* tileOffsets,
     return tileCounts[t];
 }
 
-/* One work-item per sorted position j: ray order[j]. counters[ray] counts primitive tests. */
+/* The 16 rays at sorted positions [first, first + 16) (all of one tile), lanes beyond n inactive,
+ * and lanes with tmax == 0 (empty shadow slots) inactive when skipEmpty. */
+inline void rc_cones_load_packet(__global const RcRay* rays, __global const uint* order,
+                                 uint first, uint n, int skipEmpty, RcBvhPacket* p) {
+    float o[3][RC_PACKET], dir[3][RC_PACKET], tn[RC_PACKET], tf[RC_PACKET];
+    int act[RC_PACKET];
+    for (int k = 0; k < RC_PACKET; ++k) {
+        float4 ro = (float4)(0.0f), rd = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
+        act[k] = first + k < n;
+        if (act[k]) {
+            const uint i = order[first + k];
+            ro = rays[i].origin;
+            rd = rays[i].direction;
+            act[k] = !skipEmpty || rd.w != 0.0f;
+        }
+        o[0][k] = ro.x, o[1][k] = ro.y, o[2][k] = ro.z;
+        dir[0][k] = rd.x, dir[1][k] = rd.y, dir[2][k] = rd.z;
+        tn[k] = ro.w, tf[k] = rd.w;
+    }
+    p->ox = vload16(0, o[0]), p->oy = vload16(0, o[1]), p->oz = vload16(0, o[2]);
+    p->dx = vload16(0, dir[0]), p->dy = vload16(0, dir[1]), p->dz = vload16(0, dir[2]);
+    p->tmin = vload16(0, tn), p->tmax = vload16(0, tf);
+    p->active = vload16(0, act) != 0;
+}
+
+/* Primitive `id` against the lanes `live` one lane at a time, through rc_intersect_primitive.
+ * Returns the lanes it hit. */
+inline int16 rc_cones_primitive_lanes(const RcBvhPacket* p, int16 live, uint id,
+                                      __global const RcTriangle* triangles,
+                                      __global const RcSphere* spheres,
+                                      __global const RcQuadric* quadrics, uint nT, uint nS,
+                                      float16* bt, uint16* bp, float16* bu, float16* bv) {
+    float ox[RC_PACKET], oy[RC_PACKET], oz[RC_PACKET], dx[RC_PACKET], dy[RC_PACKET],
+        dz[RC_PACKET], tn[RC_PACKET], tf[RC_PACKET], ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
+    uint ps[RC_PACKET];
+    int lanes[RC_PACKET], hits[RC_PACKET];
+    vstore16(p->ox, 0, ox), vstore16(p->oy, 0, oy), vstore16(p->oz, 0, oz);
+    vstore16(p->dx, 0, dx), vstore16(p->dy, 0, dy), vstore16(p->dz, 0, dz);
+    vstore16(p->tmin, 0, tn), vstore16(p->tmax, 0, tf);
+    vstore16(*bt, 0, ts), vstore16(*bu, 0, us), vstore16(*bv, 0, vs), vstore16(*bp, 0, ps);
+    vstore16(live, 0, lanes);
+    for (int k = 0; k < RC_PACKET; ++k) {
+        hits[k] = 0;
+        if (!lanes[k]) continue;
+        RcHit best;
+        best.t = ts[k], best.prim = ps[k], best.u = us[k], best.v = vs[k];
+        hits[k] = rc_intersect_primitive(id, (float3)(ox[k], oy[k], oz[k]),
+                                         (float3)(dx[k], dy[k], dz[k]), tn[k], tf[k], triangles,
+                                         spheres, quadrics, nT, nS, &best)
+                      ? -1
+                      : 0;
+        ts[k] = best.t, ps[k] = best.prim, us[k] = best.u, vs[k] = best.v;
+    }
+    *bt = vload16(0, ts), *bu = vload16(0, us), *bv = vload16(0, vs), *bp = vload16(0, ps);
+    return vload16(0, hits);
+}
+
+/* The packet against its tile's `count` candidates (ids, or every primitive where ids is 0):
+ * triangles sixteen lanes at once with rc_intersect_triangle's operations (accel_common.cl),
+ * other primitives lane by lane; with anyHit a lane stops at its first hit. Returns the
+ * primitive tests per lane. */
+inline uint16 rc_cones_packet(const RcBvhPacket* p, int anyHit, uint count,
+                              __global const uint* ids, __global const RcTriangle* triangles,
+                              __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+                              uint nT, uint nS, float16* bt, uint16* bp, float16* bu, float16* bv,
+                              int16* blocked) {
+    int16 live = p->active;
+    uint16 tests = (uint16)(0);
+    for (uint k = 0; k < count && any(live); ++k) {
+        const uint id = ids ? ids[k] : k;
+        tests += as_uint16(live) & (uint16)(1);
+        int16 hit;
+#ifndef RC_WATERTIGHT
+        if (id < nT) {
+            __global const RcTriangle* tri = triangles + id;
+            const float3 v0 = tri->v0.xyz;
+            hit = rc_accel_triangle16(p, live, v0, tri->v1.xyz - v0, tri->v2.xyz - v0, id, bt, bp,
+                                      bu, bv);
+        } else
+#endif
+        {
+            hit = rc_cones_primitive_lanes(p, live, id, triangles, spheres, quadrics, nT, nS, bt,
+                                           bp, bu, bv);
+        }
+        if (anyHit) {
+            *blocked |= hit;
+            live &= ~hit;
+        }
+    }
+    return tests;
+}
+
+/* One work-item per 16 sorted positions [16 w, 16 w + 16), rays order[j]: a tile's rays
+ * (RC_CONE_TILE_RAYS, a multiple of 16) test its candidates together. counters[ray] counts
+ * primitive tests. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_cones(
     __global const RcRay* rays, uint n, __global const uint* order,
     __global const uint* tileOffsets, __global const uint* tileCounts,
     __global const uint* tileList, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
     __constant const RcRenderParams* params, __global RcHit* hits, __global uint* counters) {
-    const uint j = get_global_id(0);
-    if (j >= n) return;
-    const uint i = order[j];
-    const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-    const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
+    const uint first = get_global_id(0) * RC_PACKET;
+    if (first >= n) return;
     const uint nT = params->nTriangles, nS = params->nSpheres;
     const uint nPrims = nT + nS + params->nQuadrics;
     __global const uint* ids;
     const uint count =
-        rc_cones_tile_candidates(j, tileOffsets, tileCounts, tileList, nPrims, &ids);
-    RcHit best = rc_no_hit(tmax);
-    for (uint k = 0; k < count; ++k)
-        rc_intersect_primitive(ids ? ids[k] : k, o, d, tmin, tmax, triangles, spheres, quadrics,
-                               nT, nS, &best);
-    if (best.prim == RC_NO_HIT) best.t = INFINITY;
-    hits[i] = best;
-    counters[i] = count;
+        rc_cones_tile_candidates(first, tileOffsets, tileCounts, tileList, nPrims, &ids);
+    RcBvhPacket p;
+    rc_cones_load_packet(rays, order, first, n, 0, &p);
+    float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
+    uint16 bp = (uint16)(RC_NO_HIT);
+    int16 blocked = (int16)(0);
+    const uint16 tests = rc_cones_packet(&p, 0, count, ids, triangles, spheres, quadrics, nT, nS,
+                                         &bt, &bp, &bu, &bv, &blocked);
+    float ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
+    uint ps[RC_PACKET], cs[RC_PACKET];
+    vstore16(bt, 0, ts), vstore16(bu, 0, us), vstore16(bv, 0, vs);
+    vstore16(bp, 0, ps), vstore16(tests, 0, cs);
+    for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
+        const uint i = order[first + k];
+        RcHit h;
+        h.t = ps[k] == RC_NO_HIT ? INFINITY : ts[k];
+        h.prim = ps[k];
+        h.u = us[k];
+        h.v = vs[k];
+        hits[i] = h;
+        counters[i] = cs[k];
+    }
 }
 
-/* Any hit before the light ends the search. */
+/* Any hit before the light ends a ray's search; one work-item per 16 sorted positions. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_cones(
     __global const RcRay* rays, uint n, __global const uint* order,
     __global const uint* tileOffsets, __global const uint* tileCounts,
     __global const uint* tileList, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
     __constant const RcRenderParams* params, __global uchar* blocked, __global uint* counters) {
-    const uint j = get_global_id(0);
-    if (j >= n) return;
-    const uint i = order[j];
-    blocked[i] = 0;
-    counters[i] = 0;
-    /* An empty slot has tmax 0: nothing can block it. */
-    if (rays[i].direction.w == 0.0f) return;
-    const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-    const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
+    const uint first = get_global_id(0) * RC_PACKET;
+    if (first >= n) return;
     const uint nT = params->nTriangles, nS = params->nSpheres;
     const uint nPrims = nT + nS + params->nQuadrics;
     __global const uint* ids;
     const uint count =
-        rc_cones_tile_candidates(j, tileOffsets, tileCounts, tileList, nPrims, &ids);
-    RcHit best = rc_no_hit(tmax);
-    uint k = 0;
-    while (k < count) {
-        const int hit = rc_intersect_primitive(ids ? ids[k] : k, o, d, tmin, tmax, triangles,
-                                               spheres, quadrics, nT, nS, &best);
-        ++k;
-        if (hit) {
-            blocked[i] = 1;
-            break;
-        }
+        rc_cones_tile_candidates(first, tileOffsets, tileCounts, tileList, nPrims, &ids);
+    RcBvhPacket p;
+    rc_cones_load_packet(rays, order, first, n, 1, &p);
+    float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
+    uint16 bp = (uint16)(RC_NO_HIT);
+    int16 hit = (int16)(0);
+    const uint16 tests = rc_cones_packet(&p, 1, count, ids, triangles, spheres, quadrics, nT, nS,
+                                         &bt, &bp, &bu, &bv, &hit);
+    int hs[RC_PACKET];
+    uint cs[RC_PACKET];
+    vstore16(hit, 0, hs), vstore16(tests, 0, cs);
+    for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
+        const uint i = order[first + k];
+        blocked[i] = hs[k] != 0;
+        counters[i] = cs[k];
     }
-    counters[i] = k;
 }

@@ -1,14 +1,22 @@
-/* Ray queries through the uniform grid (include/rayclass/accel/grid.h): one ray per work-item, a
- * 3D-DDA (Amanatides & Woo) from the cell where the ray enters the grid, every cell's primitives
- * tested with the routines of intersect.cl over the whole ray (lower id wins ties), so the hits
- * equal brute force's. Without mailboxes a primitive in several cells is tested in each, and a
- * hit found in a cell may lie in a later one: the walk ends only once the nearest hit lies
- * inside the cells walked so far (before the current cell's exit, less the slack), so a hit at
- * exactly a cell boundary still meets the lower ids beyond it. A cell's exit is computed afresh
- * from its index, so no rounding accumulates along the walk. counters[i] counts primitive
- * tests, counters[n + i] cells visited. */
+/* Ray queries through the uniform grid (include/rayclass/accel/grid.h), every cell's primitives
+ * tested with the routines of intersect.cl (or their float16 twin, accel_common.cl) over the
+ * whole ray, lower id wins ties, so the hits equal brute force's. Without mailboxes a primitive
+ * in several cells is tested in each, and a hit found in a cell may lie in a later one: a walk
+ * ends only once the nearest hit lies inside the cells walked so far (before their exit, less
+ * the slack), so a hit at exactly a cell boundary still meets the lower ids beyond it.
+ *
+ * A work-item answers 16 consecutive rays. A coherent packet (rc_bvh_load_packet's test) walks
+ * the grid slice by slice along the axis its directions follow most (Wald et al. 2006,
+ * coherent grid traversal): in each slice, every cell of the box that holds the packet's rays
+ * there (their points at the slice's two faces, widened by the slack) is tested against the
+ * rays in the slice, one triangle at a time against all 16. Other packets, and scenes with
+ * spheres, quadrics or the watertight test, walk ray by ray with a 3D-DDA (Amanatides & Woo)
+ * from the cell where the ray enters the grid; a cell's exit is computed afresh from its
+ * index, so no rounding accumulates along the walk. counters[i] counts primitive tests of ray i,
+ * counters[n + i] the cells visited for it. */
 #include "rc_types.h"
 #include "intersect.cl"
+#include "bvh.cl"
 #include "accel_common.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
@@ -62,49 +70,216 @@ inline uint rc_grid_trace(float3 o, float3 d, float tmin, float tmax, int anyHit
     }
 }
 
+/* Component `axis` of a packet's float16 triple. */
+inline float16 rc_grid_lane_axis(float16 x, float16 y, float16 z, uint axis) {
+    return axis == 0 ? x : (axis == 1 ? y : z);
+}
+
+/* The cells [*c0, *c1] along one axis (origin lo, cell size, res cells) that hold the points
+ * o + t d for t in [t0, t1] of the lanes `in`. */
+inline void rc_grid_lane_range(float16 o, float16 d, float16 t0, float16 t1, int16 in, float lo,
+                               float size, uint res, int* c0, int* c1) {
+    const float16 a = o + t0 * d, b = o + t1 * d;
+    const float lowest = rc_hmin16(select((float16)(INFINITY), fmin(a, b), in));
+    const float highest = rc_hmax16(select((float16)(-INFINITY), fmax(a, b), in));
+    *c0 = clamp((int)floor((lowest - lo) / size), 0, (int)res - 1);
+    *c1 = clamp((int)floor((highest - lo) / size), 0, (int)res - 1);
+}
+
+/* Walks the grid once for a coherent packet (triangles only): nearest hits in (bt, bp, bu, bv),
+ * or with anyHit the lanes that found a hit in *blocked. Per lane the primitive tests (returned)
+ * and the cells visited (*visits). A lane takes part in a slice while its interval reaches
+ * into the slice and its nearest hit (-inf once blocked) does not lie before it. */
+inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit,
+                                   __global const uint* cellStart, __global const uint* primIndex,
+                                   float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
+                                   __global const RcTriangle* triangles, float16* bt, uint16* bp,
+                                   float16* bu, float16* bv, int16* blocked, uint16* visits) {
+    const float slackAbs = boxLo.w;
+    /* rc_accel_clip lane by lane */
+    const float16 ax = (boxLo.x - p->ox) * p->ix, bx = (boxHi.x - p->ox) * p->ix;
+    const float16 ay = (boxLo.y - p->oy) * p->iy, by = (boxHi.y - p->oy) * p->iy;
+    const float16 az = (boxLo.z - p->oz) * p->iz, bz = (boxHi.z - p->oz) * p->iz;
+    const float16 near = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
+    const float16 far = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
+    const float16 tf = fmin(p->tmax, far + (1e-5f * fabs(far) + slackAbs));
+    const float16 tn = fmax(p->tmin, near - (1e-5f * fabs(near) + slackAbs));
+    const int16 inGrid = p->active & (tn <= tf);
+    uint16 tests = (uint16)(0);
+    if (!any(inGrid)) return tests;
+    float16 reach = *bt;
+    /* The slicing axis k: the one the directions follow most; u and w are the other two. */
+    const float sx = rc_hmax16(select((float16)(0.0f), fabs(p->dx), inGrid));
+    const float sy = rc_hmax16(select((float16)(0.0f), fabs(p->dy), inGrid));
+    const float sz = rc_hmax16(select((float16)(0.0f), fabs(p->dz), inGrid));
+    const uint k = sx >= sy && sx >= sz ? 0 : (sy >= sz ? 1 : 2);
+    const uint u = k == 0 ? 1 : 0, w = k == 2 ? 1 : 2;
+    const float lo[3] = {boxLo.x, boxLo.y, boxLo.z}, size[3] = {cellSize.x, cellSize.y, cellSize.z};
+    const uint r[3] = {res.x, res.y, res.z};
+    const float16 ok = rc_grid_lane_axis(p->ox, p->oy, p->oz, k);
+    const float16 ik = rc_grid_lane_axis(p->ix, p->iy, p->iz, k);
+    const float16 ou = rc_grid_lane_axis(p->ox, p->oy, p->oz, u);
+    const float16 du = rc_grid_lane_axis(p->dx, p->dy, p->dz, u);
+    const float16 ow = rc_grid_lane_axis(p->ox, p->oy, p->oz, w);
+    const float16 dw = rc_grid_lane_axis(p->dx, p->dy, p->dz, w);
+    const float16 dk = rc_grid_lane_axis(p->dx, p->dy, p->dz, k);
+    /* The slices the lanes' intervals reach, one more on each side for rounding. */
+    int first, last;
+    rc_grid_lane_range(ok, dk, tn, tf, inGrid, lo[k], size[k], r[k], &first, &last);
+    first = max(first - 1, 0);
+    last = min(last + 1, (int)r[k] - 1);
+    const int backwards = any(inGrid & (as_int16(dk) < 0));
+    const int step = backwards ? -1 : 1;
+    for (int s = backwards ? last : first; s >= first && s <= last; s += step) {
+        const float16 ta = (lo[k] + (float)s * size[k] - ok) * ik;
+        const float16 tb = (lo[k] + (float)(s + 1) * size[k] - ok) * ik;
+        const float16 ea = fmin(ta, tb), eb = fmax(ta, tb);
+        const float16 t0 = fmax(tn, ea - (1e-5f * fabs(ea) + slackAbs));
+        const float16 t1 = fmin(tf, eb + (1e-5f * fabs(eb) + slackAbs));
+        const int16 pending = inGrid & (t0 <= reach);
+        /* No lane reaches beyond this slice, or every lane has its hit before it. */
+        if (!any(pending & (t0 <= tf))) break;
+        int16 in = pending & (t0 <= t1);
+        if (!any(in)) continue;
+        int u0, u1, w0, w1;
+        rc_grid_lane_range(ou, du, t0, t1, in, lo[u], size[u], r[u], &u0, &u1);
+        rc_grid_lane_range(ow, dw, t0, t1, in, lo[w], size[w], r[w], &w0, &w1);
+        uint cell[3];
+        cell[k] = (uint)s;
+        for (int cw = w0; cw <= w1; ++cw) {
+            cell[w] = (uint)cw;
+            for (int cu = u0; cu <= u1; ++cu) {
+                cell[u] = (uint)cu;
+                const uint c = cell[0] + res.x * (cell[1] + res.y * cell[2]);
+                *visits += as_uint16(in) & (uint16)(1);
+                const uint end = cellStart[c + 1];
+                for (uint j = cellStart[c]; j < end; ++j) {
+                    const uint id = primIndex[j];
+                    const RcTriangle tri = triangles[id];
+                    const int16 lanes = in & (t0 <= reach);
+                    tests += as_uint16(lanes) & (uint16)(1);
+                    const int16 hit =
+                        rc_accel_triangle16(p, lanes, tri.v0.xyz, tri.v1.xyz - tri.v0.xyz,
+                                            tri.v2.xyz - tri.v0.xyz, id, bt, bp, bu, bv);
+                    if (anyHit) {
+                        *blocked |= hit;
+                        reach = select(reach, (float16)(-INFINITY), hit);
+                        in &= ~hit;
+                        if (!any(in)) break;
+                    } else {
+                        reach = *bt;
+                    }
+                }
+                if (!any(in)) break;
+            }
+            if (!any(in)) break;
+        }
+    }
+    return tests;
+}
+
+/* The coherent-packet walk's answers for rays [first, first + 16): nearest hits, or blocked
+ * flags when anyHit. */
+inline void rc_grid_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
+                           __global const uint* cellStart, __global const uint* primIndex,
+                           float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
+                           __global const RcTriangle* triangles, __global RcHit* hits,
+                           __global uchar* blockedOut, __global uint* counters) {
+    float16 bt = p->tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
+    uint16 bp = (uint16)(RC_NO_HIT), visits = (uint16)(0);
+    int16 blocked = (int16)(0);
+    const uint16 tests =
+        rc_grid_trace_packet(p, anyHit, cellStart, primIndex, boxLo, boxHi, cellSize, res,
+                             triangles, &bt, &bp, &bu, &bv, &blocked, &visits);
+    float ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
+    uint ps[RC_PACKET], cs[RC_PACKET], ns[RC_PACKET];
+    int bs[RC_PACKET];
+    vstore16(bt, 0, ts);
+    vstore16(bu, 0, us);
+    vstore16(bv, 0, vs);
+    vstore16(bp, 0, ps);
+    vstore16(tests, 0, cs);
+    vstore16(visits, 0, ns);
+    vstore16(blocked, 0, bs);
+    for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
+        if (anyHit) {
+            blockedOut[first + k] = bs[k] != 0;
+        } else {
+            RcHit h;
+            h.t = ps[k] == RC_NO_HIT ? INFINITY : ts[k];
+            h.prim = ps[k];
+            h.u = us[k];
+            h.v = vs[k];
+            hits[first + k] = h;
+        }
+        counters[first + k] = cs[k];
+        counters[n + first + k] = ns[k];
+    }
+}
+
+/* One work-item per 16 rays rays[16 i, 16 i + 16). */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_grid(
     __global const RcRay* rays, uint n, __global const uint* cellStart,
     __global const uint* primIndex, float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
     __global const RcTriangle* triangles, __global const RcSphere* spheres,
     __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
     __global RcHit* hits, __global uint* counters) {
-    const uint i = get_global_id(0);
-    if (i >= n) return;
-    const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-    const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-    RcHit best = rc_no_hit(tmax);
-    uint tests = 0, visits = 0;
-    if (params->nTriangles + params->nSpheres + params->nQuadrics > 0)
-        tests = rc_grid_trace(o, d, tmin, tmax, 0, cellStart, primIndex, boxLo, boxHi, cellSize,
-                              res, triangles, spheres, quadrics, params->nTriangles,
-                              params->nSpheres, &best, &visits);
-    if (best.prim == RC_NO_HIT) best.t = INFINITY;
-    hits[i] = best;
-    counters[i] = tests;
-    counters[n + i] = visits;
+    const uint first = get_global_id(0) * RC_PACKET;
+    if (first >= n) return;
+    const int hasPrims = params->nTriangles + params->nSpheres + params->nQuadrics > 0;
+    RcBvhPacket p;
+    if (hasPrims && rc_packets_allowed(params) &&
+        rc_bvh_load_packet(rays, first, n, 0, rc_accel_max_spread2(boxLo, boxHi), &p)) {
+        rc_grid_packet(&p, 0, first, n, cellStart, primIndex, boxLo, boxHi, cellSize, res,
+                       triangles, hits, 0, counters);
+        return;
+    }
+    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
+        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
+        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
+        RcHit best = rc_no_hit(tmax);
+        uint tests = 0, visits = 0;
+        if (hasPrims)
+            tests = rc_grid_trace(o, d, tmin, tmax, 0, cellStart, primIndex, boxLo, boxHi,
+                                  cellSize, res, triangles, spheres, quadrics, params->nTriangles,
+                                  params->nSpheres, &best, &visits);
+        if (best.prim == RC_NO_HIT) best.t = INFINITY;
+        hits[i] = best;
+        counters[i] = tests;
+        counters[n + i] = visits;
+    }
 }
 
-/* Any hit before the light ends the search. */
+/* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_grid(
     __global const RcRay* rays, uint n, __global const uint* cellStart,
     __global const uint* primIndex, float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
     __global const RcTriangle* triangles, __global const RcSphere* spheres,
     __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
     __global uchar* blocked, __global uint* counters) {
-    const uint i = get_global_id(0);
-    if (i >= n) return;
-    blocked[i] = 0;
-    counters[i] = counters[n + i] = 0;
-    /* An empty slot has tmax 0: nothing can block it. */
-    if (rays[i].direction.w == 0.0f) return;
-    if (params->nTriangles + params->nSpheres + params->nQuadrics == 0) return;
-    const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-    const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-    RcHit best = rc_no_hit(tmax);
-    uint visits = 0;
-    counters[i] = rc_grid_trace(o, d, tmin, tmax, 1, cellStart, primIndex, boxLo, boxHi, cellSize,
-                                res, triangles, spheres, quadrics, params->nTriangles,
-                                params->nSpheres, &best, &visits);
-    counters[n + i] = visits;
-    blocked[i] = best.prim != RC_NO_HIT;
+    const uint first = get_global_id(0) * RC_PACKET;
+    if (first >= n) return;
+    const int hasPrims = params->nTriangles + params->nSpheres + params->nQuadrics > 0;
+    RcBvhPacket p;
+    if (hasPrims && rc_packets_allowed(params) &&
+        rc_bvh_load_packet(rays, first, n, 1, rc_accel_max_spread2(boxLo, boxHi), &p)) {
+        rc_grid_packet(&p, 1, first, n, cellStart, primIndex, boxLo, boxHi, cellSize, res,
+                       triangles, 0, blocked, counters);
+        return;
+    }
+    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
+        blocked[i] = 0;
+        counters[i] = counters[n + i] = 0;
+        /* An empty slot has tmax 0: nothing can block it. */
+        if (rays[i].direction.w == 0.0f || !hasPrims) continue;
+        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
+        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
+        RcHit best = rc_no_hit(tmax);
+        uint visits = 0;
+        counters[i] = rc_grid_trace(o, d, tmin, tmax, 1, cellStart, primIndex, boxLo, boxHi,
+                                    cellSize, res, triangles, spheres, quadrics,
+                                    params->nTriangles, params->nSpheres, &best, &visits);
+        counters[n + i] = visits;
+        blocked[i] = best.prim != RC_NO_HIT;
+    }
 }

@@ -1,12 +1,24 @@
-/* Ray queries through the SAH kd-tree (include/rayclass/accel/kdtree.h): one ray per work-item,
- * a per-ray stack of (node, entry, exit) front to back, every leaf's primitives tested with the
- * routines of intersect.cl over the whole ray (lower id wins ties), so the hits equal brute
- * force's. An entry waits on the stack with the distance at which the ray enters its cell, less
- * the slack: it is dropped when the nearest hit found since lies before that, so a hit at exactly
- * a cell boundary still meets the lower ids beyond it. counters[i] counts primitive tests,
- * counters[n + i] nodes visited. */
+/* Ray queries through the SAH kd-tree (include/rayclass/accel/kdtree.h), whose leaves hold their
+ * primitives in the BVH's leaf blocks (RcBvhLeafBlock8), tested with the BVH's leaf routines
+ * (bvh.cl), so the hits equal brute force's (lower id wins ties).
+ *
+ * A work-item answers 16 consecutive rays. A coherent packet (rc_bvh_load_packet's test: one
+ * octant, a narrow cone, nearby origins) walks the tree once, float16 over its rays: each lane
+ * keeps its own interval in the current cell, the packet enters a child when any live lane
+ * does, and a leaf's triangles are tested one at a time against every lane. Because the lanes
+ * share their directions' signs, the near child is the same for all of them. Other packets, and
+ * scenes with spheres, quadrics or the watertight test, walk ray by ray: a per-ray stack of
+ * (node, entry, exit), front to back.
+ *
+ * Both walks widen every interval by the slack (accel_common.cl), so rounding never skips a
+ * cell a ray touches, and a cell waits on the stack with the distance at which the ray enters
+ * it, less the slack: it is dropped once the nearest hit found since lies before that, so a hit
+ * at exactly a cell boundary still meets the lower ids beyond it. counters[i] counts primitive
+ * tests of ray i, counters[n + i] the nodes it visited (in a packet, those visited while it was
+ * live). */
 #include "rc_types.h"
 #include "intersect.cl"
+#include "bvh.cl"
 #include "accel_common.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
@@ -17,7 +29,7 @@
 /* Walks the tree; with anyHit it returns at the first hit. Returns the primitive tests done and
  * adds the nodes visited to *visits. */
 inline uint rc_kd_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
-                        __global const RcKdNode* nodes, __global const uint* primIndex,
+                        __global const RcKdNode* nodes, __global const RcBvhLeafBlock8* blocks,
                         float4 boxLo, float4 boxHi, __global const RcTriangle* triangles,
                         __global const RcSphere* spheres, __global const RcQuadric* quadrics,
                         uint nT, uint nS, RcHit* best, uint* visits) {
@@ -61,15 +73,10 @@ inline uint rc_kd_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
             }
             continue;
         }
-        const uint first = nd.data, count = nd.word >> 2;
-        for (uint k = 0; k < count; ++k) {
-            const uint id = primIndex[first + k];
-            ++tests;
-            if (rc_intersect_primitive(id, o, d, tmin, tmax, triangles, spheres, quadrics, nT, nS,
-                                       best) &&
-                anyHit)
-                return tests;
-        }
+        const uint count = nd.word >> 2;
+        if (count > 0 && RC_BVH_LEAF(count, blocks + nd.data, o, d, tmin, tmax, anyHit, triangles,
+                                     spheres, quadrics, nT, nS, best, &tests))
+            return tests;
         for (;;) {
             if (sp == 0) return tests;
             --sp;
@@ -81,48 +88,197 @@ inline uint rc_kd_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
     }
 }
 
+/* Walks the tree once for a coherent packet (triangles only): nearest hits in (bt, bp, bu, bv),
+ * or with anyHit the lanes that found a hit in *blocked (a lane stops at its first). Per lane
+ * the primitive tests (returned) and the nodes visited (*visits). A lane is live in a cell while
+ * its interval there is not empty and does not begin beyond its reach (its nearest hit, or -inf
+ * once blocked). */
+inline uint16 rc_kd_trace_packet(const RcBvhPacket* p, int anyHit, __global const RcKdNode* nodes,
+                                 __global const RcBvhLeafBlock8* blocks, float4 boxLo,
+                                 float4 boxHi, float16* bt, uint16* bp, float16* bu, float16* bv,
+                                 int16* blocked, uint16* visits) {
+    const float slackAbs = boxLo.w;
+    /* rc_accel_clip lane by lane */
+    const float16 ax = (boxLo.x - p->ox) * p->ix, bx = (boxHi.x - p->ox) * p->ix;
+    const float16 ay = (boxLo.y - p->oy) * p->iy, by = (boxHi.y - p->oy) * p->iy;
+    const float16 az = (boxLo.z - p->oz) * p->iz, bz = (boxHi.z - p->oz) * p->iz;
+    const float16 near = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
+    const float16 far = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
+    float16 tf = fmin(p->tmax, far + (1e-5f * fabs(far) + slackAbs));
+    float16 tn = fmax(p->tmin, near - (1e-5f * fabs(near) + slackAbs));
+    tn = select((float16)(INFINITY), tn, p->active);
+    float16 reach = *bt;
+    /* The packet's rays share their directions' signs: the child on the side the first live
+     * ray points away from comes first for every lane. */
+    const int16 neg0 = p->active & (as_int16(p->dx) < 0), neg1 = p->active & (as_int16(p->dy) < 0),
+                neg2 = p->active & (as_int16(p->dz) < 0);
+    const int negative[3] = {any(neg0), any(neg1), any(neg2)};
+    uint stackNode[RC_KD_STACK];
+    float16 stackNear[RC_KD_STACK], stackFar[RC_KD_STACK];
+    int sp = 0;
+    uint node = 0;
+    uint16 tests = (uint16)(0);
+    for (;;) {
+        const int16 live = (tn <= tf) & (tn <= reach);
+        if (any(live)) {
+            const RcKdNode nd = nodes[node];
+            *visits += as_uint16(live) & (uint16)(1);
+            const uint axis = nd.word & 3u;
+            if (axis != RC_KD_LEAF) {
+                const float split = as_float(nd.data);
+                const float16 o = axis == 0 ? p->ox : (axis == 1 ? p->oy : p->oz);
+                const float16 inv = axis == 0 ? p->ix : (axis == 1 ? p->iy : p->iz);
+                /* ts: where each ray crosses the plane; before it a ray is on the first side. */
+                const float16 ts = (split - o) * inv;
+                const float16 s = 1e-5f * fabs(ts) + slackAbs;
+                const int16 needFirst = live & (tn <= ts + s);
+                const int16 needSecond = live & (tf >= ts - s);
+                const uint lower = node + 1, upper = nd.word >> 2;
+                const uint first = negative[axis] ? upper : lower;
+                const uint second = negative[axis] ? lower : upper;
+                const float16 secondNear = fmax(tn, ts - s);
+                if (!any(needFirst)) {
+                    node = second;
+                    tn = select((float16)(INFINITY), secondNear, needSecond);
+                    continue;
+                }
+                if (any(needSecond)) {
+                    stackNode[sp] = second;
+                    stackNear[sp] = select((float16)(INFINITY), secondNear, needSecond);
+                    stackFar[sp++] = tf;
+                }
+                node = first;
+                tn = select((float16)(INFINITY), tn, needFirst);
+                tf = fmin(tf, ts + s);
+                continue;
+            }
+            const uint count = nd.word >> 2;
+            __global const RcBvhLeafBlock8* blk = blocks + nd.data;
+            for (uint k = 0; k < count; ++k) {
+                const int16 lanes = (tn <= reach) & (tn <= tf);
+                tests += as_uint16(lanes) & (uint16)(1);
+                __global const RcBvhLeafBlock8* b = blk + k / 8;
+                const uint lane = k % 8;
+                const int16 hit = rc_accel_triangle16(
+                    p, lanes, (float3)(b->v0x[lane], b->v0y[lane], b->v0z[lane]),
+                    (float3)(b->e1x[lane], b->e1y[lane], b->e1z[lane]),
+                    (float3)(b->e2x[lane], b->e2y[lane], b->e2z[lane]), b->prim[lane], bt, bp, bu,
+                    bv);
+                if (anyHit) {
+                    *blocked |= hit;
+                    reach = select(reach, (float16)(-INFINITY), hit);
+                    if (!any(lanes & ~hit)) break;
+                } else {
+                    reach = *bt;
+                }
+            }
+        }
+        if (sp == 0) return tests;
+        --sp;
+        node = stackNode[sp];
+        tn = stackNear[sp];
+        tf = stackFar[sp];
+    }
+}
+
+/* The coherent-packet walk's answers for rays [first, first + 16): nearest hits, or blocked
+ * flags when anyHit. */
+inline void rc_kd_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
+                         __global const RcKdNode* nodes, __global const RcBvhLeafBlock8* blocks,
+                         float4 boxLo, float4 boxHi, __global RcHit* hits,
+                         __global uchar* blockedOut, __global uint* counters) {
+    float16 bt = p->tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
+    uint16 bp = (uint16)(RC_NO_HIT), visits = (uint16)(0);
+    int16 blocked = (int16)(0);
+    const uint16 tests = rc_kd_trace_packet(p, anyHit, nodes, blocks, boxLo, boxHi, &bt, &bp, &bu,
+                                            &bv, &blocked, &visits);
+    float ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
+    uint ps[RC_PACKET], cs[RC_PACKET], ns[RC_PACKET];
+    int bs[RC_PACKET];
+    vstore16(bt, 0, ts);
+    vstore16(bu, 0, us);
+    vstore16(bv, 0, vs);
+    vstore16(bp, 0, ps);
+    vstore16(tests, 0, cs);
+    vstore16(visits, 0, ns);
+    vstore16(blocked, 0, bs);
+    for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
+        if (anyHit) {
+            blockedOut[first + k] = bs[k] != 0;
+        } else {
+            RcHit h;
+            h.t = ps[k] == RC_NO_HIT ? INFINITY : ts[k];
+            h.prim = ps[k];
+            h.u = us[k];
+            h.v = vs[k];
+            hits[first + k] = h;
+        }
+        counters[first + k] = cs[k];
+        counters[n + first + k] = ns[k];
+    }
+}
+
+/* One work-item per 16 rays rays[16 i, 16 i + 16). */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_kdtree(
     __global const RcRay* rays, uint n, __global const RcKdNode* nodes,
-    __global const uint* primIndex, float4 boxLo, float4 boxHi,
+    __global const RcBvhLeafBlock8* blocks, float4 boxLo, float4 boxHi,
     __global const RcTriangle* triangles, __global const RcSphere* spheres,
     __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
     __global RcHit* hits, __global uint* counters) {
-    const uint i = get_global_id(0);
-    if (i >= n) return;
-    const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-    const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-    RcHit best = rc_no_hit(tmax);
-    uint tests = 0, visits = 0;
-    if (params->nTriangles + params->nSpheres + params->nQuadrics > 0)
-        tests = rc_kd_trace(o, d, tmin, tmax, 0, nodes, primIndex, boxLo, boxHi, triangles, spheres,
-                            quadrics, params->nTriangles, params->nSpheres, &best, &visits);
-    if (best.prim == RC_NO_HIT) best.t = INFINITY;
-    hits[i] = best;
-    counters[i] = tests;
-    counters[n + i] = visits;
+    const uint first = get_global_id(0) * RC_PACKET;
+    if (first >= n) return;
+    const uint nT = params->nTriangles, nS = params->nSpheres;
+    const int hasPrims = nT + nS + params->nQuadrics > 0;
+    RcBvhPacket p;
+    if (hasPrims && rc_packets_allowed(params) &&
+        rc_bvh_load_packet(rays, first, n, 0, rc_accel_max_spread2(boxLo, boxHi), &p)) {
+        rc_kd_packet(&p, 0, first, n, nodes, blocks, boxLo, boxHi, hits, 0, counters);
+        return;
+    }
+    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
+        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
+        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
+        RcHit best = rc_no_hit(tmax);
+        uint tests = 0, visits = 0;
+        if (hasPrims)
+            tests = rc_kd_trace(o, d, tmin, tmax, 0, nodes, blocks, boxLo, boxHi, triangles,
+                                spheres, quadrics, nT, nS, &best, &visits);
+        if (best.prim == RC_NO_HIT) best.t = INFINITY;
+        hits[i] = best;
+        counters[i] = tests;
+        counters[n + i] = visits;
+    }
 }
 
-/* Any hit before the light ends the search. */
+/* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_kdtree(
     __global const RcRay* rays, uint n, __global const RcKdNode* nodes,
-    __global const uint* primIndex, float4 boxLo, float4 boxHi,
+    __global const RcBvhLeafBlock8* blocks, float4 boxLo, float4 boxHi,
     __global const RcTriangle* triangles, __global const RcSphere* spheres,
     __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
     __global uchar* blocked, __global uint* counters) {
-    const uint i = get_global_id(0);
-    if (i >= n) return;
-    blocked[i] = 0;
-    counters[i] = counters[n + i] = 0;
-    /* An empty slot has tmax 0: nothing can block it. */
-    if (rays[i].direction.w == 0.0f) return;
-    if (params->nTriangles + params->nSpheres + params->nQuadrics == 0) return;
-    const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-    const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-    RcHit best = rc_no_hit(tmax);
-    uint visits = 0;
-    counters[i] =
-        rc_kd_trace(o, d, tmin, tmax, 1, nodes, primIndex, boxLo, boxHi, triangles, spheres,
-                    quadrics, params->nTriangles, params->nSpheres, &best, &visits);
-    counters[n + i] = visits;
-    blocked[i] = best.prim != RC_NO_HIT;
+    const uint first = get_global_id(0) * RC_PACKET;
+    if (first >= n) return;
+    const uint nT = params->nTriangles, nS = params->nSpheres;
+    const int hasPrims = nT + nS + params->nQuadrics > 0;
+    RcBvhPacket p;
+    if (hasPrims && rc_packets_allowed(params) &&
+        rc_bvh_load_packet(rays, first, n, 1, rc_accel_max_spread2(boxLo, boxHi), &p)) {
+        rc_kd_packet(&p, 1, first, n, nodes, blocks, boxLo, boxHi, 0, blocked, counters);
+        return;
+    }
+    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
+        blocked[i] = 0;
+        counters[i] = counters[n + i] = 0;
+        /* An empty slot has tmax 0: nothing can block it. */
+        if (rays[i].direction.w == 0.0f || !hasPrims) continue;
+        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
+        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
+        RcHit best = rc_no_hit(tmax);
+        uint visits = 0;
+        counters[i] = rc_kd_trace(o, d, tmin, tmax, 1, nodes, blocks, boxLo, boxHi, triangles,
+                                  spheres, quadrics, nT, nS, &best, &visits);
+        counters[n + i] = visits;
+        blocked[i] = best.prim != RC_NO_HIT;
+    }
 }

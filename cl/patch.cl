@@ -52,10 +52,18 @@ inline float3 rc_patch_channel(const float* c, const float* bu, const float* dbu
     return (float3)(x, xs, xt);
 }
 
-/* The nearest hit of the ray with the patch box in (tmin, tmax): t and the local (u, v). */
-inline int rc_intersect_patch_box(float3 o, float3 d, float tmin, float tmax,
-                                  __global const float4* analytic, __global const RcPatchBox* box,
-                                  float* tOut, float* uOut, float* vOut) {
+/* How one Newton search ended (--stats, cl/patch_stats.cl): the ray missed the control points'
+ * hull, |F| fell below eps, |F| grew, (u, v) left the window around the box, or the cap. */
+#define RC_NEWTON_CULLED 0
+#define RC_NEWTON_CONVERGED 1
+#define RC_NEWTON_DIVERGED 2
+#define RC_NEWTON_LEFT 3
+#define RC_NEWTON_CAP 4
+
+/* rc_intersect_patch_box, also telling how the search ended and after how many Newton steps. */
+inline int rc_patch_box_newton(float3 o, float3 d, float tmin, float tmax,
+                               __global const float4* analytic, __global const RcPatchBox* box,
+                               float* tOut, float* uOut, float* vOut, int* outcome, int* steps) {
     float3 n1, n2;
     rc_patch_planes(d, &n1, &n2);
     __global const float4* pts = analytic + box->points;
@@ -73,6 +81,8 @@ inline int rc_intersect_patch_box(float3 o, float3 d, float tmin, float tmax,
         signs |= (a[k] > 0.0f ? 1 : 0) | (a[k] < 0.0f ? 2 : 0) | (b[k] > 0.0f ? 4 : 0) |
                  (b[k] < 0.0f ? 8 : 0);
     }
+    *outcome = RC_NEWTON_CULLED;
+    *steps = 0;
     /* All control points on one side of a plane: the ray misses the convex hull. */
     if ((signs & 3) != 3 || (signs & 12) != 12) return 0;
     const float eps = spread / wMin * RC_PATCH_EPS;
@@ -87,11 +97,16 @@ inline int rc_intersect_patch_box(float3 o, float3 d, float tmin, float tmax,
         const float3 W = rc_patch_channel(w, bu, dbu, bv, dbv);
         const float f1 = A.x / W.x, f2 = B.x / W.x;
         const float err = fmax(fabs(f1), fabs(f2));
+        *steps = it;
         if (err < eps) {
             converged = 1;
+            *outcome = RC_NEWTON_CONVERGED;
             break;
         }
-        if (!(err <= prev) || it == RC_PATCH_ITERATIONS) break;
+        if (!(err <= prev) || it == RC_PATCH_ITERATIONS) {
+            *outcome = it == RC_PATCH_ITERATIONS ? RC_NEWTON_CAP : RC_NEWTON_DIVERGED;
+            break;
+        }
         prev = err;
         const float j11 = (A.y - f1 * W.y) / W.x, j12 = (A.z - f1 * W.z) / W.x;
         const float j21 = (B.y - f2 * W.y) / W.x, j22 = (B.z - f2 * W.z) / W.x;
@@ -104,7 +119,11 @@ inline int rc_intersect_patch_box(float3 o, float3 d, float tmin, float tmax,
             t += t <= 0.5f ? 0.0625f : -0.0625f;
             prev = INFINITY;
         }
-        if (!(s > -0.5f && s < 1.5f && t > -0.5f && t < 1.5f)) break;
+        if (!(s > -0.5f && s < 1.5f && t > -0.5f && t < 1.5f)) {
+            *outcome = RC_NEWTON_LEFT;
+            *steps = it + 1;
+            break;
+        }
     }
     if (!converged) return 0;
     if (!(s >= 0.0f && (s < 1.0f || (box->closedU && s == 1.0f)))) return 0;
@@ -123,6 +142,15 @@ inline int rc_intersect_patch_box(float3 o, float3 d, float tmin, float tmax,
     *uOut = s;
     *vOut = t;
     return 1;
+}
+
+/* The nearest hit of the ray with the patch box in (tmin, tmax): t and the local (u, v). */
+inline int rc_intersect_patch_box(float3 o, float3 d, float tmin, float tmax,
+                                  __global const float4* analytic, __global const RcPatchBox* box,
+                                  float* tOut, float* uOut, float* vOut) {
+    int outcome, steps;
+    return rc_patch_box_newton(o, d, tmin, tmax, analytic, box, tOut, uOut, vOut, &outcome,
+                               &steps);
 }
 
 /* The surface point and its unnormalised normal at local (s, t) of a patch box. Where the

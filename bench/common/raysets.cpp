@@ -82,7 +82,8 @@ RaySets MakeRaySets(const scene::Scene& scene, const std::vector<BenchRay>& eye,
         if (hits[i].prim == 0xFFFFFFFFu) continue;
         const glm::vec3 d = eye[i].direction;
         const glm::vec3 p = eye[i].origin + hits[i].t * d;
-        glm::vec3 n = geometry::GeometricNormal(scene, hits[i].prim, p);
+        glm::vec3 n =
+            geometry::GeometricNormal(scene, hits[i].prim, p, glm::vec2(hits[i].u, hits[i].v));
         if (!(glm::length(n) > 0.0f)) continue;
         n = glm::normalize(n);
         if (glm::dot(n, d) > 0.0f) n = -n;  // facing the eye

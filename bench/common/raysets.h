@@ -7,10 +7,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <glm/glm.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "rayclass/scene/scene.h"
 
@@ -56,10 +55,12 @@ glm::vec3 NamedLight(const scene::Scene& scene, const std::string& spec);
 // Eye rays of `camera`, row 0 at the top, by RcCamera's float formula.
 std::vector<BenchRay> EyeRays(const scene::Camera& camera);
 
-// Nearest hit of each eye ray (prim == 0xFFFFFFFF: miss).
+// Nearest hit of each eye ray (prim == 0xFFFFFFFF: miss), with RcHit's u, v (a triangle's
+// barycentrics, a patch box's local parameters: its normal depends on them).
 struct BenchHit {
     float t;
     uint32_t prim;
+    float u = 0.0f, v = 0.0f;
 };
 
 // The secondary sets from the eye rays' hits. Origins are the hit point moved 1e-4 of the scene

@@ -27,7 +27,12 @@
 // inside the timed stage, as the renderer does, but for eye rays, which it classifies from their
 // camera (Hierarchy::ClassifyPinhole) as the renderer does too. --classify sets a cost-function
 // parameter of the classified methods as `rayclass render --classify` does (classify::SetParam),
-// for sweeps.
+// for sweeps. Method `auto` is the renderer's default query (`--accel auto --kernel auto`): each
+// run is begun as a generation, where it picks classify/auto or bvh from what the runs before
+// cost, so with --warm 1 its median is its steady state over like generations (with --warm 0
+// every run is its first generation, classified). Its eye rays are classified, as a render's
+// first generation always is, and so are its shadow rays, as a render's are until a nearest-hit
+// generation has built the BVH.
 //
 // --micro: peak intersection tests per second for spheres, quadrics and triangles, N random rays
 // against P primitives each (P a multiple of 16): the renderer's brute-force kernel (method
@@ -47,6 +52,7 @@
 #include "micro_kernels.h"
 #include "rayclass/classify/params.h"
 #include "rayclass/clrt/context.h"
+#include "rayclass/render/auto_query.h"
 #include "rayclass/render/brute_query.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/classified_query.h"
@@ -131,6 +137,13 @@ struct Bench {
         if (method == "kdtree") return render::MakeKdTreeQuery(ctx, program, buffers, scene);
         if (method == "grid") return render::MakeGridQuery(ctx, program, buffers, scene);
         if (method == "cones") return render::MakeConesQuery(ctx, program, buffers, scene);
+        if (method == "auto") {
+            return render::MakeAutoQuery(
+                ctx,
+                render::MakeClassifiedQuery(ctx, program, buffers, scene, params,
+                                            render::KernelStyle::kAuto),
+                [this] { return render::MakeBvhQuery(ctx, program, buffers, scene); });
+        }
         const auto style = method.starts_with("classify/")
                                ? render::FindChoice(render::kKernelStyles, method.substr(9))
                                : std::nullopt;
@@ -418,7 +431,7 @@ std::vector<bench::BenchHit> EyeHits(Bench& b, const std::vector<bench::BenchRay
         b.ctx.queue().enqueueReadBuffer(hits, CL_TRUE, 0, h.size() * sizeof(RcHit), h.data());
     });
     std::vector<bench::BenchHit> out(eye.size());
-    for (size_t i = 0; i < h.size(); ++i) out[i] = {h[i].t, h[i].prim};
+    for (size_t i = 0; i < h.size(); ++i) out[i] = {h[i].t, h[i].prim, h[i].u, h[i].v};
     return out;
 }
 
@@ -486,6 +499,10 @@ Timings Measure(Bench& b, const Args& a, const std::string& method, const KindRa
         render::KernelTimer timer;
         const double host0 = q->Stats().hostSeconds;
         const auto tq = Clock::now();
+        // Each run of secondary rays is a generation, begun as the renderer begins one: auto
+        // picks its method there, from the runs before. Eye rays are a render's first
+        // generation, which auto always classifies.
+        if (!kr.shadow && !kr.camera) q->BeginGeneration(uint32_t(r), kr.raysBuf, kr.n, timer);
         t.tests = Query(*q, kr, b.ctx.queue(), timer);
         b.ctx.queue().finish();
         const double w = Since(tq);

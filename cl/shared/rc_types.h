@@ -242,8 +242,9 @@ typedef struct RcBvh8Node {
 /* A node of the SAH kd-tree that cl/kdtree.cl walks (--accel kdtree; include/rayclass/accel/
  * kdtree.h). word & 3 is the split axis of an inner node, 3 for a leaf; word >> 2 is the index
  * of an inner node's upper child (its lower child is the next node) or a leaf's primitive
- * count. data is an inner node's split position (its float's bits) or the position in the
- * primitive index list where a leaf's primitives' global ids begin. 8 bytes. */
+ * count. data is an inner node's split position (its float's bits) or where a leaf's primitives
+ * begin: on the host their position in the primitive index list, on the device the index of
+ * their first leaf block (RcBvhLeafBlock8). 8 bytes. */
 #define RC_KD_LEAF 3u
 typedef struct RcKdNode {
     rc_uint word;

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <future>
 #include <stdexcept>
+#include <thread>
 
 #include "rayclass/accel/triangle_box.h"
 
@@ -49,13 +51,37 @@ struct Split {
     float pos = 0;
 };
 
+// A subtree in the final layout relative to its own start: node indices and primitive index
+// positions count from 0.
+struct Fragment {
+    std::vector<RcKdNode> nodes;
+    std::vector<uint32_t> primIndex;
+    uint32_t maxDepth = 0, leaves = 0, emptyLeaves = 0;
+
+    // Appends `f`, moving its node indices and primitive positions past what is here.
+    void Append(const Fragment& f) {
+        const uint32_t nodeBase = uint32_t(nodes.size()), primBase = uint32_t(primIndex.size());
+        for (RcKdNode node : f.nodes) {
+            if ((node.word & 3u) == RC_KD_LEAF) {
+                node.data += primBase;
+            } else {
+                node.word += nodeBase << 2;
+            }
+            nodes.push_back(node);
+        }
+        primIndex.insert(primIndex.end(), f.primIndex.begin(), f.primIndex.end());
+        maxDepth = std::max(maxDepth, f.maxDepth);
+        leaves += f.leaves;
+        emptyLeaves += f.emptyLeaves;
+    }
+};
+
 struct Builder {
     const scene::Scene& scene;
     KdBuildParams params;
     double pad;
     uint32_t maxDepth;
-    KdTree& tree;
-    std::vector<Side> side;  // per primitive, valid for the primitives of the node being split
+    uint32_t parallelDepth;  // subtrees above it build on threads of their own
 
     // The events of `prim`'s extent in `box`, padded; none when the primitive misses the box.
     void AddEvents(uint32_t prim, const Bounds3d& box, std::vector<Event>& out) const {
@@ -97,24 +123,26 @@ struct Builder {
         return best;
     }
 
-    void Leaf(uint32_t self, const std::vector<Event>& events) {
-        const uint32_t first = uint32_t(tree.primIndex.size());
+    static void Leaf(Fragment& out, uint32_t self, const std::vector<Event>& events) {
+        const uint32_t first = uint32_t(out.primIndex.size());
         for (const Event& e : events) {
-            if (e.axis == 0 && e.start) tree.primIndex.push_back(e.prim);
+            if (e.axis == 0 && e.start) out.primIndex.push_back(e.prim);
         }
-        std::sort(tree.primIndex.begin() + first, tree.primIndex.end());
-        const uint32_t count = uint32_t(tree.primIndex.size()) - first;
-        tree.nodes[self] = {count << 2 | RC_KD_LEAF, first};
-        ++tree.leaves;
-        tree.emptyLeaves += count == 0;
+        std::sort(out.primIndex.begin() + first, out.primIndex.end());
+        const uint32_t count = uint32_t(out.primIndex.size()) - first;
+        out.nodes[self] = {count << 2 | RC_KD_LEAF, first};
+        ++out.leaves;
+        out.emptyLeaves += count == 0;
     }
 
     // The events of one side of the split: those of the primitives only on it, merged with the
     // events of the primitives on both sides clipped to its cell.
-    std::vector<Event> ChildEvents(const std::vector<Event>& events,
+    std::vector<Event> ChildEvents(const std::vector<Event>& events, const std::vector<Side>& side,
                                    const std::vector<uint32_t>& straddling, Side only,
                                    const Bounds3d& cell) const {
         std::vector<Event> kept, clipped;
+        kept.reserve(events.size());
+        clipped.reserve(6 * straddling.size());
         for (const Event& e : events) {
             if (side[e.prim] == only) kept.push_back(e);
         }
@@ -125,14 +153,18 @@ struct Builder {
         return out;
     }
 
-    void Node(std::vector<Event> events, const Bounds3d& box, uint32_t depth) {
-        const uint32_t self = uint32_t(tree.nodes.size());
-        tree.nodes.push_back({});
-        tree.maxDepth = std::max(tree.maxDepth, depth);
+    // Builds the subtree of `box` into `out`; `side` is scratch of one entry per primitive.
+    void Node(std::vector<Event> events, const Bounds3d& box, uint32_t depth, Fragment& out,
+              std::vector<Side>& side) const {
+        const uint32_t self = uint32_t(out.nodes.size());
+        out.nodes.push_back({});
+        out.maxDepth = std::max(out.maxDepth, depth);
         uint32_t n = 0;
         for (const Event& e : events) n += e.axis == 0 && e.start;
         const Split split = n == 0 || depth >= maxDepth ? Split{} : FindSplit(events, box, n);
-        if (split.axis < 0 || split.cost >= params.intersectCost * n) return Leaf(self, events);
+        if (split.axis < 0 || split.cost >= params.intersectCost * n) {
+            return Leaf(out, self, events);
+        }
 
         // Extents ending at the plane lie below it, extents starting there above it, as the
         // sweep counted them.
@@ -150,15 +182,32 @@ struct Builder {
         }
         Bounds3d lower = box, upper = box;
         lower.hi[split.axis] = upper.lo[split.axis] = split.pos;
-        std::vector<Event> lowerEvents = ChildEvents(events, straddling, Side::kLower, lower);
-        std::vector<Event> upperEvents = ChildEvents(events, straddling, Side::kUpper, upper);
+        std::vector<Event> lowerEvents = ChildEvents(events, side, straddling, Side::kLower, lower);
+        std::vector<Event> upperEvents = ChildEvents(events, side, straddling, Side::kUpper, upper);
         events = {};
         straddling = {};
-        Node(std::move(lowerEvents), lower, depth + 1);
-        const uint32_t upperIndex = uint32_t(tree.nodes.size());
-        Node(std::move(upperEvents), upper, depth + 1);
-        tree.nodes[self] = {upperIndex << 2 | uint32_t(split.axis),
-                            std::bit_cast<uint32_t>(split.pos)};
+        if (depth < parallelDepth) {
+            // The lower subtree on a thread of its own, the upper one here, then both after
+            // this node in depth-first order.
+            Fragment lowerPart, upperPart;
+            auto lowerDone = std::async(std::launch::async, [&] {
+                std::vector<Side> own(side.size(), Side::kBoth);
+                Node(std::move(lowerEvents), lower, depth + 1, lowerPart, own);
+            });
+            Node(std::move(upperEvents), upper, depth + 1, upperPart, side);
+            lowerDone.get();
+            out.Append(lowerPart);
+            const uint32_t upperIndex = uint32_t(out.nodes.size());
+            out.Append(upperPart);
+            out.nodes[self] = {upperIndex << 2 | uint32_t(split.axis),
+                               std::bit_cast<uint32_t>(split.pos)};
+            return;
+        }
+        Node(std::move(lowerEvents), lower, depth + 1, out, side);
+        const uint32_t upperIndex = uint32_t(out.nodes.size());
+        Node(std::move(upperEvents), upper, depth + 1, out, side);
+        out.nodes[self] = {upperIndex << 2 | uint32_t(split.axis),
+                           std::bit_cast<uint32_t>(split.pos)};
     }
 };
 
@@ -176,15 +225,24 @@ KdTree BuildKdTree(const scene::Scene& scene, const KdBuildParams& params) {
     root.lo = {Down(root.lo.x), Down(root.lo.y), Down(root.lo.z)};
     root.hi = {Up(root.hi.x), Up(root.hi.y), Up(root.hi.z)};
     tree.box = {glm::vec3(root.lo), glm::vec3(root.hi)};
-    const uint32_t depthRule = uint32_t(8 + 2 * std::log2(std::max(1u, n)));
-    Builder b{scene, params,
-              pad,   std::min(params.maxDepth ? params.maxDepth : depthRule, kKdMaxDepth - 1),
-              tree,  std::vector<Side>(n, Side::kBoth)};
+    const uint32_t depthRule = uint32_t(8 + 1.5 * std::log2(std::max(1u, n)));
+    // Two subtrees a thread until every hardware thread has about two to build.
+    const uint32_t threads = std::max(1u, std::thread::hardware_concurrency());
+    const Builder b{scene, params, pad,
+                    std::min(params.maxDepth ? params.maxDepth : depthRule, kKdMaxDepth - 1),
+                    uint32_t(std::bit_width(threads))};
     std::vector<Event> events;
     events.reserve(size_t(6) * n);
     for (uint32_t prim = 0; prim < n; ++prim) b.AddEvents(prim, root, events);
     std::sort(events.begin(), events.end(), Before);
-    b.Node(std::move(events), root, 0);
+    Fragment built;
+    std::vector<Side> side(n, Side::kBoth);
+    b.Node(std::move(events), root, 0, built, side);
+    tree.nodes = std::move(built.nodes);
+    tree.primIndex = std::move(built.primIndex);
+    tree.maxDepth = built.maxDepth;
+    tree.leaves = built.leaves;
+    tree.emptyLeaves = built.emptyLeaves;
     if (tree.primIndex.size() >= (1ull << 30)) {
         throw std::runtime_error("kdtree: more primitive references than a leaf can address");
     }

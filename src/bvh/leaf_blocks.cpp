@@ -57,4 +57,12 @@ BlockedBvh BlockLeaves(std::vector<RcBvh8Node> nodes, std::span<const uint32_t> 
     return out;
 }
 
+void AppendBlocks(std::span<const uint32_t> prims, const scene::Scene& scene,
+                  std::vector<RcBvhLeafBlock8>& blocks) {
+    for (size_t k = 0; k < prims.size(); ++k) {
+        if (k % 8 == 0) blocks.push_back(EmptyBlock());
+        SetLane(blocks.back(), uint32_t(k % 8), prims[k], scene);
+    }
+}
+
 }  // namespace rayclass::bvh

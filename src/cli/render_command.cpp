@@ -115,6 +115,7 @@ void RenderImage(const RenderArgs& r, const scene::Scene& scene, clrt::Context* 
     if (!statsPath.empty()) statsFile.emplace(statsPath);
     render::RenderOptions options = r.options;
     options.window = WindowOf(r, scene.camera);
+    options.newtonStats = statsFile.has_value();
     render::RenderStats stats;
     stats.part = part;
     if (r.tile) stats.part.tile = r.tile;

@@ -21,13 +21,6 @@ std::string RasterChoice(const EyeRayRequest& request, const GlContext& gl) {
 EyeRays ChooseEyeRays(const EyeRayRequest& request, render::RayEncoding encoding,
                       const scene::Scene& scene, std::ostream& err) {
     if (request.path == EyeRayPath::kKernel) return {nullptr, "--eye-rays kernel"};
-    if (!scene.patchBoxes.empty()) {
-        if (request.RasterAsked()) {
-            err << "rayclass: the raster pass draws no Bezier or NURBS patches: eye rays by "
-                   "kernel\n";
-        }
-        return {nullptr, "kernel: the raster pass draws no patches"};
-    }
     if (encoding == render::RayEncoding::kPolar16) {
         return {nullptr, "auto: kernel for --ray-encoding polar16"};
     }

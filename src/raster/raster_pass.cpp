@@ -52,6 +52,23 @@ GlTexture MakeTexture(GLenum format, uint32_t width, uint32_t height) {
     return tex;
 }
 
+// The patch boxes as the patch shaders read them (patch_shaders.cpp): per box (boxMin, closedU),
+// (boxMax, closedV) and the 16 control points, in the float values the kernels get
+// (render::AnalyticArray).
+std::vector<rc_float4> PatchBoxArray(const scene::Scene& scene) {
+    std::vector<rc_float4> out;
+    out.reserve(scene.patchBoxes.size() * 18);
+    for (const scene::PatchBox& box : scene.patchBoxes) {
+        const glm::vec3 lo = box.bounds.lo, hi = box.bounds.hi;
+        out.push_back({lo.x, lo.y, lo.z, box.closedU ? 1.0f : 0.0f});
+        out.push_back({hi.x, hi.y, hi.z, box.closedV ? 1.0f : 0.0f});
+        for (const glm::dvec4& p : box.p) {
+            out.push_back({float(p.x), float(p.y), float(p.z), float(p.w)});
+        }
+    }
+    return out;
+}
+
 // Distance from `eye` to the farthest corner of `bounds` (0 when it is empty).
 double FarthestDistance(const Bounds3f& bounds, const glm::dvec3& eye) {
     double maxDist = 0;
@@ -138,13 +155,16 @@ RasterPass::RasterPass(GlContext& gl, const scene::Scene& scene, const RasterOpt
     count_[kTriangles] = uint32_t(scene.triangles.size());
     count_[kSpheres] = uint32_t(scene.spheres.size());
     count_[kQuadrics] = uint32_t(scene.quadrics.size());
+    count_[kPatchBoxes] = uint32_t(scene.patchBoxes.size());
     base_[kTriangles] = 0;
     base_[kSpheres] = scene.SphereBase();
     base_[kQuadrics] = scene.QuadricBase();
+    base_[kPatchBoxes] = scene.PatchBoxBase();
     bounds_ = scene.Bounds();
     primitives_[kTriangles] = UploadStorage(render::DeviceArray(scene.triangles));
     primitives_[kSpheres] = UploadStorage(render::DeviceArray(scene.spheres));
     primitives_[kQuadrics] = UploadStorage(render::DeviceArray(scene.quadrics));
+    primitives_[kPatchBoxes] = UploadStorage(PatchBoxArray(scene));
     if (options_.slabs > 1) {
         // Bounding spheres for sorting primitives front to back.
         for (const auto& t : scene.triangles) {
@@ -157,6 +177,10 @@ RasterPass::RasterPass(GlContext& gl, const scene::Scene& scene, const RasterOpt
         for (const auto& q : scene.quadrics) {
             sphereHulls_[kQuadrics].push_back(
                 {(q.boxMin + q.boxMax) * 0.5f, 0.5f * glm::length(q.boxMax - q.boxMin)});
+        }
+        for (const auto& b : scene.patchBoxes) {
+            sphereHulls_[kPatchBoxes].push_back(
+                {(b.bounds.lo + b.bounds.hi) * 0.5f, 0.5f * glm::length(b.bounds.Size())});
         }
     }
     GLuint name = 0;
@@ -178,7 +202,7 @@ GLuint RasterPass::Program(Kind kind, Hull hull, bool slabPass) {
     auto it = programs_.find(key);
     if (it != programs_.end()) return it->second.get();
     const int hullIndex = hull == Hull::Sphere ? 0 : hull == Hull::Box ? 1 : 2;
-    static const char* kKindNames[] = {"triangles", "spheres", "quadrics"};
+    static const char* kKindNames[] = {"triangles", "spheres", "quadrics", "patch boxes"};
     const std::string name = std::string(kKindNames[kind]) +
                              (kind == kTriangles ? "" : std::string("/") + HullName(hull));
     GlProgram program =
@@ -233,7 +257,7 @@ void RasterPass::PrepareSlabs(const RcCamera& camera) {
         uint32_t local;
     };
     std::vector<Entry> all;
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < kKinds; ++k) {
         for (uint32_t i = 0; i < count_[k]; ++i) {
             const auto& s = sphereHulls_[k][i];
             all.push_back({std::max(0.0f, glm::length(s.center - eye) - s.radius), uint8_t(k), i});
@@ -242,19 +266,19 @@ void RasterPass::PrepareSlabs(const RcCamera& camera) {
     std::stable_sort(all.begin(), all.end(),
                      [](const Entry& a, const Entry& b) { return a.near < b.near; });
     const uint32_t slabs = options_.slabs;
-    slabRanges_.assign(slabs, std::vector<std::pair<uint32_t, uint32_t>>(3, {0, 0}));
-    std::vector<uint32_t> order[3];
+    slabRanges_.assign(slabs, std::vector<std::pair<uint32_t, uint32_t>>(kKinds, {0, 0}));
+    std::vector<uint32_t> order[kKinds];
     for (uint32_t s = 0; s < slabs; ++s) {
         const size_t first = all.size() * s / slabs, last = all.size() * (s + 1) / slabs;
-        std::vector<uint32_t> members[3];
+        std::vector<uint32_t> members[kKinds];
         for (size_t e = first; e < last; ++e) members[all[e].kind].push_back(all[e].local);
-        for (int k = 0; k < 3; ++k) {
+        for (int k = 0; k < kKinds; ++k) {
             std::sort(members[k].begin(), members[k].end());
             slabRanges_[s][k] = {uint32_t(order[k].size()), uint32_t(members[k].size())};
             order[k].insert(order[k].end(), members[k].begin(), members[k].end());
         }
     }
-    for (int k = 0; k < 3; ++k) slabOrder_[k] = UploadStorage(order[k]);
+    for (int k = 0; k < kKinds; ++k) slabOrder_[k] = UploadStorage(order[k]);
 }
 
 std::vector<RcHit> RasterPass::Render(const RcCamera& camera, RasterStats* stats) {
@@ -297,13 +321,14 @@ RasterPass::Programs RasterPass::SetUpPrograms(const RcCamera& camera) {
     if (options_.slabs > 1) PrepareSlabs(camera);
 
     const bool slabPass = options_.slabs > 1;
-    const Hull hulls[3] = {
+    const Hull hulls[kKinds] = {
         Hull::Sphere,
         options_.hull == Hull::Auto ? Hull::Sphere : options_.hull,
         options_.hull == Hull::Auto ? Hull::Box : options_.hull,
+        options_.hull == Hull::Auto ? Hull::Box : options_.hull,
     };
     Programs programs;
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < kKinds; ++k) {
         programs[k] = count_[k] ? Program(Kind(k), hulls[k], slabPass) : 0;
         const GLuint p = programs[k];
         if (!p) continue;
@@ -361,7 +386,7 @@ void RasterPass::Draw(const Programs& programs) {
                                GL_TEXTURE_2D, 0, 0, 0, 0, GLsizei(width_), GLsizei(height_), 1);
             glBindTextureUnit(0, prevDepthTex_.get());
         }
-        for (int k = 0; k < 3; ++k) {
+        for (int k = 0; k < kKinds; ++k) {
             if (!programs[k]) continue;
             uint32_t first = 0, n = count_[k];
             if (slabPass) {

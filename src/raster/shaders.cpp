@@ -5,7 +5,8 @@ namespace rayclass::raster::shaders {
 namespace {
 
 // Uniforms and primitive buffers every stage sees. Buffers hold the RcTriangle / RcSphere /
-// RcQuadric arrays of cl/shared/rc_types.h as they are (48, 32 and 96 bytes: 3, 2 and 6 vec4s).
+// RcQuadric arrays of cl/shared/rc_types.h as they are (48, 32 and 96 bytes: 3, 2 and 6 vec4s),
+// or the patch boxes (patch_shaders.cpp).
 constexpr const char* kCommon = R"GLSL(
 #version 450 core
 layout(std430, binding = 0) readonly buffer Primitives { vec4 prim[]; };
@@ -480,7 +481,7 @@ std::string Vertex(int /*kind*/, bool slabs) {
 std::string Geometry(int kind, int hull) {
     std::string s = std::string(kCommon) + kGeometryCommon;
     if (kind == 0) return s + kTriangleGeometry;
-    s += kind == 1 ? kSphereBounds : kQuadricBounds;
+    s += kind == 1 ? kSphereBounds : kind == 2 ? kQuadricBounds : PatchBounds();
     s += hull == 0 ? kSphereHull : hull == 1 ? kBoxHull : kBillboardHull;
     return s;
 }
@@ -491,7 +492,10 @@ std::string Fragment(int kind, bool count, bool slabs) {
     if (count) s += "#define RC_COUNT 1\n";
     if (slabs) s += "#define RC_SLABS 1\n";
     s += kFragmentCommon;
-    s += kind == 0 ? kTriangleTest : kind == 1 ? kSphereTest : kQuadricTest;
+    s += kind == 0   ? kTriangleTest
+         : kind == 1 ? kSphereTest
+         : kind == 2 ? kQuadricTest
+                     : PatchTest();
     s += kFragmentMain;
     return s;
 }

@@ -5,10 +5,15 @@
 
 namespace rayclass::raster::shaders {
 
-// kind: 0 triangles, 1 spheres, 2 quadrics; hull: 0 sphere, 1 box, 2 billboard (ignored for
-// triangles); count: atomic fragment counters; slabs: skip fragments behind the previous slabs.
+// kind: 0 triangles, 1 spheres, 2 quadrics, 3 patch boxes; hull: 0 sphere, 1 box, 2 billboard
+// (ignored for triangles); count: atomic fragment counters; slabs: skip fragments behind the
+// previous slabs.
 std::string Vertex(int kind, bool slabs);
 std::string Geometry(int kind, int hull);
 std::string Fragment(int kind, bool count, bool slabs);
+
+// The patch boxes' Bounds and Intersect (patch_shaders.cpp).
+const char* PatchBounds();
+const char* PatchTest();
 
 }  // namespace rayclass::raster::shaders

@@ -6,6 +6,7 @@
 #include <functional>
 #include <future>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "ray_pages.h"
 #include "rayclass/clrt/mapped.h"
 #include "rayclass/render/launch.h"
+#include "rayclass/render/newton_stats.h"
 #include "rayclass/render/query_factory.h"
 
 namespace rayclass::render {
@@ -259,6 +261,7 @@ class Frame {
     double hostSeconds_ = 0;  // the accumulation's and the ray ordering's
     const size_t nEye_;
     std::vector<RcHit> eyeHits_;  // generation 0's, when the eye-hit source finds them
+    std::optional<NewtonSampler> newton_;  // options.newtonStats on a scene with patches
     Clock::time_point lastProgress_;
     bool printedProgress_ = false;
 };
@@ -294,6 +297,9 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
     stats.nPrimitives = scene.PrimitiveCount();
     stats.accel = query_->Name();
     stats.eyeRays = eyeHitSource ? eyeHitSource->Name() : "kernel";
+    if (options.newtonStats && !scene.patchBoxes.empty()) {
+        newton_.emplace(ctx, program_, sceneBuffers_, params_.nQuadrics);
+    }
     if (eyeHitSource) {
         const auto t0 = Clock::now();
         eyeHits_ = eyeHitSource->FindHits(scene, basis_, stats);
@@ -366,6 +372,7 @@ QueryResult Frame::Intersect(const Batch& b, std::unique_ptr<PreparedBatch> prep
     shade.rayInfo = b.generation == 0 ? cl::Buffer() : rays.info;
     shade.writeNormals = b.generation == 0 && options_.aovs;
     QueryResult found;
+    if (newton_) newton_->Sample(rays.rays, b.n);
     if (HitsFromSource(b.generation)) {
         clrt::Check("clEnqueueWriteBuffer", [&] {
             ctx_.queue().enqueueWriteBuffer(buffers_.hits, CL_FALSE, 0, b.n * sizeof(RcHit),
@@ -507,6 +514,11 @@ image::Image Frame::Finish(Clock::time_point tStart) {
     }
     stats_.timeS["render"] = SecondsSince(tStart);
     AddOtherTime(timer_, hostSeconds_ + q.hostSeconds, stats_);
+    if (newton_) {
+        const auto t0 = Clock::now();
+        stats_.patchNewton = newton_->Count().ToStats();
+        stats_.timeS["patch_newton_stats"] = SecondsSince(t0);
+    }
     return std::move(img_);
 }
 

@@ -16,6 +16,9 @@ using Clock = std::chrono::steady_clock;
 
 constexpr uint32_t kAll = 0xFFFFFFFFu;  // RC_CONES_ALL
 
+// Rays per work-item of the query kernels (RC_PACKET in cl/bvh.cl).
+constexpr uint32_t kPacketRays = 16;
+
 // The most survivor ids one level's lists may hold; tiles or groups beyond it test every
 // primitive, which bounds the memory incoherent rays need.
 constexpr uint64_t kMaxListEntries = uint64_t(1) << 25;
@@ -104,15 +107,19 @@ class ConesQuery final : public RayQuery {
         const auto t0 = Clock::now();
         auto b = std::make_unique<ConeBatch>();
         b->order = accel::CoherentOrder(rays, box_);
+        // The rays in tile order once, so that the cones read them in place.
+        std::vector<RcRay> sorted(rays.size());
+        for (size_t j = 0; j < rays.size(); ++j) sorted[j] = rays[b->order[j]];
+        const std::span<const RcRay> all(sorted);
         const size_t n = rays.size(), tileRays = accel::kConeTileRays;
         const size_t groupRays = tileRays * accel::kConeGroupTiles;
         for (size_t first = 0; first < n; first += tileRays) {
-            b->tiles.push_back(accel::EnclosingCone(rays, b->order, first,
-                                                    std::min(n, first + tileRays), margin_));
+            b->tiles.push_back(
+                accel::EnclosingCone(all.subspan(first, std::min(n - first, tileRays)), margin_));
         }
         for (size_t first = 0; first < n; first += groupRays) {
-            b->groups.push_back(accel::EnclosingCone(rays, b->order, first,
-                                                     std::min(n, first + groupRays), margin_));
+            b->groups.push_back(
+                accel::EnclosingCone(all.subspan(first, std::min(n - first, groupRays)), margin_));
         }
         std::lock_guard<std::mutex> lock(mutex_);
         stats_.hostSeconds += std::chrono::duration<double>(Clock::now() - t0).count();
@@ -175,7 +182,7 @@ class ConesQuery final : public RayQuery {
         SetArgs(kernel, rays, n, order, tileOffsets_.Reserve(ctx_, 0), tileCounts_.Reserve(ctx_, 0),
                 tileList_.Reserve(ctx_, 0), scene_.triangles, scene_.spheres, scene_.quadrics,
                 scene_.params, out, counters_.Reserve(ctx_, n));
-        Launch(ctx_, kernel, n, timer);
+        Launch(ctx_, kernel, (n + kPacketRays - 1) / kPacketRays, timer);
         const CounterSums sums = counters_.Sum(ctx_, n);
         Count(b, n, groupCounts, groupOffsets, tileCounts, tileOffsets);
         return sums.tests;

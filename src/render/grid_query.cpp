@@ -6,6 +6,9 @@ namespace rayclass::render {
 
 namespace {
 
+// Rays per work-item of the kernels (RC_PACKET in cl/bvh.cl).
+constexpr uint32_t kPacketRays = 16;
+
 class GridQuery final : public WalkQuery {
   public:
     GridQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene,
@@ -17,7 +20,8 @@ class GridQuery final : public WalkQuery {
                      {"grid_resolution_y", double(grid.resolution.y)},
                      {"grid_resolution_z", double(grid.resolution.z)},
                      {"grid_references", double(grid.primIndex.size())},
-                     {"grid_bytes", double(grid.Bytes())}}),
+                     {"grid_bytes", double(grid.Bytes())}},
+                    kPacketRays),
           cellStart_(UploadVector(ctx, grid.cellStart)),
           primIndex_(UploadVector(ctx, grid.primIndex)),
           boxLo_{grid.box.lo.x, grid.box.lo.y, grid.box.lo.z, grid.pad * 0.25f},

@@ -35,7 +35,7 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
                                 (extraOptions.empty() ? "" : " " + extraOptions);
     return ctx.BuildProgram({"camera.cl", "intersect.cl", "encoding.cl", "shade.cl",
                              "generation.cl", "brute.cl", "classified.cl", "bvh.cl",
-                             "kdtree.cl", "grid.cl", "cones.cl"},
+                             "kdtree.cl", "grid.cl", "cones.cl", "patch_stats.cl"},
                             options, fromCache);
 }
 

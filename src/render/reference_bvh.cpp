@@ -48,6 +48,11 @@ Box PrimitiveBox(const scene::Scene& scene, uint32_t id) {
         const scene::Sphere& s = scene.spheres[id - scene.SphereBase()];
         Grow(b, V(s.center) - double(s.radius));
         Grow(b, V(s.center) + double(s.radius));
+    } else if (id >= scene.PatchBoxBase()) {
+        // The control points' box holds the surface (convex hull).
+        const Bounds3f& c = scene.patchBoxes[id - scene.PatchBoxBase()].bounds;
+        Grow(b, V(c.lo));
+        Grow(b, V(c.hi));
     } else {
         const scene::Quadric& q = scene.quadrics[id - scene.QuadricBase()];
         Grow(b, V(q.boxMin));

@@ -52,6 +52,7 @@ nlohmann::json RenderStats::ToJson() const {
     j["shadow_rays_in_cells"] = shadowRaysInCells;
     j["eye_rays_from_camera"] = eyeRaysFromCamera;
     if (!accelStats.empty()) j["accel_stats"] = accelStats;
+    if (!patchNewton.empty()) j["patch_newton"] = patchNewton;
     j["mrays_per_s"] = queryTimeS > 0 ? double(RaysTotal()) / queryTimeS * 1e-6 : 0.0;
     j["time_s"] = timeS;
     return j;

@@ -1,6 +1,7 @@
 // A query whose two kernels walk one structure ray by ray (the kd-tree's, the grid's): each batch
 // is one launch of rc_intersect_NAME or rc_occluded_NAME, and the per-ray counters add up into the
-// stats keys NAME_rays and NAME_STEPS (the structure's own steps: nodes or cells visited).
+// stats keys NAME_rays and NAME_STEPS (the structure's own steps: nodes or cells visited). A
+// work-item answers raysPerItem consecutive rays.
 #pragma once
 
 #include <map>
@@ -32,14 +33,15 @@ class WalkQuery : public RayQuery {
     // `structure`: the structure's size figures, reported as they are.
     WalkQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene,
               const std::string& name, const std::string& steps,
-              std::map<std::string, double> structure)
+              std::map<std::string, double> structure, uint32_t raysPerItem = 1)
         : ctx_(ctx),
           scene_(scene),
           name_(name),
           raysKey_(name + "_rays"),
           stepsKey_(name + "_" + steps),
           intersect_(program, ("rc_intersect_" + name).c_str()),
-          occluded_(program, ("rc_occluded_" + name).c_str()) {
+          occluded_(program, ("rc_occluded_" + name).c_str()),
+          raysPerItem_(raysPerItem) {
         stats_.accel = std::move(structure);
         stats_.accel[raysKey_] = 0.0;
         stats_.accel[stepsKey_] = 0.0;
@@ -57,7 +59,7 @@ class WalkQuery : public RayQuery {
                  KernelTimer& timer) {
         if (n == 0) return 0;
         Bind(kernel, rays, n, out, counters_.Reserve(ctx_, n));
-        Launch(ctx_, kernel, n, timer);
+        Launch(ctx_, kernel, (n + raysPerItem_ - 1) / raysPerItem_, timer);
         const CounterSums sums = counters_.Sum(ctx_, n);
         stats_.accel[raysKey_] += n;
         stats_.accel[stepsKey_] += double(sums.steps);
@@ -66,6 +68,7 @@ class WalkQuery : public RayQuery {
 
     std::string name_, raysKey_, stepsKey_;
     cl::Kernel intersect_, occluded_;
+    uint32_t raysPerItem_;
     RayCounters counters_;
     QueryStats stats_;
 };

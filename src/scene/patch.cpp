@@ -299,16 +299,23 @@ void SplitPatches(Scene& scene, const PatchSplit& split) {
                             decltype(less)>
             queue(less);
         queue.push({PatchDeviation(whole.p), whole});
-        while (queue.size() < target) {
+        std::vector<PatchBox> done;
+        while (!queue.empty() && queue.size() + done.size() < target) {
             auto [deviation, box] = queue.top();
             if (split.boxesPerPatch == 0 && deviation <= double(split.flatness)) break;
             queue.pop();
+            const bool canU = box.u[1] - box.u[0] > kMinPatchExtent;
+            const bool canV = box.v[1] - box.v[0] > kMinPatchExtent;
+            if (!canU && !canV) {
+                done.push_back(box);
+                continue;
+            }
             // Halve where the halves come out flatter (across a patch's long side; around a
             // collapsed edge, where halving towards the point only makes smaller copies).
             const auto byU = HalvePatch(box.p, true), byV = HalvePatch(box.p, false);
             const double du = std::max(PatchDeviation(byU[0]), PatchDeviation(byU[1]));
             const double dv = std::max(PatchDeviation(byV[0]), PatchDeviation(byV[1]));
-            const bool alongU = du <= dv;
+            const bool alongU = canU && (!canV || du <= dv);
             const auto& halves = alongU ? byU : byV;
             for (int h = 0; h < 2; ++h) {
                 PatchBox part = box;
@@ -321,7 +328,6 @@ void SplitPatches(Scene& scene, const PatchSplit& split) {
                 queue.push({PatchDeviation(part.p), part});
             }
         }
-        std::vector<PatchBox> done;
         while (!queue.empty()) {
             done.push_back(queue.top().second);
             queue.pop();

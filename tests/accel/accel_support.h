@@ -79,7 +79,7 @@ inline bench::RaySets SampledRaySets(const Loaded& l, uint32_t width, uint32_t h
     const std::vector<bench::BenchRay> eye = bench::EyeRays(cam);
     const std::vector<RcHit> hits = render::NearestHits(Ctx(), *l.brute, ToRc(eye));
     std::vector<bench::BenchHit> benchHits;
-    for (const RcHit& h : hits) benchHits.push_back({h.t, h.prim});
+    for (const RcHit& h : hits) benchHits.push_back({h.t, h.prim, h.u, h.v});
     const glm::vec3 light = l.scene.lights.empty() ? cam.position : l.scene.lights[0].position;
     return bench::MakeRaySets(l.scene, eye, benchHits, light, 7, width);
 }

@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <numeric>
 #include <random>
 
 namespace rayclass::accel {
@@ -29,11 +28,7 @@ double WorstExcess(const RcCone& c, const std::vector<RcRay>& rays) {
     return worst;
 }
 
-RcCone ConeOf(const std::vector<RcRay>& rays) {
-    std::vector<uint32_t> order(rays.size());
-    std::iota(order.begin(), order.end(), 0u);
-    return EnclosingCone(rays, order, 0, rays.size(), 1e-6);
-}
+RcCone ConeOf(const std::vector<RcRay>& rays) { return EnclosingCone(rays, 1e-6); }
 
 RcRay Ray(glm::vec3 o, glm::vec3 d) {
     d = glm::normalize(d);
@@ -56,6 +51,25 @@ TEST(EnclosingCone, HoldsEveryRayOfCoherentSets) {
         ASSERT_GE(c.apex.w, 0.0f) << "set " << set;  // coherent: a bounded cone
         EXPECT_LE(WorstExcess(c, rays), 0.0) << "set " << set;
     }
+}
+
+// Two rays diverging symmetrically by theta from origins 2 apart: step (a) turns the axis to
+// their bisector, step (b) slides the apex back along the far generator until the near one
+// passes through the second origin, which puts it where the two rays' lines cross, 1 / tan theta
+// behind the origins (the construction's least angle, 1e-3, tilts the axis by about half that,
+// which moves the apex across by about 0.005, and the margins back it off by far less).
+TEST(EnclosingCone, OriginStepPutsTheApexWhereTheGeneratorsCross) {
+    const float theta = 0.1f;
+    const RcCone c = ConeOf({Ray({1, 0, 0}, {std::sin(theta), 0, std::cos(theta)}),
+                             Ray({-1, 0, 0}, {-std::sin(theta), 0, std::cos(theta)})});
+    ASSERT_GE(c.apex.w, 0.0f);
+    EXPECT_NEAR(c.axis.z, 1.0f, 1e-6f);
+    EXPECT_NEAR(c.apex.x, 0.0f, 0.01f);
+    EXPECT_NEAR(c.apex.z, -1.0f / std::tan(theta), 0.05f);
+    // Far behind the apex and off the axis: only the back-off along the axis reaches it.
+    const std::vector<RcRay> behind = {Ray({0, 0, 0}, {0.1f, 0, 1}), Ray({0, 0, 0}, {-0.1f, 0, 1}),
+                                       Ray({3, 0, -50}, {0, 0, 1})};
+    EXPECT_LE(WorstExcess(ConeOf(behind), behind), 0.0);
 }
 
 TEST(EnclosingCone, DirectionsOverTheWholeSphereAreUnbounded) {

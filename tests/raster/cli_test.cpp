@@ -93,6 +93,20 @@ TEST(RasterCli, ExplicitChoicesAndRasterOptionsWin) {
     EXPECT_EQ(EyeRaysOf("--depth-bits 32"), (Choice{"raster", "auto: raster for --depth-bits"}));
 }
 
+// Patch boxes are drawn like the other primitives: raster asked for is raster given.
+TEST(RasterCli, PatchScenesTakeTheRasterPass) {
+    RC_REQUIRE_GL();
+    const std::string stats = Out("patch_stats.json");
+    const CliRun r = RunRayclass(
+        "", "render '" + (SceneDir() / "teapot.json").string() + "' -o '" + Out("t.png") +
+                "' --width 32 --height 24 -q --eye-rays raster --stats '" + stats + "'");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    const nlohmann::json j = nlohmann::json::parse(ReadFile(stats));
+    EXPECT_EQ(j.at("eye_rays"), "raster");
+    EXPECT_EQ(j.at("eye_rays_choice"), "--eye-rays raster");
+}
+
 // The shortcut must not hide a hardware renderer: where EGL lists software devices alone, the
 // context is a software one.
 TEST(RasterCli, OnlySoftwareEglDevicesMeansASoftwareContext) {

@@ -44,7 +44,7 @@ inline std::vector<RcHit> KernelHits(const scene::Scene& scene) {
     RcRenderParams params{};
     params.nTriangles = uint32_t(scene.triangles.size());
     params.nSpheres = uint32_t(scene.spheres.size());
-    params.nQuadrics = uint32_t(scene.quadrics.size());
+    params.nQuadrics = render::AnalyticRecords(scene);
     const render::SceneBuffers buffers(Cl(), scene, params);
     auto query = render::MakeBruteForceQuery(Cl(), program, buffers);
     const RcCamera cam = render::CameraBasis(scene.camera).ToDevice();

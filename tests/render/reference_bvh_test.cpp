@@ -236,7 +236,8 @@ INSTANTIATE_TEST_SUITE_P(Scenes, ReferenceBvhImage,
                                          ImageCase{"cornell.json", TriangleTest::kWatertight},
                                          ImageCase{"tests/spheres.json", TriangleTest::kMoller},
                                          ImageCase{"tests/quadrics.json", TriangleTest::kMoller},
-                                         ImageCase{"tests/glass.json", TriangleTest::kWatertight}),
+                                         ImageCase{"tests/glass.json", TriangleTest::kWatertight},
+                                         ImageCase{"tests/nurbs_torus.json", TriangleTest::kMoller}),
                          [](const testing::TestParamInfo<ImageCase>& info) {
                              std::string name =
                                  std::filesystem::path(info.param.file).stem().string();

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "rayclass/scene/loader.h"
 #include "rayclass/scene/patch.h"
@@ -132,6 +133,40 @@ TEST(PatchInput, BoxesTileEachPatchAndHoldItsNet) {
         }
         for (double a : area) EXPECT_DOUBLE_EQ(a, 1.0);
     }
+}
+
+// The .bpt files fuzz_bpt found (tests/fuzz/regressions/bpt: nets folded onto a point, where
+// halving leaves the flatness measure as it was): the split spent its budget at the fold, down to
+// parameter ranges that double cannot halve. Each patch's boxes must tile its parameter square
+// exactly, none narrower than kMinPatchExtent, and hold the patch's corners.
+TEST(PatchInput, FoldedNetsFromTheFuzzerSplitExactly) {
+    const std::filesystem::path dir = ScenesDir() / ".." / "tests" / "fuzz" / "regressions" / "bpt";
+    size_t files = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+        ++files;
+        TempDir temp;
+        const Scene s = LoadScene(
+            temp.Write("s.json", R"({"objects": [{"type": "bezier", "file": ")" +
+                                     std::filesystem::absolute(entry.path()).string() + R"("}]})"));
+        std::vector<double> area(s.patches.size(), 0.0);
+        std::vector<int> corners(s.patches.size(), 0);
+        for (const PatchBox& b : s.patchBoxes) {
+            EXPECT_GE(b.u[1] - b.u[0], kMinPatchExtent) << entry.path();
+            EXPECT_GE(b.v[1] - b.v[0], kMinPatchExtent) << entry.path();
+            area[b.patch] += (b.u[1] - b.u[0]) * (b.v[1] - b.v[0]);
+            for (int c = 0; c < 4; ++c) {
+                const double u = c / 2, v = c % 2;
+                if (b.bounds.Contains(glm::vec3(Evaluate(s.patches[b.patch], u, v)))) {
+                    corners[b.patch] |= 1 << c;
+                }
+            }
+        }
+        for (size_t k = 0; k < s.patches.size(); ++k) {
+            EXPECT_EQ(area[k], 1.0) << entry.path() << " patch " << k;
+            EXPECT_EQ(corners[k], 15) << entry.path() << " patch " << k;
+        }
+    }
+    EXPECT_EQ(files, 3u);
 }
 
 TEST(PatchInput, FlatnessParameterSetsTheSplit) {

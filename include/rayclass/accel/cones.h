@@ -22,14 +22,16 @@ constexpr uint32_t kConeGroupTiles = 16;
 // compact screen tiles.
 std::vector<uint32_t> CoherentOrder(std::span<const RcRay> rays, const Bounds3f& box);
 
-// The cone enclosing rays[order[i]] for i in [first, last): the paper's incremental step (a)
-// gives the axis and the smallest half-angle holding every direction (checked against every
-// ray, then widened by a margin for the kernels' float arithmetic), then the apex slides back
-// along the axis until every origin lies inside (the remedy our notes give for the printed
-// step (b)); a cone of 89 degrees or more is marked unbounded. Rays without a direction (empty
-// shadow slots) are left out. `margin` is an absolute distance the apex backs off further.
-RcCone EnclosingCone(std::span<const RcRay> rays, std::span<const uint32_t> order, size_t first,
-                     size_t last, double margin);
+// The cone enclosing `rays` (consecutive in CoherentOrder's order): the paper's incremental
+// construction, ray by ray step (a) (the smallest cone with the same apex holding the new
+// direction) then step (b) (the apex slides back along the far generator until the near one
+// passes through the new origin, with the sign our notes correct, and backs off along the axis
+// where no slide can reach the origin); then every direction is checked against the final axis
+// and the half-angle widened by a margin for the kernels' float arithmetic, and every origin
+// checked, the apex backing off along the axis where rounding left one outside. A cone of 89
+// degrees or more is marked unbounded. Rays without a direction (empty shadow slots) are left
+// out. `margin` is an absolute distance the apex backs off further.
+RcCone EnclosingCone(std::span<const RcRay> rays, double margin);
 
 // Bounding spheres of every primitive (global ids) as structure of arrays, x, y, z and radius,
 // each padded to a multiple of 16 entries; radii grown by `pad`.

@@ -24,7 +24,7 @@ struct KdBuildParams {
     float traversalCost = 1.0f;  // cost of one node step
     float intersectCost = 4.0f;  // cost of one primitive test
     float emptyBonus = 0.8f;     // share of the cost a split cutting off empty space saves
-    uint32_t maxDepth = 0;       // 0: 8 + 2 log2 N, at most kKdMaxDepth - 1
+    uint32_t maxDepth = 0;       // 0: 8 + 1.5 log2 N, at most kKdMaxDepth - 1
 };
 
 // The traversal kernel's stack holds one entry per level (RC_KD_STACK in cl/kdtree.cl).

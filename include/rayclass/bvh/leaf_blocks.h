@@ -26,4 +26,9 @@ struct BlockedBvh {
 BlockedBvh BlockLeaves(std::vector<RcBvh8Node> nodes, std::span<const uint32_t> primIndex,
                        const scene::Scene& scene);
 
+// Appends blocks holding `prims` lane by lane, the last one's unused lanes empty (RC_NO_HIT):
+// the leaves of the other hierarchies (the kd-tree's, the grid's cells) in the same form.
+void AppendBlocks(std::span<const uint32_t> prims, const scene::Scene& scene,
+                  std::vector<RcBvhLeafBlock8>& blocks);
+
 }  // namespace rayclass::bvh

@@ -13,11 +13,15 @@
 //   box grown by a pixel footprint (back faces culled, so each ray is tested once), or a
 //   screen-aligned billboard over the box's angular extents. A hull that reaches within `zNear` of
 //   the eye plane covers the whole screen (the exact test decides).
+// - Patch boxes are drawn as the hull of their control points' box (box by default, or the
+//   sphere or billboard hull when asked), and the fragment shader runs the Newton iteration of
+//   cl/patch.cl on the pixel's eye ray.
 // - Depth = world distance times DepthScale(): by default the largest power of two 2^-k that keeps
 //   every distance from the eye to the scene bounds below 1, so a float depth buffer holds t * 2^-k
 //   exactly and the depth test compares hit distances exactly; equal distances keep the primitive
 //   drawn first, the lower id, as every query path does.
-// - Ids are full 32-bit global primitive ids (triangles, spheres, quadrics; RC_NO_HIT on a miss).
+// - Ids are full 32-bit global primitive ids (triangles, spheres, quadrics, patch boxes; RC_NO_HIT
+//   on a miss).
 #pragma once
 
 #include <array>
@@ -47,8 +51,8 @@ Hull ParseHull(const std::string& name);
 const char* HullName(Hull hull);
 
 struct RasterOptions {
-    // Hull of spheres and quadrics. Auto: spheres by their bounding sphere (the sphere itself),
-    // quadrics by their clip box.
+    // Hull of spheres, quadrics and patch boxes. Auto: spheres by their bounding sphere (the
+    // sphere itself), quadrics by their clip box, patch boxes by their box.
     Hull hull = Hull::Auto;
     // Depth buffer: 32 (float, default), 24 or 16 (fixed point; for precision studies).
     int depthBits = 32;
@@ -99,7 +103,7 @@ class RasterPass {
     // One frame seen from `camera` (its width x height, whatever its window): the nearest hit of
     // every pixel's eye ray, row-major with row 0 at the top, as the eye-ray query would return it:
     // t along the unit direction, the global primitive id (RC_NO_HIT and t = +inf on a miss),
-    // barycentrics for triangles (0 otherwise).
+    // barycentrics for triangles, the box's local (u, v) for patch boxes (0 otherwise).
     std::vector<RcHit> Render(const RcCamera& camera, RasterStats* stats = nullptr);
 
     // The factor of the last Render.
@@ -107,8 +111,9 @@ class RasterPass {
     const RasterOptions& Options() const { return options_; }
 
   private:
-    enum Kind { kTriangles = 0, kSpheres = 1, kQuadrics = 2 };
-    using Programs = std::array<GLuint, 3>;  // per kind; 0: no primitive of the kind
+    enum Kind { kTriangles = 0, kSpheres = 1, kQuadrics = 2, kPatchBoxes = 3 };
+    static constexpr int kKinds = 4;
+    using Programs = std::array<GLuint, kKinds>;  // per kind; 0: no primitive of the kind
     GLuint Program(Kind kind, Hull hull, bool slabPass);
     void EnsureFramebuffer(uint32_t width, uint32_t height);
     void PrepareSlabs(const RcCamera& camera);
@@ -121,11 +126,11 @@ class RasterPass {
 
     GlContext& gl_;
     RasterOptions options_;
-    uint32_t count_[3] = {0, 0, 0};
-    uint32_t base_[3] = {0, 0, 0};
+    uint32_t count_[kKinds] = {0, 0, 0, 0};
+    uint32_t base_[kKinds] = {0, 0, 0, 0};
     Bounds3f bounds_;
-    GlBuffer primitives_[3];
-    GlBuffer slabOrder_[3];
+    GlBuffer primitives_[kKinds];
+    GlBuffer slabOrder_[kKinds];
     GlBuffer counters_;
     GlVertexArray vao_;
     GlFramebuffer fbo_;
@@ -136,7 +141,7 @@ class RasterPass {
     std::map<std::tuple<int, int, bool>, GlProgram> programs_;
     // Slabs: per kind, the draw ranges of each slab in the sorted order.
     std::vector<std::vector<std::pair<uint32_t, uint32_t>>> slabRanges_;
-    std::vector<scene::Sphere> sphereHulls_[3];  // per primitive: bounding sphere (slab sorting)
+    std::vector<scene::Sphere> sphereHulls_[kKinds];  // per primitive: bounding sphere (slabs)
 };
 
 // The renderer's generation-0 hook: hits of the eye rays from a RasterPass.

@@ -97,6 +97,9 @@ struct RenderOptions {
     TriangleTest triangleTest = TriangleTest::kMoller;
     // Only these pixels of the image (a crop or tile), each as the whole render has it.
     std::optional<image::PixelRect> window;
+    // Count how the patch boxes' Newton iteration ends, on a sample of the rays
+    // (render/newton_stats.h); --stats sets it.
+    bool newtonStats = false;
 };
 
 }  // namespace rayclass::render

@@ -50,6 +50,7 @@ struct RenderStats {
     uint64_t shadowRaysInCells = 0;    // of them, sorted into direction cells (light_cells.h)
     uint64_t eyeRaysFromCamera = 0;    // classified from their camera (ClassifyPinhole)
     std::map<std::string, double> accelStats;  // the query's own figures (QueryStats::accel)
+    std::map<std::string, double> patchNewton;  // NewtonCounts::ToStats (render/newton_stats.h)
     bool programFromCache = false;     // the kernels' binary came from the program cache
     double queryTimeS = 0;             // time of the ray-query kernels (nearest hit and shadow)
     // Named stages in seconds: "scene_load", "program_build", "kernel_<name>", "host", "total".

@@ -56,6 +56,10 @@ struct PatchSplit {
 };
 inline constexpr uint32_t kMaxFlatnessBoxes = 256;
 inline constexpr uint32_t kMaxPatchBoxes = 4096;
+// No box is halved across a parameter extent of kMinPatchExtent or less: around a singular
+// point (where the net folds onto itself) halving leaves the flatness measure where it was, and
+// without this floor the split spent its whole budget there, down to ranges double cannot halve.
+inline constexpr double kMinPatchExtent = 0x1p-20;
 
 // The flatness measure above: the net's largest distance from the bilinear corner surface over
 // the diagonal of its control points' box (0 for a point).
