@@ -232,7 +232,7 @@ std::vector<Option> FileOptions(RenderArgs& r) {
          Choice(r.pngCompression, kPngCompressions)},
         {{"--batch-rays"},
          "N",
-         "rays per kernel launch (default 1048576)",
+         "rays per kernel launch (default 262144)",
          Number(r.options.batchRays, 64u, 1u << 24)},
         {{"--cl-options"},
          "STRING",

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "ray_order.h"
 #include "ray_pages.h"
 #include "rayclass/clrt/mapped.h"
 #include "rayclass/render/launch.h"
@@ -250,10 +251,14 @@ class Frame {
     PagePool pool_;
     RayPages rays_, next_;        // the generation in flight, and the one its batches spawn
     std::vector<uint32_t> live_;  // the batch's live secondary slots
+    RayOrder order_;              // the order Compact gives them
+    // Some ray has spawned both a reflection and a refraction: a pixel may then have several
+    // rays in a generation, whose contributions must reach it in the order they always did.
+    bool branched_ = false;
     // Prepare's queue: its reads do not wait for the kernels on ctx_.queue().
     cl::CommandQueue readQueue_;
     KernelTimer timer_;
-    double hostSeconds_ = 0;  // the accumulation's
+    double hostSeconds_ = 0;  // the accumulation's and the ray ordering's
     const size_t nEye_;
     std::vector<RcHit> eyeHits_;           // generation 0's, when the eye-hit source finds them
     std::optional<NewtonSampler> newton_;  // options.newtonStats on a scene with patches
@@ -282,6 +287,7 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
       buffers_(ctx, batch_, params_.nLights),
       compactKernel_(program_, "rc_compact_rays"),
       pool_(ctx, batch_),
+      order_(scene.Bounds()),
       readQueue_(clrt::Check("clCreateCommandQueue",
                              [&] { return cl::CommandQueue(ctx.context(), ctx.device()); })),
       nEye_(basis_.window.PixelCount()) {
@@ -420,6 +426,7 @@ void Frame::Accumulate(const Batch& b, const ShadowSlots& shadow, const BatchOut
             ++tally.stats.shadowRays;
             if (!blocked[size_t(i) * nLights + l]) px += glm::vec3(c.x, c.y, c.z);
         }
+        branched_ |= spawned[2 * size_t(i)] && spawned[2 * size_t(i) + 1];
         for (uint32_t k = 0; k < 2; ++k) {
             if (!spawned[2 * size_t(i) + k]) continue;
             live_.push_back(2 * i + k);
@@ -437,17 +444,26 @@ void Frame::Accumulate(const Batch& b, const ShadowSlots& shadow, const BatchOut
 }
 
 // Copies the batch's live secondary rays to the end of the next generation's pages (new pages
-// from the pool); the batch's own page goes back to the pool, answered and shaded.
+// from the pool), in RayOrder's order while every pixel has at most one ray in a generation (a
+// pixel's contributions then arrive in generation order whatever the order of the rays); the
+// batch's own page goes back to the pool, answered and shaded.
 void Frame::Compact(const Batch& b) {
     const size_t pageRays = pool_.PageRays();
     const size_t count = next_.pixels.size() - live_.size();  // rays on the pages before these
+    const RayBuffers& secondary = buffers_.shade.secondary;
+    if (!branched_ && live_.size() > 1) {
+        const auto t0 = Clock::now();
+        clrt::MappedRead<RcRay> rays(ctx_.queue(), secondary.rays, 2 * size_t(b.n));
+        order_.Sort(rays.span(), live_, std::span(next_.pixels).subspan(count));
+        rays.Unmap();
+        hostSeconds_ += SecondsSince(t0);
+    }
     if (!live_.empty()) {
         clrt::Check("clEnqueueWriteBuffer", [&] {
             ctx_.queue().enqueueWriteBuffer(buffers_.liveSlots, CL_FALSE, 0,
                                             live_.size() * sizeof(uint32_t), live_.data());
         });
     }
-    const RayBuffers& secondary = buffers_.shade.secondary;
     for (size_t done = 0; done < live_.size();) {
         const size_t offset = (count + done) % pageRays;
         if (offset == 0) next_.pages.push_back(pool_.Take());

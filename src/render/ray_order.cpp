@@ -1,0 +1,98 @@
+#include "ray_order.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <future>
+
+namespace rayclass::render {
+
+namespace {
+
+// Grid cells per axis: 2^kCellBits. Finer cells sort longer and gained nothing more.
+constexpr int kCellBits = 7;
+constexpr int kKeyBits = 3 + 3 * kCellBits;
+
+// The bits of v (below 2^kCellBits) spread to every third position.
+uint32_t Spread(uint32_t x) {
+    x = (x | x << 8) & 0x0000F00Fu;
+    x = (x | x << 4) & 0x000C30C3u;
+    x = (x | x << 2) & 0x00249249u;
+    return x;
+}
+
+// Rays below this many have their keys computed on one thread.
+constexpr size_t kParallelKeys = 65536;
+
+}  // namespace
+
+RayOrder::RayOrder(const Bounds3f& box) {
+    for (int a = 0; a < 3; ++a) {
+        const float extent = box.Empty() ? 0.0f : box.hi[a] - box.lo[a];
+        lo_[a] = box.Empty() ? 0.0f : box.lo[a];
+        scale_[a] = extent > 0.0f ? float(1 << kCellBits) / extent : 0.0f;
+    }
+}
+
+uint32_t RayOrder::Key(const RcRay& ray) const {
+    const float o[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
+    const float d[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
+    uint32_t morton = 0, octant = 0;
+    for (int a = 0; a < 3; ++a) {
+        // NaN-safe: a NaN coordinate lands in cell 0.
+        const float c = std::clamp((o[a] - lo_[a]) * scale_[a], 0.0f, float((1 << kCellBits) - 1));
+        morton |= Spread(c >= 0.0f ? uint32_t(c) : 0u) << a;
+        octant |= uint32_t(std::signbit(d[a])) << a;
+    }
+    return octant << (3 * kCellBits) | morton;
+}
+
+void RayOrder::Sort(std::span<const RcRay> rays, std::span<uint32_t> slots,
+                    std::span<uint32_t> pixels) {
+    const size_t n = slots.size();
+    keys_.resize(n);
+    nextKeys_.resize(n);
+    order_.resize(n);
+    nextOrder_.resize(n);
+    // The keys read every ray once, from memory the shading kernel has just written: the
+    // render thread is alone on the host then, so two threads read them.
+    auto keysOf = [&](size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) {
+            keys_[i] = Key(rays[slots[i]]);
+            order_[i] = uint32_t(i);
+        }
+    };
+    if (n < kParallelKeys) {
+        keysOf(0, n);
+    } else {
+        auto half = std::async(std::launch::async, keysOf, n / 2, n);
+        keysOf(0, n / 2);
+        half.get();
+    }
+    // Least significant digit first: each pass is stable, so equal keys keep their order.
+    constexpr int kDigitBits = 12;
+    constexpr uint32_t kBuckets = 1u << kDigitBits;
+    for (int shift = 0; shift < kKeyBits; shift += kDigitBits) {
+        std::array<uint32_t, kBuckets> start{};
+        for (size_t i = 0; i < n; ++i) ++start[(keys_[i] >> shift) & (kBuckets - 1)];
+        uint32_t at = 0;
+        for (uint32_t& s : start) {
+            const uint32_t count = s;
+            s = at;
+            at += count;
+        }
+        for (size_t i = 0; i < n; ++i) {
+            const uint32_t to = start[(keys_[i] >> shift) & (kBuckets - 1)]++;
+            nextKeys_[to] = keys_[i];
+            nextOrder_[to] = order_[i];
+        }
+        keys_.swap(nextKeys_);
+        order_.swap(nextOrder_);
+    }
+    scratch_.assign(slots.begin(), slots.end());
+    for (size_t i = 0; i < n; ++i) slots[i] = scratch_[order_[i]];
+    scratch_.assign(pixels.begin(), pixels.end());
+    for (size_t i = 0; i < n; ++i) pixels[i] = scratch_[order_[i]];
+}
+
+}  // namespace rayclass::render

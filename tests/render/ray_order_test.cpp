@@ -1,0 +1,110 @@
+// RayOrder: the order of a generation's rays, checked against what the rays themselves say
+// (their directions' signs, their origins' positions) and against the order they came in.
+#include "ray_order.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <vector>
+
+namespace rayclass::render {
+namespace {
+
+RcRay MakeRay(float ox, float oy, float oz, float dx, float dy, float dz) {
+    RcRay r{};
+    r.origin = {ox, oy, oz, 0.0f};
+    r.direction = {dx, dy, dz, 1.0f};
+    return r;
+}
+
+Bounds3f UnitBox() {
+    Bounds3f box;
+    box.Grow(glm::vec3(0.0f));
+    box.Grow(glm::vec3(1.0f));
+    return box;
+}
+
+// Slots name every second ray (as the renderer's live slots name reflection slots), pixels
+// are tied to their slot, so the test sees that both move alike.
+struct Live {
+    std::vector<uint32_t> slots, pixels;
+    explicit Live(size_t n) {
+        for (uint32_t i = 0; i < n; ++i) {
+            slots.push_back(2 * i);
+            pixels.push_back(1000 + 2 * i);
+        }
+    }
+    void ExpectTied() const {
+        for (size_t i = 0; i < slots.size(); ++i) EXPECT_EQ(pixels[i], 1000 + slots[i]);
+    }
+    void ExpectPermutationOf(size_t n) const {
+        std::vector<uint32_t> s = slots;
+        std::sort(s.begin(), s.end());
+        for (uint32_t i = 0; i < n; ++i) ASSERT_EQ(s[i], 2 * i);
+    }
+};
+
+int Octant(const RcRay& r) {
+    return int(std::signbit(r.direction.x)) | int(std::signbit(r.direction.y)) << 1 |
+           int(std::signbit(r.direction.z)) << 2;
+}
+
+TEST(RayOrder, GroupsRaysByTheOctantOfTheirDirection) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f), p(0.0f, 1.0f);
+    const size_t n = 200;
+    std::vector<RcRay> rays(2 * n);
+    for (RcRay& r : rays) r = MakeRay(p(rng), p(rng), p(rng), u(rng), u(rng), u(rng));
+    Live live(n);
+    RayOrder order(UnitBox());
+    order.Sort(rays, live.slots, live.pixels);
+    live.ExpectPermutationOf(n);
+    live.ExpectTied();
+    for (size_t i = 1; i < n; ++i)
+        EXPECT_LE(Octant(rays[live.slots[i - 1]]), Octant(rays[live.slots[i]]));
+}
+
+TEST(RayOrder, OrdersRaysOfOneOctantAlongALineByTheirOrigins) {
+    // Origins far enough apart to lie in different cells of any grid of up to 2^10 per axis.
+    const std::vector<float> xs = {0.9f, 0.1f, 0.5f, 0.3f, 0.7f, 0.2f};
+    std::vector<RcRay> rays(2 * xs.size());
+    for (size_t i = 0; i < xs.size(); ++i) rays[2 * i] = MakeRay(xs[i], 0.5f, 0.5f, 1, 1, 1);
+    Live live(xs.size());
+    RayOrder order(UnitBox());
+    order.Sort(rays, live.slots, live.pixels);
+    live.ExpectTied();
+    for (size_t i = 1; i < xs.size(); ++i)
+        EXPECT_LT(rays[live.slots[i - 1]].origin.x, rays[live.slots[i]].origin.x);
+}
+
+TEST(RayOrder, KeepsTheOrderOfRaysThatStartTogetherAndHeadTheSameWay) {
+    const size_t n = 50;
+    std::vector<RcRay> rays(2 * n, MakeRay(0.25f, 0.5f, 0.75f, -1, 1, 1));
+    Live live(n);
+    const Live before = live;
+    RayOrder order(UnitBox());
+    order.Sort(rays, live.slots, live.pixels);
+    EXPECT_EQ(live.slots, before.slots);
+    EXPECT_EQ(live.pixels, before.pixels);
+}
+
+TEST(RayOrder, TakesOriginsOutsideItsBoxAndAnEmptyBox) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    std::vector<RcRay> rays = {MakeRay(-5, 9, 0.5f, 1, 1, 1),  {}, MakeRay(nan, 0, 0, 1, 1, 1), {},
+                               MakeRay(2, -3, 1e30f, 1, 1, 1), {}};
+    for (const Bounds3f& box : {UnitBox(), Bounds3f{}}) {
+        Live live(3);
+        RayOrder order(box);
+        order.Sort(rays, live.slots, live.pixels);
+        live.ExpectPermutationOf(3);
+        live.ExpectTied();
+    }
+}
+
+}  // namespace
+}  // namespace rayclass::render
