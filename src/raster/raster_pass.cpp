@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <iomanip>
 #include <limits>
 #include <numeric>
@@ -30,11 +31,13 @@ GlBuffer UploadStorage(const std::vector<T>& data) {
     GlBuffer buffer(name);
     // A zero-sized store is legal, but binding one is not: keep at least 16 bytes.
     const size_t bytes = std::max<size_t>(16, data.size() * sizeof(T));
-    std::vector<char> zeros;
+    // The driver reads the whole store from src, so a short array goes through a padded copy.
+    std::vector<char> padded;
     const void* src = data.data();
-    if (data.empty()) {
-        zeros.assign(bytes, 0);
-        src = zeros.data();
+    if (data.size() * sizeof(T) < bytes) {
+        padded.assign(bytes, 0);
+        std::memcpy(padded.data(), data.data(), data.size() * sizeof(T));
+        src = padded.data();
     }
     glNamedBufferStorage(buffer.get(), GLsizeiptr(bytes), src, 0);
     CheckGl("uploading primitives (glNamedBufferStorage)");
