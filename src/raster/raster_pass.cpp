@@ -36,7 +36,7 @@ GlBuffer UploadStorage(const std::vector<T>& data) {
     const void* src = data.data();
     if (data.size() * sizeof(T) < bytes) {
         padded.assign(bytes, 0);
-        std::memcpy(padded.data(), data.data(), data.size() * sizeof(T));
+        if (!data.empty()) std::memcpy(padded.data(), data.data(), data.size() * sizeof(T));
         src = padded.data();
     }
     glNamedBufferStorage(buffer.get(), GLsizeiptr(bytes), src, 0);
