@@ -114,30 +114,6 @@ inline uint rc_cones_tile_candidates(uint j, __global const uint* tileOffsets,
     return tileCounts[t];
 }
 
-/* The 16 rays at sorted positions [first, first + 16) (all of one tile), lanes beyond n inactive,
- * and lanes with tmax == 0 (empty shadow slots) inactive when skipEmpty. */
-inline void rc_cones_load_packet(__global const RcRay* sorted, uint first, uint n, int skipEmpty,
-                                 RcBvhPacket* p) {
-    float o[3][RC_PACKET], dir[3][RC_PACKET], tn[RC_PACKET], tf[RC_PACKET];
-    int act[RC_PACKET];
-    for (int k = 0; k < RC_PACKET; ++k) {
-        float4 ro = (float4)(0.0f), rd = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
-        act[k] = first + k < n;
-        if (act[k]) {
-            ro = sorted[first + k].origin;
-            rd = sorted[first + k].direction;
-            act[k] = !skipEmpty || rd.w != 0.0f;
-        }
-        o[0][k] = ro.x, o[1][k] = ro.y, o[2][k] = ro.z;
-        dir[0][k] = rd.x, dir[1][k] = rd.y, dir[2][k] = rd.z;
-        tn[k] = ro.w, tf[k] = rd.w;
-    }
-    p->ox = vload16(0, o[0]), p->oy = vload16(0, o[1]), p->oz = vload16(0, o[2]);
-    p->dx = vload16(0, dir[0]), p->dy = vload16(0, dir[1]), p->dz = vload16(0, dir[2]);
-    p->tmin = vload16(0, tn), p->tmax = vload16(0, tf);
-    p->active = vload16(0, act) != 0;
-}
-
 /* Primitive `id` against the lanes `live` one lane at a time, through rc_intersect_primitive.
  * Returns the lanes it hit. */
 inline int16 rc_cones_primitive_lanes(const RcBvhPacket* p, int16 live, uint id,
@@ -205,9 +181,35 @@ inline uint16 rc_cones_packet(const RcBvhPacket* p, int anyHit, uint count,
     return tests;
 }
 
-/* One work-item per 16 sorted positions [16 w, 16 w + 16): the rays sorted[j], whose places in
- * the batch are order[j]. A tile's rays (RC_CONE_TILE_RAYS, a multiple of 16) test its
- * candidates together. counters[ray] counts primitive tests. */
+/* The answers of the rays at sorted positions [first, first + 16) (all of one tile), whose
+ * places in the batch are order[j]: nearest hits, or with anyHit blocked flags; counters[ray]
+ * the primitive tests. */
+inline void rc_cones_answer(int anyHit, __global const RcRay* sorted, uint first, uint n,
+                            __global const uint* order, __global const uint* tileOffsets,
+                            __global const uint* tileCounts, __global const uint* tileList,
+                            __global const RcTriangle* triangles, __global const RcSphere* spheres,
+                            __global const RcQuadric* quadrics,
+                            __constant const RcRenderParams* params, __global RcHit* hits,
+                            __global uchar* blockedOut, __global uint* counters) {
+    const uint nT = params->nTriangles, nS = params->nSpheres;
+    const uint nPrims = nT + nS + params->nQuadrics;
+    __global const uint* ids;
+    const uint count =
+        rc_cones_tile_candidates(first, tileOffsets, tileCounts, tileList, nPrims, &ids);
+    /* A tile's rays always test its candidates together: the BVH's coherence verdict is moot. */
+    RcBvhPacket p;
+    rc_bvh_load_packet(sorted, first, n, anyHit, INFINITY, &p);
+    float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
+    uint16 bp = (uint16)(RC_NO_HIT);
+    int16 blocked = (int16)(0);
+    const uint16 tests = rc_cones_packet(&p, anyHit, count, ids, triangles, spheres, quadrics, nT,
+                                         nS, &bt, &bp, &bu, &bv, &blocked);
+    rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, order, hits, blockedOut);
+    rc_packet_store_counts(first, n, tests, order, counters);
+}
+
+/* One work-item per 16 sorted positions [16 w, 16 w + 16). A tile's rays (RC_CONE_TILE_RAYS, a
+ * multiple of 16) test its candidates together. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_cones(
     __global const RcRay* sorted, uint n, __global const uint* order,
     __global const uint* tileOffsets, __global const uint* tileCounts,
@@ -216,32 +218,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     __constant const RcRenderParams* params, __global RcHit* hits, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    const uint nT = params->nTriangles, nS = params->nSpheres;
-    const uint nPrims = nT + nS + params->nQuadrics;
-    __global const uint* ids;
-    const uint count =
-        rc_cones_tile_candidates(first, tileOffsets, tileCounts, tileList, nPrims, &ids);
-    RcBvhPacket p;
-    rc_cones_load_packet(sorted, first, n, 0, &p);
-    float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
-    uint16 bp = (uint16)(RC_NO_HIT);
-    int16 blocked = (int16)(0);
-    const uint16 tests = rc_cones_packet(&p, 0, count, ids, triangles, spheres, quadrics, nT, nS,
-                                         &bt, &bp, &bu, &bv, &blocked);
-    float ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
-    uint ps[RC_PACKET], cs[RC_PACKET];
-    vstore16(bt, 0, ts), vstore16(bu, 0, us), vstore16(bv, 0, vs);
-    vstore16(bp, 0, ps), vstore16(tests, 0, cs);
-    for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
-        const uint i = order[first + k];
-        RcHit h;
-        h.t = ps[k] == RC_NO_HIT ? INFINITY : ts[k];
-        h.prim = ps[k];
-        h.u = us[k];
-        h.v = vs[k];
-        hits[i] = h;
-        counters[i] = cs[k];
-    }
+    rc_cones_answer(0, sorted, first, n, order, tileOffsets, tileCounts, tileList, triangles,
+                    spheres, quadrics, params, hits, 0, counters);
 }
 
 /* Any hit before the light ends a ray's search; one work-item per 16 sorted positions. */
@@ -253,24 +231,6 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     __constant const RcRenderParams* params, __global uchar* blocked, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    const uint nT = params->nTriangles, nS = params->nSpheres;
-    const uint nPrims = nT + nS + params->nQuadrics;
-    __global const uint* ids;
-    const uint count =
-        rc_cones_tile_candidates(first, tileOffsets, tileCounts, tileList, nPrims, &ids);
-    RcBvhPacket p;
-    rc_cones_load_packet(sorted, first, n, 1, &p);
-    float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
-    uint16 bp = (uint16)(RC_NO_HIT);
-    int16 hit = (int16)(0);
-    const uint16 tests = rc_cones_packet(&p, 1, count, ids, triangles, spheres, quadrics, nT, nS,
-                                         &bt, &bp, &bu, &bv, &hit);
-    int hs[RC_PACKET];
-    uint cs[RC_PACKET];
-    vstore16(hit, 0, hs), vstore16(tests, 0, cs);
-    for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
-        const uint i = order[first + k];
-        blocked[i] = hs[k] != 0;
-        counters[i] = cs[k];
-    }
+    rc_cones_answer(1, sorted, first, n, order, tileOffsets, tileCounts, tileList, triangles,
+                    spheres, quadrics, params, 0, blocked, counters);
 }
