@@ -1,7 +1,8 @@
 /* What the kd-tree, grid and cone kernels share: a ray's inverse direction without infinities, the
  * slack by which they widen ray intervals so that float rounding never skips a cell a ray
- * touches, a ray's interval inside a box, and the test of one triangle against a packet of 16
- * rays (the BVH's packets, bvh.cl). */
+ * touches, a ray's interval inside a box (one ray, or a packet's lanes), the test of one
+ * triangle against a packet of 16 rays (the BVH's packets, bvh.cl), and how the answers and
+ * counters of a packet or a single ray are written. */
 #include "rc_types.h"
 #include "bvh.cl"
 
@@ -29,6 +30,32 @@ inline int rc_accel_clip(float3 o, float3 inv, float3 lo, float3 hi, float slack
     *t0 = fmax(*t0, tn - rc_accel_slack(tn, slackAbs));
     *t1 = fmin(*t1, tf + rc_accel_slack(tf, slackAbs));
     return *t0 <= *t1;
+}
+
+/* A single ray's entry into the box [boxLo, boxHi] (boxLo.w: the slack's absolute part): its
+ * inverse direction, and its interval inside the box, widened by the slack, in [*t0, *t1].
+ * Returns 0 where it needs no walk (rc_ray_walks) or misses the box. */
+inline int rc_accel_enter(RcRay ray, int anyHit, float4 boxLo, float4 boxHi,
+                          __constant const RcRenderParams* params, float3* inv, float* t0,
+                          float* t1) {
+    if (!rc_ray_walks(anyHit, ray.direction.w, params)) return 0;
+    *inv = rc_accel_inverse(ray.direction.xyz);
+    *t0 = ray.origin.w;
+    *t1 = ray.direction.w;
+    return rc_accel_clip(ray.origin.xyz, *inv, boxLo.xyz, boxHi.xyz, boxLo.w, t0, t1);
+}
+
+/* rc_accel_clip lane by lane: each lane's [tmin, tmax] narrowed to its interval inside the box
+ * [boxLo, boxHi], widened by the slack (boxLo.w its absolute part), in [*tn, *tf]. */
+inline void rc_accel_clip16(const RcBvhPacket* p, float4 boxLo, float4 boxHi, float16* tn,
+                            float16* tf) {
+    const float16 ax = (boxLo.x - p->ox) * p->ix, bx = (boxHi.x - p->ox) * p->ix;
+    const float16 ay = (boxLo.y - p->oy) * p->iy, by = (boxHi.y - p->oy) * p->iy;
+    const float16 az = (boxLo.z - p->oz) * p->iz, bz = (boxHi.z - p->oz) * p->iz;
+    const float16 near = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
+    const float16 far = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
+    *tf = fmin(p->tmax, far + (1e-5f * fabs(far) + boxLo.w));
+    *tn = fmax(p->tmin, near - (1e-5f * fabs(near) + boxLo.w));
 }
 
 /* Component `axis` (0, 1, 2) of v. */
@@ -72,4 +99,35 @@ inline int16 rc_accel_triangle16(const RcBvhPacket* p, int16 live, float3 v0, fl
 inline float rc_accel_max_spread2(float4 boxLo, float4 boxHi) {
     const float3 e = (boxHi.xyz - boxLo.xyz) * (1.0f / 32.0f);
     return dot(e, e);
+}
+
+/* A packet walk's answers for rays [first, first + 16): nearest hits, or blocked flags when
+ * anyHit; counters[ray] the primitive tests, counters[n + ray] the cells or nodes visited. */
+inline void rc_accel_store_packet(int anyHit, uint first, uint n, float16 bt, uint16 bp,
+                                  float16 bu, float16 bv, int16 blocked, uint16 tests,
+                                  uint16 visits, __global RcHit* hits, __global uchar* blockedOut,
+                                  __global uint* counters) {
+    rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, 0, hits, blockedOut);
+    rc_packet_store_counts(first, n, tests, 0, counters);
+    rc_packet_store_counts(first, n, visits, 0, counters + n);
+}
+
+/* A single ray's answer (rc_ray_store_answer) and counters: counters[i] its primitive tests,
+ * counters[n + i] the cells or nodes it visited. */
+inline void rc_accel_store_ray(int anyHit, uint i, uint n, RcHit best, uint tests, uint visits,
+                               __global RcHit* hits, __global uchar* blockedOut,
+                               __global uint* counters) {
+    rc_ray_store_answer(anyHit, i, best, hits, blockedOut);
+    counters[i] = tests;
+    counters[n + i] = visits;
+}
+
+/* Loads rays [first, first + 16) into *p; returns whether they walk as one packet: packets are
+ * allowed (rc_packets_allowed) and the rays coherent by the BVH's rule, their origins' spread
+ * measured against the scene box. */
+inline int rc_accel_load_packet(__global const RcRay* rays, uint first, uint n, int skipEmpty,
+                                float4 boxLo, float4 boxHi, __constant const RcRenderParams* params,
+                                RcBvhPacket* p) {
+    return rc_packets_allowed(params) &&
+           rc_bvh_load_packet(rays, first, n, skipEmpty, rc_accel_max_spread2(boxLo, boxHi), p);
 }

@@ -246,6 +246,45 @@ typedef struct RcBvhPacket {
     int16 active;
 } RcBvhPacket;
 
+/* The packet's nearest hits (bt, bp, bu, bv) as the answers of rays [first, first + 16) below
+ * n, a lane without a hit as t = inf. Lane k answers ray order[first + k] where order is given
+ * (a sorted batch), else ray first + k. */
+inline void rc_packet_store_hits(uint first, uint n, float16 bt, uint16 bp, float16 bu, float16 bv,
+                                 __global const uint* order, __global RcHit* hits) {
+    float ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
+    uint ps[RC_PACKET];
+    vstore16(bt, 0, ts);
+    vstore16(bu, 0, us);
+    vstore16(bv, 0, vs);
+    vstore16(bp, 0, ps);
+    for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
+        RcHit h;
+        h.t = ps[k] == RC_NO_HIT ? INFINITY : ts[k];
+        h.prim = ps[k];
+        h.u = us[k];
+        h.v = vs[k];
+        hits[order ? order[first + k] : first + k] = h;
+    }
+}
+
+/* Per-lane counts as out[ray], the rays as in rc_packet_store_hits. */
+inline void rc_packet_store_counts(uint first, uint n, uint16 counts, __global const uint* order,
+                                   __global uint* out) {
+    uint cs[RC_PACKET];
+    vstore16(counts, 0, cs);
+    for (uint k = 0; k < RC_PACKET && first + k < n; ++k)
+        out[order ? order[first + k] : first + k] = cs[k];
+}
+
+/* The lanes that found a hit as blocked flags, the rays as in rc_packet_store_hits. */
+inline void rc_packet_store_blocked(uint first, uint n, int16 blocked, __global const uint* order,
+                                    __global uchar* out) {
+    int bs[RC_PACKET];
+    vstore16(blocked, 0, bs);
+    for (uint k = 0; k < RC_PACKET && first + k < n; ++k)
+        out[order ? order[first + k] : first + k] = bs[k] != 0;
+}
+
 /* The largest spread of a packet's origins that walks as one, squared: a 32nd of the diagonal
  * of the root's children's boxes. Rays from scattered points share few nodes even when their
  * directions agree (shadow rays toward one light after several bounces). */
@@ -409,13 +448,79 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
     }
 }
 
-/* Whether packets may walk the tree: triangles only, tested as rc_intersect_triangle tests. */
+/* Whether packets may walk the tree: triangles only (at least one), tested as
+ * rc_intersect_triangle tests. */
 inline int rc_packets_allowed(__constant const RcRenderParams* params) {
 #ifdef RC_WATERTIGHT
     return 0;
 #else
-    return params->nSpheres + params->nQuadrics == 0;
+    return params->nTriangles > 0 && params->nSpheres + params->nQuadrics == 0;
 #endif
+}
+
+/* The packet's answers: nearest hits, or with anyHit blocked flags; the rays as in
+ * rc_packet_store_hits. */
+inline void rc_packet_store_answers(int anyHit, uint first, uint n, float16 bt, uint16 bp,
+                                    float16 bu, float16 bv, int16 blocked,
+                                    __global const uint* order, __global RcHit* hits,
+                                    __global uchar* blockedOut) {
+    if (anyHit)
+        rc_packet_store_blocked(first, n, blocked, order, blockedOut);
+    else
+        rc_packet_store_hits(first, n, bt, bp, bu, bv, order, hits);
+}
+
+/* Whether a single ray needs a walk: not in a scene without primitives, nor, when anyHit, an
+ * empty shadow slot (tmax 0), which nothing can block. */
+inline int rc_ray_walks(int anyHit, float tmax, __constant const RcRenderParams* params) {
+    return params->nTriangles + params->nSpheres + params->nQuadrics > 0 &&
+           !(anyHit && tmax == 0.0f);
+}
+
+/* A single ray's answer: hits[i] its nearest hit (t = inf without one), or with anyHit
+ * blockedOut[i] whether it found one. */
+inline void rc_ray_store_answer(int anyHit, uint i, RcHit best, __global RcHit* hits,
+                                __global uchar* blockedOut) {
+    if (anyHit) {
+        blockedOut[i] = best.prim != RC_NO_HIT;
+    } else {
+        if (best.prim == RC_NO_HIT) best.t = INFINITY;
+        hits[i] = best;
+    }
+}
+
+/* The answers of rays [first, first + 16): nearest hits, or with anyHit blocked flags;
+ * tests[ray] its primitive tests. A coherent packet walks the tree once, other rays one by
+ * one. */
+inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
+                          __global const RcBvh8Node* nodes, __global const RcBvhLeafBlock8* blocks,
+                          __global const RcTriangle* triangles, __global const RcSphere* spheres,
+                          __global const RcQuadric* quadrics,
+                          __constant const RcRenderParams* params, __global RcHit* hits,
+                          __global uchar* blockedOut, __global uint* tests) {
+    RcBvhPacket p;
+    if (rc_packets_allowed(params) &&
+        rc_bvh_load_packet(rays, first, n, anyHit, rc_bvh_max_spread2(nodes), &p)) {
+        float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
+        uint16 bp = (uint16)(RC_NO_HIT);
+        int16 blocked = (int16)(0);
+        const uint16 count =
+            rc_bvh_trace_packet(&p, anyHit, nodes, blocks, &bt, &bp, &bu, &bv, &blocked);
+        rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, 0, hits, blockedOut);
+        rc_packet_store_counts(first, n, count, 0, tests);
+        return;
+    }
+    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
+        const RcRay r = rays[i];
+        RcHit best = rc_no_hit(r.direction.w);
+        uint count = 0;
+        if (rc_ray_walks(anyHit, r.direction.w, params))
+            count = rc_bvh_trace(r.origin.xyz, r.direction.xyz, r.origin.w, r.direction.w, anyHit,
+                                 nodes, blocks, triangles, spheres, quadrics, params->nTriangles,
+                                 params->nSpheres, &best);
+        rc_ray_store_answer(anyHit, i, best, hits, blockedOut);
+        tests[i] = count;
+    }
 }
 
 /* One work-item per 16 rays rays[16 i, 16 i + 16). */
@@ -426,46 +531,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     __constant const RcRenderParams* params, __global RcHit* hits, __global uint* tests) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    const uint nT = params->nTriangles, nS = params->nSpheres;
-    const int hasPrims = nT + nS + params->nQuadrics > 0;
-    RcBvhPacket p;
-    if (hasPrims && rc_packets_allowed(params) &&
-        rc_bvh_load_packet(rays, first, n, 0, rc_bvh_max_spread2(nodes), &p)) {
-        float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
-        uint16 bp = (uint16)(RC_NO_HIT);
-        int16 blocked = (int16)(0);
-        const uint16 count = rc_bvh_trace_packet(&p, 0, nodes, blocks, &bt, &bp, &bu, &bv,
-                                                 &blocked);
-        float ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
-        uint ps[RC_PACKET], cs[RC_PACKET];
-        vstore16(bt, 0, ts);
-        vstore16(bu, 0, us);
-        vstore16(bv, 0, vs);
-        vstore16(bp, 0, ps);
-        vstore16(count, 0, cs);
-        for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
-            RcHit h;
-            h.t = ps[k] == RC_NO_HIT ? INFINITY : ts[k];
-            h.prim = ps[k];
-            h.u = us[k];
-            h.v = vs[k];
-            hits[first + k] = h;
-            tests[first + k] = cs[k];
-        }
-        return;
-    }
-    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
-        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-        RcHit best = rc_no_hit(tmax);
-        uint count = 0;
-        if (hasPrims)
-            count = rc_bvh_trace(o, d, tmin, tmax, 0, nodes, blocks, triangles, spheres,
-                                 quadrics, nT, nS, &best);
-        if (best.prim == RC_NO_HIT) best.t = INFINITY;
-        hits[i] = best;
-        tests[i] = count;
-    }
+    rc_bvh_answer(0, rays, first, n, nodes, blocks, triangles, spheres, quadrics, params, hits,
+                  0, tests);
 }
 
 /* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
@@ -476,35 +543,6 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     __constant const RcRenderParams* params, __global uchar* blocked, __global uint* tests) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    const uint nT = params->nTriangles, nS = params->nSpheres;
-    const int hasPrims = nT + nS + params->nQuadrics > 0;
-    RcBvhPacket p;
-    if (hasPrims && rc_packets_allowed(params) &&
-        rc_bvh_load_packet(rays, first, n, 1, rc_bvh_max_spread2(nodes), &p)) {
-        float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
-        uint16 bp = (uint16)(RC_NO_HIT);
-        int16 hit = (int16)(0);
-        const uint16 count = rc_bvh_trace_packet(&p, 1, nodes, blocks, &bt, &bp, &bu, &bv, &hit);
-        int hs[RC_PACKET];
-        uint cs[RC_PACKET];
-        vstore16(hit, 0, hs);
-        vstore16(count, 0, cs);
-        for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
-            blocked[first + k] = hs[k] != 0;
-            tests[first + k] = cs[k];
-        }
-        return;
-    }
-    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
-        blocked[i] = 0;
-        tests[i] = 0;
-        /* An empty slot has tmax 0: nothing can block it. */
-        if (rays[i].direction.w == 0.0f || !hasPrims) continue;
-        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-        RcHit best = rc_no_hit(tmax);
-        tests[i] = rc_bvh_trace(o, d, tmin, tmax, 1, nodes, blocks, triangles, spheres, quadrics,
-                                nT, nS, &best);
-        blocked[i] = best.prim != RC_NO_HIT;
-    }
+    rc_bvh_answer(1, rays, first, n, nodes, blocks, triangles, spheres, quadrics, params, 0,
+                  blocked, tests);
 }

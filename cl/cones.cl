@@ -7,7 +7,8 @@
  * tile's survivors (the fragment-unit step), sixteen rays of a tile together, with the routines
  * of intersect.cl or their float16 twin for triangles (lower id wins ties), so the hits equal
  * brute force's. A list of RC_CONES_ALL entries stands for every
- * primitive (an unbounded cone, or a list that did not fit). */
+ * primitive (an unbounded cone, or a list that did not fit). The cones themselves are built here
+ * too (rc_cones_build), sixteen tiles a work-item, from the rays the host sorted into tiles. */
 #include "rc_types.h"
 #include "intersect.cl"
 #include "bvh.cl"
@@ -43,6 +44,229 @@ inline int16 rc_cone_spheres16(RcCone cone, float16 cx, float16 cy, float16 cz, 
 
 inline int rc_cone_sphere(RcCone cone, float cx, float cy, float cz, float r) {
     return rc_cone_spheres16(cone, (float16)(cx), (float16)(cy), (float16)(cz), (float16)(r)).s0;
+}
+
+/* --- the cones, built on the device ----------------------------------------------------------
+ * A work-item builds the cones of one group's 16 tiles, a tile a lane, by accel::EnclosingCone's
+ * construction (rayclass/accel/cones.h) in float: the paper's steps (a) and (b) ray by ray, then
+ * every direction and every origin checked against the final cone and the half-angle and apex
+ * widened by the same margins. The angles are measured as atan2 of the cross and dot products:
+ * an acos of a cosine near 1 would lose them in float. Then the group's cone from its tiles',
+ * as accel::EnclosingConeOfCones. */
+#define RC_CONE_MIN_HALF_ANGLE 1e-3f
+#define RC_CONE_MAX_HALF_ANGLE (89.0f * M_PI_F / 180.0f)
+#define RC_CONE_ANGLE_MARGIN 1e-4f
+
+/* A 3-vector a lane. */
+typedef struct RcVec16 {
+    float16 x, y, z;
+} RcVec16;
+
+inline RcVec16 rc_v16(float16 x, float16 y, float16 z) {
+    RcVec16 v;
+    v.x = x, v.y = y, v.z = z;
+    return v;
+}
+inline RcVec16 rc_v16_add(RcVec16 a, RcVec16 b) { return rc_v16(a.x + b.x, a.y + b.y, a.z + b.z); }
+inline RcVec16 rc_v16_sub(RcVec16 a, RcVec16 b) { return rc_v16(a.x - b.x, a.y - b.y, a.z - b.z); }
+inline RcVec16 rc_v16_scale(RcVec16 a, float16 s) { return rc_v16(a.x * s, a.y * s, a.z * s); }
+inline float16 rc_v16_dot(RcVec16 a, RcVec16 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline float16 rc_v16_length(RcVec16 a) { return sqrt(rc_v16_dot(a, a)); }
+inline RcVec16 rc_v16_cross(RcVec16 a, RcVec16 b) {
+    return rc_v16(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+/* b where `take`, else a. */
+inline RcVec16 rc_v16_select(RcVec16 a, RcVec16 b, int16 take) {
+    return rc_v16(select(a.x, b.x, take), select(a.y, b.y, take), select(a.z, b.z, take));
+}
+/* The angle between a and b (any lengths), accurate down to 0. */
+inline float16 rc_v16_angle(RcVec16 a, RcVec16 b) {
+    return atan2(rc_v16_length(rc_v16_cross(a, b)), rc_v16_dot(a, b));
+}
+
+/* Ray k of each lane's tile (tile 16 g + lane: sorted positions [64 tile, 64 tile + 64) below
+ * n): origin, unit direction, and whether it counts (it exists and has a direction). */
+inline int16 rc_cones_tile_ray16(__global const RcRay* sorted, uint n, uint g, uint k,
+                                 RcVec16* o, RcVec16* r) {
+    float ox[RC_PACKET], oy[RC_PACKET], oz[RC_PACKET], dx[RC_PACKET], dy[RC_PACKET],
+        dz[RC_PACKET];
+    int ok[RC_PACKET];
+    for (uint l = 0; l < RC_PACKET; ++l) {
+        const uint j = (g * RC_CONE_GROUP_TILES + l) * RC_CONE_TILE_RAYS + k;
+        float4 ro = (float4)(0.0f), rd = (float4)(0.0f);
+        if (j < n) ro = sorted[j].origin, rd = sorted[j].direction;
+        ox[l] = ro.x, oy[l] = ro.y, oz[l] = ro.z;
+        /* Scaled first, so that a tiny direction's squared length does not underflow. */
+        const float m = fmax(fmax(fabs(rd.x), fabs(rd.y)), fabs(rd.z));
+        ok[l] = m > 0.0f;
+        const float3 d = ok[l] ? rd.xyz / m : (float3)(0.0f, 0.0f, 1.0f);
+        dx[l] = d.x, dy[l] = d.y, dz[l] = d.z;
+    }
+    *o = rc_v16(vload16(0, ox), vload16(0, oy), vload16(0, oz));
+    const RcVec16 d = rc_v16(vload16(0, dx), vload16(0, dy), vload16(0, dz));
+    *r = rc_v16_scale(d, 1.0f / rc_v16_length(d));
+    return vload16(0, ok) != 0;
+}
+
+/* Step (a), in the lanes `m`: the smallest cone with the same apex holding the cone (axis *x,
+ * half-angle's cosine and sine *c, *s) and the unit direction r. Returns the lanes where that
+ * cone would open to 180 degrees or beyond the largest half-angle. */
+inline int16 rc_cones_widen_to_direction(int16 m, RcVec16* x, float16* c, float16* s,
+                                         RcVec16 r) {
+    const float16 cr = rc_v16_dot(*x, r);
+    const int16 need = m & (cr < *c);
+    if (!any(need)) return (int16)(0);
+    const RcVec16 qRaw = rc_v16_sub(rc_v16_scale(*x, cr), r);
+    const float16 lq = rc_v16_length(qRaw);
+    /* r along the axis (up to rounding), or opposite it */
+    const int16 tiny = lq < 1e-6f;
+    int16 bad = need & tiny & (cr <= 0.0f);
+    const int16 widen = need & ~tiny;
+    const RcVec16 q = rc_v16_scale(qRaw, 1.0f / select((float16)(1.0f), lq, widen));
+    const RcVec16 er = rc_v16_add(rc_v16_add(rc_v16_scale(*x, *c), rc_v16_scale(q, *s)), r);
+    const float16 ler = rc_v16_length(er);
+    /* r opposite the far generator */
+    bad |= widen & (ler < 1e-6f);
+    const int16 take = widen & (ler >= 1e-6f);
+    const RcVec16 xn = rc_v16_scale(er, 1.0f / select((float16)(1.0f), ler, take));
+    *x = rc_v16_select(*x, xn, take);
+    *c = select(*c, rc_v16_dot(xn, r), take);
+    *s = select(*s, rc_v16_length(rc_v16_cross(xn, r)), take);
+    return bad | (take & (*c <= cos(RC_CONE_MAX_HALF_ANGLE)));
+}
+
+/* Step (b), in the lanes `m`: where p lies outside the cone (apex *a, axis x, half-angle's
+ * cosine and sine c, s), the apex slides back along the far generator until the near one passes
+ * through p, or where no slide reaches p, backs off along the axis (accel::EnclosingCone). */
+inline void rc_cones_widen_to_origin(int16 m, RcVec16* a, RcVec16 x, float16 c, float16 s,
+                                     RcVec16 p) {
+    const RcVec16 cv = rc_v16_sub(p, *a);
+    const float16 along = rc_v16_dot(x, cv);
+    const RcVec16 qRaw = rc_v16_sub(rc_v16_scale(x, along), cv);
+    const float16 across = rc_v16_length(qRaw);
+    const int16 out = m & ~((along >= 0.0f) & (across * c <= along * s));
+    if (!any(out)) return;
+    const int16 off = across > 1e-6f * rc_v16_length(cv);
+    const RcVec16 q = rc_v16_scale(qRaw, 1.0f / select((float16)(1.0f), across, off));
+    const RcVec16 e = rc_v16_add(rc_v16_scale(x, c), rc_v16_scale(q, s));
+    const RcVec16 nn = rc_v16_sub(rc_v16_scale(x, c), rc_v16_scale(q, s));
+    const RcVec16 g = rc_v16_sub(cv, rc_v16_scale(nn, rc_v16_dot(nn, cv)));
+    const float16 eg = rc_v16_dot(e, g);
+    const int16 slide = out & off & (eg < 0.0f);
+    const float16 bySlide = rc_v16_dot(g, g) / select((float16)(1.0f), -eg, slide);
+    const float16 byAxis = across * c / s - along;
+    *a = rc_v16_select(*a, rc_v16_sub(*a, rc_v16_scale(e, bySlide)), slide);
+    *a = rc_v16_select(*a, rc_v16_sub(*a, rc_v16_scale(x, byAxis)), out & ~slide);
+}
+
+/* A cone that culls nothing (accel::EnclosingCone's unbounded one). */
+inline RcCone rc_cones_unbounded(void) {
+    RcCone c;
+    c.apex = (float4)(0.0f, 0.0f, 0.0f, -1.0f);
+    c.axis = (float4)(0.0f, 0.0f, 1.0f, 1.0f);
+    return c;
+}
+
+/* The cone of apex a, axis x and half-angle phi as the cull kernels read it. */
+inline RcCone rc_cones_make(float3 a, float3 x, float phi) {
+    RcCone c;
+    const float t = tan(phi);
+    c.apex = (float4)(a, t * t);
+    c.axis = (float4)(x, 1.0f / sin(phi));
+    return c;
+}
+
+/* The group's cone from its tiles' (axes x, half-angles phi, apexes a, `count` of them): the
+ * mean axis, the half-angle holding every tile's directions, and the apex backed off along the
+ * axis until every tile's apex lies inside, half the margin from the surface. */
+inline RcCone rc_cones_group(const float* ax, const float* ay, const float* az, const float* px,
+                             const float* py, const float* pz, const float* phis,
+                             const int* bad, uint count, float margin) {
+    float3 sum = (float3)(0.0f), centroid = (float3)(0.0f);
+    int unbounded = count == 0;
+    for (uint t = 0; t < count; ++t) {
+        unbounded |= bad[t];
+        sum += (float3)(ax[t], ay[t], az[t]);
+        centroid += (float3)(px[t], py[t], pz[t]);
+    }
+    const float ls = length(sum);
+    if (unbounded || ls < 1e-6f) return rc_cones_unbounded();
+    const float3 x = sum / ls;
+    centroid /= (float)count;
+    float phi = 0.0f;
+    for (uint t = 0; t < count; ++t) {
+        const float3 axis = (float3)(ax[t], ay[t], az[t]);
+        phi = fmax(phi, atan2(length(cross(x, axis)), dot(x, axis)) + phis[t]);
+    }
+    phi = fmax(phi + RC_CONE_ANGLE_MARGIN, RC_CONE_MIN_HALF_ANGLE);
+    if (phi >= RC_CONE_MAX_HALF_ANGLE) return rc_cones_unbounded();
+    const float tanInner = tan(phi - 0.5f * RC_CONE_ANGLE_MARGIN);
+    float back = 0.0f;
+    for (uint t = 0; t < count; ++t) {
+        const float3 d = (float3)(px[t], py[t], pz[t]) - centroid;
+        const float along = dot(d, x);
+        back = fmax(back, length(d - along * x) / tanInner - along);
+    }
+    return rc_cones_make(centroid - (back + margin) * x, x, phi);
+}
+
+/* The cones of group g's tiles, tiles[16 g ...] (those below nTiles), and of the group,
+ * groups[g]; `margin` the absolute distance every apex backs off further. */
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_cones_build(
+    __global const RcRay* sorted, uint n, uint nTiles, float margin, __global RcCone* tiles,
+    __global RcCone* groups) {
+    const uint g = get_global_id(0);
+    if (g * RC_CONE_GROUP_TILES >= nTiles) return;
+    RcVec16 x = rc_v16((float16)(0.0f), (float16)(0.0f), (float16)(1.0f)), o, r;
+    RcVec16 a = rc_v16((float16)(0.0f), (float16)(0.0f), (float16)(0.0f));
+    float16 c = (float16)(cos(RC_CONE_MIN_HALF_ANGLE)), s = (float16)(sin(RC_CONE_MIN_HALF_ANGLE));
+    int16 seen = (int16)(0), bad = (int16)(0);
+    for (uint k = 0; k < RC_CONE_TILE_RAYS; ++k) {
+        const int16 ok = rc_cones_tile_ray16(sorted, n, g, k, &o, &r);
+        const int16 first = ok & ~seen;
+        x = rc_v16_select(x, r, first);
+        a = rc_v16_select(a, o, first);
+        seen |= first;
+        const int16 m = ok & ~first & ~bad;
+        if (!any(m)) continue;
+        bad |= rc_cones_widen_to_direction(m, &x, &c, &s, r);
+        rc_cones_widen_to_origin(m & ~bad, &a, x, c, s, o);
+    }
+    bad |= ~seen;
+    /* Every direction checked against the final axis, then the margin. */
+    float16 widest = (float16)(0.0f);
+    for (uint k = 0; k < RC_CONE_TILE_RAYS; ++k) {
+        const int16 ok = rc_cones_tile_ray16(sorted, n, g, k, &o, &r);
+        widest = select(widest, fmax(widest, rc_v16_angle(x, r)), ok);
+    }
+    const float16 phi = fmax(widest + RC_CONE_ANGLE_MARGIN, (float16)(RC_CONE_MIN_HALF_ANGLE));
+    bad |= phi >= RC_CONE_MAX_HALF_ANGLE;
+    /* Every origin checked too: the apex backs off along the axis until each lies inside, half
+     * the margin from the surface. */
+    const float16 tanInner = tan(phi - 0.5f * RC_CONE_ANGLE_MARGIN);
+    float16 back = (float16)(0.0f);
+    for (uint k = 0; k < RC_CONE_TILE_RAYS; ++k) {
+        const int16 ok = rc_cones_tile_ray16(sorted, n, g, k, &o, &r);
+        const RcVec16 cv = rc_v16_sub(o, a);
+        const float16 along = rc_v16_dot(cv, x);
+        const float16 across = rc_v16_length(rc_v16_sub(cv, rc_v16_scale(x, along)));
+        back = select(back, fmax(back, across / tanInner - along), ok);
+    }
+    a = rc_v16_sub(a, rc_v16_scale(x, back + margin));
+    float ax[RC_PACKET], ay[RC_PACKET], az[RC_PACKET], px[RC_PACKET], py[RC_PACKET],
+        pz[RC_PACKET], phis[RC_PACKET];
+    int bads[RC_PACKET];
+    vstore16(x.x, 0, ax), vstore16(x.y, 0, ay), vstore16(x.z, 0, az);
+    vstore16(a.x, 0, px), vstore16(a.y, 0, py), vstore16(a.z, 0, pz);
+    vstore16(phi, 0, phis), vstore16(bad, 0, bads);
+    const uint count = min((uint)RC_CONE_GROUP_TILES, nTiles - g * RC_CONE_GROUP_TILES);
+    for (uint t = 0; t < count; ++t) {
+        tiles[g * RC_CONE_GROUP_TILES + t] =
+            bads[t] ? rc_cones_unbounded()
+                    : rc_cones_make((float3)(px[t], py[t], pz[t]), (float3)(ax[t], ay[t], az[t]),
+                                    phis[t]);
+    }
+    groups[g] = rc_cones_group(ax, ay, az, px, py, pz, phis, bads, count, margin);
 }
 
 /* Group cones against every primitive. write = 0: counts[g] = survivors; else the survivors'
@@ -114,30 +338,6 @@ inline uint rc_cones_tile_candidates(uint j, __global const uint* tileOffsets,
     return tileCounts[t];
 }
 
-/* The 16 rays at sorted positions [first, first + 16) (all of one tile), lanes beyond n inactive,
- * and lanes with tmax == 0 (empty shadow slots) inactive when skipEmpty. */
-inline void rc_cones_load_packet(__global const RcRay* sorted, uint first, uint n, int skipEmpty,
-                                 RcBvhPacket* p) {
-    float o[3][RC_PACKET], dir[3][RC_PACKET], tn[RC_PACKET], tf[RC_PACKET];
-    int act[RC_PACKET];
-    for (int k = 0; k < RC_PACKET; ++k) {
-        float4 ro = (float4)(0.0f), rd = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
-        act[k] = first + k < n;
-        if (act[k]) {
-            ro = sorted[first + k].origin;
-            rd = sorted[first + k].direction;
-            act[k] = !skipEmpty || rd.w != 0.0f;
-        }
-        o[0][k] = ro.x, o[1][k] = ro.y, o[2][k] = ro.z;
-        dir[0][k] = rd.x, dir[1][k] = rd.y, dir[2][k] = rd.z;
-        tn[k] = ro.w, tf[k] = rd.w;
-    }
-    p->ox = vload16(0, o[0]), p->oy = vload16(0, o[1]), p->oz = vload16(0, o[2]);
-    p->dx = vload16(0, dir[0]), p->dy = vload16(0, dir[1]), p->dz = vload16(0, dir[2]);
-    p->tmin = vload16(0, tn), p->tmax = vload16(0, tf);
-    p->active = vload16(0, act) != 0;
-}
-
 /* Primitive `id` against the lanes `live` one lane at a time, through rc_intersect_primitive.
  * Returns the lanes it hit. */
 inline int16 rc_cones_primitive_lanes(const RcBvhPacket* p, int16 live, uint id,
@@ -205,9 +405,35 @@ inline uint16 rc_cones_packet(const RcBvhPacket* p, int anyHit, uint count,
     return tests;
 }
 
-/* One work-item per 16 sorted positions [16 w, 16 w + 16): the rays sorted[j], whose places in
- * the batch are order[j]. A tile's rays (RC_CONE_TILE_RAYS, a multiple of 16) test its
- * candidates together. counters[ray] counts primitive tests. */
+/* The answers of the rays at sorted positions [first, first + 16) (all of one tile), whose
+ * places in the batch are order[j]: nearest hits, or with anyHit blocked flags; counters[ray]
+ * the primitive tests. */
+inline void rc_cones_answer(int anyHit, __global const RcRay* sorted, uint first, uint n,
+                            __global const uint* order, __global const uint* tileOffsets,
+                            __global const uint* tileCounts, __global const uint* tileList,
+                            __global const RcTriangle* triangles, __global const RcSphere* spheres,
+                            __global const RcQuadric* quadrics,
+                            __constant const RcRenderParams* params, __global RcHit* hits,
+                            __global uchar* blockedOut, __global uint* counters) {
+    const uint nT = params->nTriangles, nS = params->nSpheres;
+    const uint nPrims = nT + nS + params->nQuadrics;
+    __global const uint* ids;
+    const uint count =
+        rc_cones_tile_candidates(first, tileOffsets, tileCounts, tileList, nPrims, &ids);
+    /* A tile's rays always test its candidates together: the BVH's coherence verdict is moot. */
+    RcBvhPacket p;
+    rc_bvh_load_packet(sorted, first, n, anyHit, INFINITY, &p);
+    float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
+    uint16 bp = (uint16)(RC_NO_HIT);
+    int16 blocked = (int16)(0);
+    const uint16 tests = rc_cones_packet(&p, anyHit, count, ids, triangles, spheres, quadrics, nT,
+                                         nS, &bt, &bp, &bu, &bv, &blocked);
+    rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, order, hits, blockedOut);
+    rc_packet_store_counts(first, n, tests, order, counters);
+}
+
+/* One work-item per 16 sorted positions [16 w, 16 w + 16). A tile's rays (RC_CONE_TILE_RAYS, a
+ * multiple of 16) test its candidates together. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_cones(
     __global const RcRay* sorted, uint n, __global const uint* order,
     __global const uint* tileOffsets, __global const uint* tileCounts,
@@ -216,32 +442,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     __constant const RcRenderParams* params, __global RcHit* hits, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    const uint nT = params->nTriangles, nS = params->nSpheres;
-    const uint nPrims = nT + nS + params->nQuadrics;
-    __global const uint* ids;
-    const uint count =
-        rc_cones_tile_candidates(first, tileOffsets, tileCounts, tileList, nPrims, &ids);
-    RcBvhPacket p;
-    rc_cones_load_packet(sorted, first, n, 0, &p);
-    float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
-    uint16 bp = (uint16)(RC_NO_HIT);
-    int16 blocked = (int16)(0);
-    const uint16 tests = rc_cones_packet(&p, 0, count, ids, triangles, spheres, quadrics, nT, nS,
-                                         &bt, &bp, &bu, &bv, &blocked);
-    float ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
-    uint ps[RC_PACKET], cs[RC_PACKET];
-    vstore16(bt, 0, ts), vstore16(bu, 0, us), vstore16(bv, 0, vs);
-    vstore16(bp, 0, ps), vstore16(tests, 0, cs);
-    for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
-        const uint i = order[first + k];
-        RcHit h;
-        h.t = ps[k] == RC_NO_HIT ? INFINITY : ts[k];
-        h.prim = ps[k];
-        h.u = us[k];
-        h.v = vs[k];
-        hits[i] = h;
-        counters[i] = cs[k];
-    }
+    rc_cones_answer(0, sorted, first, n, order, tileOffsets, tileCounts, tileList, triangles,
+                    spheres, quadrics, params, hits, 0, counters);
 }
 
 /* Any hit before the light ends a ray's search; one work-item per 16 sorted positions. */
@@ -253,24 +455,6 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     __constant const RcRenderParams* params, __global uchar* blocked, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    const uint nT = params->nTriangles, nS = params->nSpheres;
-    const uint nPrims = nT + nS + params->nQuadrics;
-    __global const uint* ids;
-    const uint count =
-        rc_cones_tile_candidates(first, tileOffsets, tileCounts, tileList, nPrims, &ids);
-    RcBvhPacket p;
-    rc_cones_load_packet(sorted, first, n, 1, &p);
-    float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
-    uint16 bp = (uint16)(RC_NO_HIT);
-    int16 hit = (int16)(0);
-    const uint16 tests = rc_cones_packet(&p, 1, count, ids, triangles, spheres, quadrics, nT, nS,
-                                         &bt, &bp, &bu, &bv, &hit);
-    int hs[RC_PACKET];
-    uint cs[RC_PACKET];
-    vstore16(hit, 0, hs), vstore16(tests, 0, cs);
-    for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
-        const uint i = order[first + k];
-        blocked[i] = hs[k] != 0;
-        counters[i] = cs[k];
-    }
+    rc_cones_answer(1, sorted, first, n, order, tileOffsets, tileCounts, tileList, triangles,
+                    spheres, quadrics, params, 0, blocked, counters);
 }

@@ -21,17 +21,18 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-/* boxLo.w: the slack's absolute part; cellSize.xyz; res.xyz: cells along each axis. */
-inline uint rc_grid_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
-                          __global const uint* cellStart, __global const uint* primIndex,
-                          float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
-                          __global const RcTriangle* triangles, __global const RcSphere* spheres,
-                          __global const RcQuadric* quadrics, uint nT, uint nS, RcHit* best,
-                          uint* visits) {
-    const float slackAbs = boxLo.w;
-    const float3 inv = rc_accel_inverse(d);
-    float t0 = tmin, t1 = tmax;
-    if (!rc_accel_clip(o, inv, boxLo.xyz, boxHi.xyz, slackAbs, &t0, &t1)) return 0;
+/* Walks the cells, unless the ray needs no walk (rc_ray_walks); with anyHit it returns at the
+ * first hit. Returns the primitive tests done and adds the cells visited to *visits. boxLo.w:
+ * the slack's absolute part; cellSize.xyz; res.xyz: cells along each axis. */
+inline uint rc_grid_trace(RcRay ray, int anyHit, __global const uint* cellStart,
+                          __global const uint* primIndex, float4 boxLo, float4 boxHi,
+                          float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+                          __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+                          __constant const RcRenderParams* params, RcHit* best, uint* visits) {
+    const float3 o = ray.origin.xyz, d = ray.direction.xyz;
+    float3 inv;
+    float t0, t1;
+    if (!rc_accel_enter(ray, anyHit, boxLo, boxHi, params, &inv, &t0, &t1)) return 0;
     const int3 last = convert_int3(res.xyz) - 1;
     const float3 p = o + fmax(t0, 0.0f) * d;
     int3 cell = clamp(convert_int3_rtn((p - boxLo.xyz) / cellSize.xyz), (int3)(0), last);
@@ -46,8 +47,8 @@ inline uint rc_grid_trace(float3 o, float3 d, float tmin, float tmax, int anyHit
         for (uint k = cellStart[c]; k < end; ++k) {
             const uint id = primIndex[k];
             ++tests;
-            if (rc_intersect_primitive(id, o, d, tmin, tmax, triangles, spheres, quadrics, nT, nS,
-                                       best) &&
+            if (rc_intersect_primitive(id, o, d, ray.origin.w, ray.direction.w, triangles, spheres,
+                                       quadrics, params->nTriangles, params->nSpheres, best) &&
                 anyHit)
                 return tests;
         }
@@ -55,7 +56,7 @@ inline uint rc_grid_trace(float3 o, float3 d, float tmin, float tmax, int anyHit
             boxLo.xyz + convert_float3(cell + select((int3)(0), (int3)(1), upper)) * cellSize.xyz;
         const float3 tNext = select((float3)(INFINITY), (boundary - o) * inv, moves);
         const float tExit = fmin(fmin(tNext.x, tNext.y), tNext.z);
-        const float s = rc_accel_slack(tExit, slackAbs);
+        const float s = rc_accel_slack(tExit, boxLo.w);
         if (best->t < tExit - s || tExit - s > t1) return tests;
         if (tNext.x <= tNext.y && tNext.x <= tNext.z) {
             cell.x += step.x;
@@ -96,14 +97,8 @@ inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit,
                                    __global const RcTriangle* triangles, float16* bt, uint16* bp,
                                    float16* bu, float16* bv, int16* blocked, uint16* visits) {
     const float slackAbs = boxLo.w;
-    /* rc_accel_clip lane by lane */
-    const float16 ax = (boxLo.x - p->ox) * p->ix, bx = (boxHi.x - p->ox) * p->ix;
-    const float16 ay = (boxLo.y - p->oy) * p->iy, by = (boxHi.y - p->oy) * p->iy;
-    const float16 az = (boxLo.z - p->oz) * p->iz, bz = (boxHi.z - p->oz) * p->iz;
-    const float16 near = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
-    const float16 far = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
-    const float16 tf = fmin(p->tmax, far + (1e-5f * fabs(far) + slackAbs));
-    const float16 tn = fmax(p->tmin, near - (1e-5f * fabs(near) + slackAbs));
+    float16 tn, tf;
+    rc_accel_clip16(p, boxLo, boxHi, &tn, &tf);
     const int16 inGrid = p->active & (tn <= tf);
     uint16 tests = (uint16)(0);
     if (!any(inGrid)) return tests;
@@ -191,29 +186,32 @@ inline void rc_grid_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
     const uint16 tests =
         rc_grid_trace_packet(p, anyHit, cellStart, primIndex, boxLo, boxHi, cellSize, res,
                              triangles, &bt, &bp, &bu, &bv, &blocked, &visits);
-    float ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
-    uint ps[RC_PACKET], cs[RC_PACKET], ns[RC_PACKET];
-    int bs[RC_PACKET];
-    vstore16(bt, 0, ts);
-    vstore16(bu, 0, us);
-    vstore16(bv, 0, vs);
-    vstore16(bp, 0, ps);
-    vstore16(tests, 0, cs);
-    vstore16(visits, 0, ns);
-    vstore16(blocked, 0, bs);
-    for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
-        if (anyHit) {
-            blockedOut[first + k] = bs[k] != 0;
-        } else {
-            RcHit h;
-            h.t = ps[k] == RC_NO_HIT ? INFINITY : ts[k];
-            h.prim = ps[k];
-            h.u = us[k];
-            h.v = vs[k];
-            hits[first + k] = h;
-        }
-        counters[first + k] = cs[k];
-        counters[n + first + k] = ns[k];
+    rc_accel_store_packet(anyHit, first, n, bt, bp, bu, bv, blocked, tests, visits, hits,
+                          blockedOut, counters);
+}
+
+/* The answers of rays [first, first + 16): nearest hits, or with anyHit blocked flags, and
+ * their counters. A coherent packet walks the grid once, other rays one by one. */
+inline void rc_grid_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
+                           __global const uint* cellStart, __global const uint* primIndex,
+                           float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
+                           __global const RcTriangle* triangles, __global const RcSphere* spheres,
+                           __global const RcQuadric* quadrics,
+                           __constant const RcRenderParams* params, __global RcHit* hits,
+                           __global uchar* blockedOut, __global uint* counters) {
+    RcBvhPacket p;
+    if (rc_accel_load_packet(rays, first, n, anyHit, boxLo, boxHi, params, &p)) {
+        rc_grid_packet(&p, anyHit, first, n, cellStart, primIndex, boxLo, boxHi, cellSize, res,
+                       triangles, hits, blockedOut, counters);
+        return;
+    }
+    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
+        RcHit best = rc_no_hit(rays[i].direction.w);
+        uint visits = 0;
+        const uint tests = rc_grid_trace(rays[i], anyHit, cellStart, primIndex, boxLo, boxHi,
+                                         cellSize, res, triangles, spheres, quadrics, params, &best,
+                                         &visits);
+        rc_accel_store_ray(anyHit, i, n, best, tests, visits, hits, blockedOut, counters);
     }
 }
 
@@ -226,28 +224,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     __global RcHit* hits, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    const int hasPrims = params->nTriangles + params->nSpheres + params->nQuadrics > 0;
-    RcBvhPacket p;
-    if (hasPrims && rc_packets_allowed(params) &&
-        rc_bvh_load_packet(rays, first, n, 0, rc_accel_max_spread2(boxLo, boxHi), &p)) {
-        rc_grid_packet(&p, 0, first, n, cellStart, primIndex, boxLo, boxHi, cellSize, res,
-                       triangles, hits, 0, counters);
-        return;
-    }
-    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
-        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-        RcHit best = rc_no_hit(tmax);
-        uint tests = 0, visits = 0;
-        if (hasPrims)
-            tests = rc_grid_trace(o, d, tmin, tmax, 0, cellStart, primIndex, boxLo, boxHi,
-                                  cellSize, res, triangles, spheres, quadrics, params->nTriangles,
-                                  params->nSpheres, &best, &visits);
-        if (best.prim == RC_NO_HIT) best.t = INFINITY;
-        hits[i] = best;
-        counters[i] = tests;
-        counters[n + i] = visits;
-    }
+    rc_grid_answer(0, rays, first, n, cellStart, primIndex, boxLo, boxHi, cellSize, res,
+                   triangles, spheres, quadrics, params, hits, 0, counters);
 }
 
 /* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
@@ -259,27 +237,6 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     __global uchar* blocked, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    const int hasPrims = params->nTriangles + params->nSpheres + params->nQuadrics > 0;
-    RcBvhPacket p;
-    if (hasPrims && rc_packets_allowed(params) &&
-        rc_bvh_load_packet(rays, first, n, 1, rc_accel_max_spread2(boxLo, boxHi), &p)) {
-        rc_grid_packet(&p, 1, first, n, cellStart, primIndex, boxLo, boxHi, cellSize, res,
-                       triangles, 0, blocked, counters);
-        return;
-    }
-    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
-        blocked[i] = 0;
-        counters[i] = counters[n + i] = 0;
-        /* An empty slot has tmax 0: nothing can block it. */
-        if (rays[i].direction.w == 0.0f || !hasPrims) continue;
-        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-        RcHit best = rc_no_hit(tmax);
-        uint visits = 0;
-        counters[i] = rc_grid_trace(o, d, tmin, tmax, 1, cellStart, primIndex, boxLo, boxHi,
-                                    cellSize, res, triangles, spheres, quadrics,
-                                    params->nTriangles, params->nSpheres, &best, &visits);
-        counters[n + i] = visits;
-        blocked[i] = best.prim != RC_NO_HIT;
-    }
+    rc_grid_answer(1, rays, first, n, cellStart, primIndex, boxLo, boxHi, cellSize, res,
+                   triangles, spheres, quadrics, params, 0, blocked, counters);
 }

@@ -26,17 +26,17 @@
 /* accel::kKdMaxDepth: one entry per level. */
 #define RC_KD_STACK 64
 
-/* Walks the tree; with anyHit it returns at the first hit. Returns the primitive tests done and
- * adds the nodes visited to *visits. */
-inline uint rc_kd_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
-                        __global const RcKdNode* nodes, __global const RcBvhLeafBlock8* blocks,
-                        float4 boxLo, float4 boxHi, __global const RcTriangle* triangles,
-                        __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-                        uint nT, uint nS, RcHit* best, uint* visits) {
-    const float slackAbs = boxLo.w;
-    const float3 inv = rc_accel_inverse(d);
-    float tn = tmin, tf = tmax;
-    if (!rc_accel_clip(o, inv, boxLo.xyz, boxHi.xyz, slackAbs, &tn, &tf)) return 0;
+/* Walks the tree, unless the ray needs no walk (rc_ray_walks); with anyHit it returns at the
+ * first hit. Returns the primitive tests done and adds the nodes visited to *visits. */
+inline uint rc_kd_trace(RcRay ray, int anyHit, __global const RcKdNode* nodes,
+                        __global const RcBvhLeafBlock8* blocks, float4 boxLo, float4 boxHi,
+                        __global const RcTriangle* triangles, __global const RcSphere* spheres,
+                        __global const RcQuadric* quadrics,
+                        __constant const RcRenderParams* params, RcHit* best, uint* visits) {
+    const float3 o = ray.origin.xyz, d = ray.direction.xyz;
+    float3 inv;
+    float tn, tf;
+    if (!rc_accel_enter(ray, anyHit, boxLo, boxHi, params, &inv, &tn, &tf)) return 0;
     uint stackNode[RC_KD_STACK];
     float stackNear[RC_KD_STACK], stackFar[RC_KD_STACK];
     int sp = 0;
@@ -49,7 +49,7 @@ inline uint rc_kd_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
             const float split = as_float(nd.data);
             const float oa = rc_accel_component(o, axis), da = rc_accel_component(d, axis);
             const float ts = (split - oa) * rc_accel_component(inv, axis);
-            const float s = rc_accel_slack(ts, slackAbs);
+            const float s = rc_accel_slack(ts, boxLo.w);
             const int lowerFirst = oa < split || (oa == split && da <= 0.0f);
             const uint lower = node + 1, upper = nd.word >> 2;
             const uint first = lowerFirst ? lower : upper, second = lowerFirst ? upper : lower;
@@ -74,8 +74,9 @@ inline uint rc_kd_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
             continue;
         }
         const uint count = nd.word >> 2;
-        if (count > 0 && RC_BVH_LEAF(count, blocks + nd.data, o, d, tmin, tmax, anyHit, triangles,
-                                     spheres, quadrics, nT, nS, best, &tests))
+        if (count > 0 && RC_BVH_LEAF(count, blocks + nd.data, o, d, ray.origin.w, ray.direction.w,
+                                     anyHit, triangles, spheres, quadrics, params->nTriangles,
+                                     params->nSpheres, best, &tests))
             return tests;
         for (;;) {
             if (sp == 0) return tests;
@@ -98,14 +99,8 @@ inline uint16 rc_kd_trace_packet(const RcBvhPacket* p, int anyHit, __global cons
                                  float4 boxHi, float16* bt, uint16* bp, float16* bu, float16* bv,
                                  int16* blocked, uint16* visits) {
     const float slackAbs = boxLo.w;
-    /* rc_accel_clip lane by lane */
-    const float16 ax = (boxLo.x - p->ox) * p->ix, bx = (boxHi.x - p->ox) * p->ix;
-    const float16 ay = (boxLo.y - p->oy) * p->iy, by = (boxHi.y - p->oy) * p->iy;
-    const float16 az = (boxLo.z - p->oz) * p->iz, bz = (boxHi.z - p->oz) * p->iz;
-    const float16 near = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
-    const float16 far = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
-    float16 tf = fmin(p->tmax, far + (1e-5f * fabs(far) + slackAbs));
-    float16 tn = fmax(p->tmin, near - (1e-5f * fabs(near) + slackAbs));
+    float16 tn, tf;
+    rc_accel_clip16(p, boxLo, boxHi, &tn, &tf);
     tn = select((float16)(INFINITY), tn, p->active);
     float16 reach = *bt;
     /* The packet's rays share their directions' signs: the child on the side the first live
@@ -192,29 +187,30 @@ inline void rc_kd_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
     int16 blocked = (int16)(0);
     const uint16 tests = rc_kd_trace_packet(p, anyHit, nodes, blocks, boxLo, boxHi, &bt, &bp, &bu,
                                             &bv, &blocked, &visits);
-    float ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
-    uint ps[RC_PACKET], cs[RC_PACKET], ns[RC_PACKET];
-    int bs[RC_PACKET];
-    vstore16(bt, 0, ts);
-    vstore16(bu, 0, us);
-    vstore16(bv, 0, vs);
-    vstore16(bp, 0, ps);
-    vstore16(tests, 0, cs);
-    vstore16(visits, 0, ns);
-    vstore16(blocked, 0, bs);
-    for (uint k = 0; k < RC_PACKET && first + k < n; ++k) {
-        if (anyHit) {
-            blockedOut[first + k] = bs[k] != 0;
-        } else {
-            RcHit h;
-            h.t = ps[k] == RC_NO_HIT ? INFINITY : ts[k];
-            h.prim = ps[k];
-            h.u = us[k];
-            h.v = vs[k];
-            hits[first + k] = h;
-        }
-        counters[first + k] = cs[k];
-        counters[n + first + k] = ns[k];
+    rc_accel_store_packet(anyHit, first, n, bt, bp, bu, bv, blocked, tests, visits, hits,
+                          blockedOut, counters);
+}
+
+/* The answers of rays [first, first + 16): nearest hits, or with anyHit blocked flags, and
+ * their counters. A coherent packet walks the tree once, other rays one by one. */
+inline void rc_kd_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
+                         __global const RcKdNode* nodes, __global const RcBvhLeafBlock8* blocks,
+                         float4 boxLo, float4 boxHi, __global const RcTriangle* triangles,
+                         __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+                         __constant const RcRenderParams* params, __global RcHit* hits,
+                         __global uchar* blockedOut, __global uint* counters) {
+    RcBvhPacket p;
+    if (rc_accel_load_packet(rays, first, n, anyHit, boxLo, boxHi, params, &p)) {
+        rc_kd_packet(&p, anyHit, first, n, nodes, blocks, boxLo, boxHi, hits, blockedOut,
+                     counters);
+        return;
+    }
+    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
+        RcHit best = rc_no_hit(rays[i].direction.w);
+        uint visits = 0;
+        const uint tests = rc_kd_trace(rays[i], anyHit, nodes, blocks, boxLo, boxHi, triangles,
+                                       spheres, quadrics, params, &best, &visits);
+        rc_accel_store_ray(anyHit, i, n, best, tests, visits, hits, blockedOut, counters);
     }
 }
 
@@ -227,27 +223,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     __global RcHit* hits, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    const uint nT = params->nTriangles, nS = params->nSpheres;
-    const int hasPrims = nT + nS + params->nQuadrics > 0;
-    RcBvhPacket p;
-    if (hasPrims && rc_packets_allowed(params) &&
-        rc_bvh_load_packet(rays, first, n, 0, rc_accel_max_spread2(boxLo, boxHi), &p)) {
-        rc_kd_packet(&p, 0, first, n, nodes, blocks, boxLo, boxHi, hits, 0, counters);
-        return;
-    }
-    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
-        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-        RcHit best = rc_no_hit(tmax);
-        uint tests = 0, visits = 0;
-        if (hasPrims)
-            tests = rc_kd_trace(o, d, tmin, tmax, 0, nodes, blocks, boxLo, boxHi, triangles,
-                                spheres, quadrics, nT, nS, &best, &visits);
-        if (best.prim == RC_NO_HIT) best.t = INFINITY;
-        hits[i] = best;
-        counters[i] = tests;
-        counters[n + i] = visits;
-    }
+    rc_kd_answer(0, rays, first, n, nodes, blocks, boxLo, boxHi, triangles, spheres, quadrics,
+                 params, hits, 0, counters);
 }
 
 /* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
@@ -259,26 +236,6 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     __global uchar* blocked, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    const uint nT = params->nTriangles, nS = params->nSpheres;
-    const int hasPrims = nT + nS + params->nQuadrics > 0;
-    RcBvhPacket p;
-    if (hasPrims && rc_packets_allowed(params) &&
-        rc_bvh_load_packet(rays, first, n, 1, rc_accel_max_spread2(boxLo, boxHi), &p)) {
-        rc_kd_packet(&p, 1, first, n, nodes, blocks, boxLo, boxHi, 0, blocked, counters);
-        return;
-    }
-    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
-        blocked[i] = 0;
-        counters[i] = counters[n + i] = 0;
-        /* An empty slot has tmax 0: nothing can block it. */
-        if (rays[i].direction.w == 0.0f || !hasPrims) continue;
-        const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
-        const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
-        RcHit best = rc_no_hit(tmax);
-        uint visits = 0;
-        counters[i] = rc_kd_trace(o, d, tmin, tmax, 1, nodes, blocks, boxLo, boxHi, triangles,
-                                  spheres, quadrics, nT, nS, &best, &visits);
-        counters[n + i] = visits;
-        blocked[i] = best.prim != RC_NO_HIT;
-    }
+    rc_kd_answer(1, rays, first, n, nodes, blocks, boxLo, boxHi, triangles, spheres, quadrics,
+                 params, 0, blocked, counters);
 }

@@ -23,18 +23,23 @@ inline void rc_patch_planes(float3 d, float3* n1, float3* n2) {
     *n2 = RC_CROSS3(d, n);
 }
 
-/* Cubic Bernstein weights and their derivatives at s. */
-inline void rc_bernstein3(float s, float* b, float* db) {
-    const float r = 1.0f - s;
-    b[0] = r * r * r;
-    b[1] = 3.0f * s * r * r;
-    b[2] = 3.0f * s * s * r;
-    b[3] = s * s * s;
-    db[0] = -3.0f * r * r;
-    db[1] = 3.0f * r * (r - 2.0f * s);
-    db[2] = 3.0f * s * (2.0f * r - s);
-    db[3] = 3.0f * s * s;
-}
+/* Defines `qualifiers void name(T s, T* b, T* db)`: cubic Bernstein weights b and their
+ * derivatives db at s, for T float here and float16 in the packets (patch_packet.cl), one body
+ * for both so that a lane computes what the scalar routine computes. */
+#define RC_DEFINE_BERNSTEIN3(qualifiers, name, T) \
+    qualifiers void name(T s, T* b, T* db) {      \
+        const T r = 1.0f - s;                     \
+        b[0] = r * r * r;                         \
+        b[1] = 3.0f * s * r * r;                  \
+        b[2] = 3.0f * s * s * r;                  \
+        b[3] = s * s * s;                         \
+        db[0] = -3.0f * r * r;                    \
+        db[1] = 3.0f * r * (r - 2.0f * s);        \
+        db[2] = 3.0f * s * (2.0f * r - s);        \
+        db[3] = 3.0f * s * s;                     \
+    }
+
+RC_DEFINE_BERNSTEIN3(inline, rc_bernstein3, float)
 
 /* Value and derivatives of one channel c[16] at the weights (bu, dbu) x (bv, dbv). */
 inline float3 rc_patch_channel(const float* c, const float* bu, const float* dbu, const float* bv,

@@ -6,17 +6,7 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-RC_SHADE_INLINE void rc_bernstein3_16(float16 s, float16* b, float16* db) {
-    const float16 r = 1.0f - s;
-    b[0] = r * r * r;
-    b[1] = 3.0f * s * r * r;
-    b[2] = 3.0f * s * s * r;
-    b[3] = s * s * s;
-    db[0] = -3.0f * r * r;
-    db[1] = 3.0f * r * (r - 2.0f * s);
-    db[2] = 3.0f * s * (2.0f * r - s);
-    db[3] = 3.0f * s * s;
-}
+RC_DEFINE_BERNSTEIN3(RC_SHADE_INLINE, rc_bernstein3_16, float16)
 
 /* rc_patch_channel per lane: value, derivative along s, along t. */
 RC_SHADE_INLINE void rc_patch_channel16(const float16* c, const float16* bu, const float16* dbu,

@@ -178,39 +178,6 @@ bool CoherentAsGiven(std::span<const RcRay> rays) {
     return sampled > 0 && sum <= kMeanHalfAngle * double(sampled);
 }
 
-RcCone EnclosingConeOfCones(std::span<const RcCone> cones, double margin) {
-    glm::dvec3 sum(0.0);
-    for (const RcCone& c : cones) {
-        if (c.apex.w < 0.0f) return Unbounded();
-        sum += glm::dvec3(c.axis.x, c.axis.y, c.axis.z);
-    }
-    if (cones.empty() || glm::length(sum) < 1e-12) return Unbounded();
-    const glm::dvec3 x = glm::normalize(sum);
-    // Every cone's directions inside: the angle to its axis plus its half-angle, then the margin.
-    double phi = 0.0;
-    glm::dvec3 centroid(0.0);
-    for (const RcCone& c : cones) {
-        const glm::dvec3 axis = glm::normalize(glm::dvec3(c.axis.x, c.axis.y, c.axis.z));
-        const double toAxis = std::acos(std::clamp(glm::dot(x, axis), -1.0, 1.0));
-        phi = std::max(phi, toAxis + std::atan(std::sqrt(double(c.apex.w))));
-        centroid += glm::dvec3(c.apex.x, c.apex.y, c.apex.z);
-    }
-    phi = std::max(phi + kAngleMargin, kMinHalfAngle);
-    if (phi >= kMaxHalfAngle) return Unbounded();
-    centroid /= double(cones.size());
-    // Every apex inside, half the margin away from the surface, as EnclosingCone's origins.
-    const double tanPhi = std::tan(phi), tanInner = std::tan(phi - 0.5 * kAngleMargin);
-    double back = 0.0;
-    for (const RcCone& c : cones) {
-        const glm::dvec3 d = glm::dvec3(c.apex.x, c.apex.y, c.apex.z) - centroid;
-        const double along = glm::dot(d, x);
-        back = std::max(back, glm::length(d - along * x) / tanInner - along);
-    }
-    const glm::dvec3 apex = centroid - (back + margin) * x;
-    return {{float(apex.x), float(apex.y), float(apex.z), float(tanPhi * tanPhi)},
-            {float(x.x), float(x.y), float(x.z), float(1.0 / std::sin(phi))}};
-}
-
 PrimitiveSpheres BoundingSpheres(const scene::Scene& scene, float pad) {
     PrimitiveSpheres s;
     s.count = scene.PrimitiveCount();

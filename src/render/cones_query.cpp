@@ -1,5 +1,6 @@
 #include "rayclass/render/cones_query.h"
 
+#include <algorithm>
 #include <chrono>
 #include <mutex>
 #include <numeric>
@@ -24,13 +25,36 @@ constexpr uint32_t kPacketRays = 16;
 // primitive, which bounds the memory incoherent rays need.
 constexpr uint64_t kMaxListEntries = uint64_t(1) << 25;
 
-// A batch's rays in tile order (sorted[j] = rays[order[j]]) and the cones of its groups and
-// tiles.
+// A batch's rays in tile order (sorted[j] = rays[order[j]]).
 struct ConeBatch final : PreparedBatch {
     std::vector<uint32_t> order;
     std::vector<RcRay> sorted;
-    std::vector<RcCone> groups, tiles;
 };
+
+uint32_t TilesOf(uint32_t n) { return (n + accel::kConeTileRays - 1) / accel::kConeTileRays; }
+uint32_t GroupsOf(uint32_t nTiles) {
+    return (nTiles + accel::kConeGroupTiles - 1) / accel::kConeGroupTiles;
+}
+
+// cl/cones.cl's rc_cones_build: the cones of the tiles and groups of the n rays in tile order in
+// `sorted`, into `tiles` and `groups`.
+void LaunchBuild(clrt::Context& ctx, cl::Kernel& build, const cl::Buffer& sorted, uint32_t n,
+                 double margin, const cl::Buffer& tiles, const cl::Buffer& groups,
+                 KernelTimer& timer) {
+    const uint32_t nTiles = TilesOf(n);
+    if (nTiles == 0) return;
+    SetArgs(build, sorted, n, nTiles, float(margin), tiles, groups);
+    Launch(ctx, build, GroupsOf(nTiles), timer);
+}
+
+std::vector<RcCone> ReadCones(clrt::Context& ctx, const cl::Buffer& buffer, uint32_t count) {
+    std::vector<RcCone> cones(count);
+    if (count == 0) return cones;
+    clrt::Check("clEnqueueReadBuffer", [&] {
+        ctx.queue().enqueueReadBuffer(buffer, CL_TRUE, 0, count * sizeof(RcCone), cones.data());
+    });
+    return cones;
+}
 
 class ConesQuery final : public RayQuery {
   public:
@@ -40,6 +64,7 @@ class ConesQuery final : public RayQuery {
           scene_(scene),
           box_(hostScene.Bounds()),
           margin_(1e-5 * std::max(1e-20f, box_.Diagonal())),
+          build_(program, "rc_cones_build"),
           cullGroups_(program, "rc_cones_cull_groups"),
           cullTiles_(program, "rc_cones_cull_tiles"),
           intersect_(program, "rc_intersect_cones"),
@@ -115,22 +140,9 @@ class ConesQuery final : public RayQuery {
         } else {
             b->order = accel::CoherentOrder(rays, box_);
         }
-        // The rays in tile order once, so that the cones and the kernels read them in place.
+        // The rays in tile order once, so that the kernels read them in place.
         b->sorted.resize(rays.size());
         for (size_t j = 0; j < rays.size(); ++j) b->sorted[j] = rays[b->order[j]];
-        const std::span<const RcRay> all(b->sorted);
-        const size_t n = rays.size(), tileRays = accel::kConeTileRays;
-        for (size_t first = 0; first < n; first += tileRays) {
-            b->tiles.push_back(
-                accel::EnclosingCone(all.subspan(first, std::min(n - first, tileRays)), margin_));
-        }
-        const std::span<const RcCone> tiles(b->tiles);
-        for (size_t first = 0; first < tiles.size(); first += accel::kConeGroupTiles) {
-            b->groups.push_back(accel::EnclosingConeOfCones(
-                tiles.subspan(first,
-                              std::min(tiles.size() - first, size_t(accel::kConeGroupTiles))),
-                margin_));
-        }
         std::lock_guard<std::mutex> lock(mutex_);
         stats_.hostSeconds += std::chrono::duration<double>(Clock::now() - t0).count();
         return b;
@@ -177,9 +189,11 @@ class ConesQuery final : public RayQuery {
 
     uint64_t Run(cl::Kernel& kernel, uint32_t n, const ConeBatch& b, const cl::Buffer& out,
                  KernelTimer& timer) {
-        const uint32_t nGroups = uint32_t(b.groups.size()), nTiles = uint32_t(b.tiles.size());
-        const cl::Buffer& groupCones = groupCones_.Upload(ctx_, b.groups);
-        const cl::Buffer& tileCones = tileCones_.Upload(ctx_, b.tiles);
+        const uint32_t nTiles = TilesOf(n), nGroups = GroupsOf(nTiles);
+        const cl::Buffer& sorted = sorted_.Share(ctx_, b.sorted);
+        const cl::Buffer& tileCones = tileCones_.Reserve(ctx_, nTiles * sizeof(RcCone));
+        const cl::Buffer& groupCones = groupCones_.Reserve(ctx_, nGroups * sizeof(RcCone));
+        LaunchBuild(ctx_, build_, sorted, n, margin_, tileCones, groupCones, timer);
         std::vector<uint32_t> groupCounts, tileCounts;
         const std::vector<uint32_t> groupOffsets =
             Cull(cullGroups_, nGroups, groupCounts_, groupOffsets_, groupList_, groupCounts, timer,
@@ -189,31 +203,31 @@ class ConesQuery final : public RayQuery {
                  tileCones, nTiles, groupOffsets_.Reserve(ctx_, 0), groupCounts_.Reserve(ctx_, 0),
                  groupList_.Reserve(ctx_, 0));
         const cl::Buffer& order = order_.Upload(ctx_, b.order);
-        const cl::Buffer& sorted = sorted_.Share(ctx_, b.sorted);
         SetArgs(kernel, sorted, n, order, tileOffsets_.Reserve(ctx_, 0),
                 tileCounts_.Reserve(ctx_, 0), tileList_.Reserve(ctx_, 0), scene_.triangles,
                 scene_.spheres, scene_.quadrics, scene_.params, out, counters_.Reserve(ctx_, n));
         Launch(ctx_, kernel, (n + kPacketRays - 1) / kPacketRays, timer);
         const CounterSums sums = counters_.Sum(ctx_, n);
-        Count(b, n, groupCounts, groupOffsets, tileCounts, tileOffsets);
+        Count(n, ReadCones(ctx_, tileCones, nTiles), ReadCones(ctx_, groupCones, nGroups),
+              groupCounts, groupOffsets, tileCounts, tileOffsets);
         return sums.tests;
     }
 
-    void Count(const ConeBatch& b, uint32_t n, const std::vector<uint32_t>& groupCounts,
-               const std::vector<uint32_t>& groupOffsets, const std::vector<uint32_t>& tileCounts,
-               const std::vector<uint32_t>& tileOffsets) {
-        double sphereTests = double(b.groups.size()) * nPrims_, candidates = 0, unbounded = 0;
-        for (size_t t = 0; t < b.tiles.size(); ++t) {
+    void Count(uint32_t n, const std::vector<RcCone>& tiles, const std::vector<RcCone>& groups,
+               const std::vector<uint32_t>& groupCounts, const std::vector<uint32_t>& groupOffsets,
+               const std::vector<uint32_t>& tileCounts, const std::vector<uint32_t>& tileOffsets) {
+        double sphereTests = double(groups.size()) * nPrims_, candidates = 0, unbounded = 0;
+        for (size_t t = 0; t < tiles.size(); ++t) {
             const size_t g = t / accel::kConeGroupTiles;
             sphereTests += groupOffsets[g] == kAll ? nPrims_ : groupCounts[g];
             candidates += tileOffsets[t] == kAll ? nPrims_ : tileCounts[t];
-            unbounded += b.tiles[t].apex.w < 0.0f;
+            unbounded += tiles[t].apex.w < 0.0f;
         }
-        for (const RcCone& c : b.groups) unbounded += c.apex.w < 0.0f;
+        for (const RcCone& c : groups) unbounded += c.apex.w < 0.0f;
         std::lock_guard<std::mutex> lock(mutex_);
         stats_.accel["cones_rays"] += n;
-        stats_.accel["cones_tiles"] += double(b.tiles.size());
-        stats_.accel["cones_groups"] += double(b.groups.size());
+        stats_.accel["cones_tiles"] += double(tiles.size());
+        stats_.accel["cones_groups"] += double(groups.size());
         stats_.accel["cones_unbounded"] += unbounded;
         stats_.accel["cones_sphere_tests"] += sphereTests;
         stats_.accel["cones_candidates"] += candidates;
@@ -225,7 +239,7 @@ class ConesQuery final : public RayQuery {
     double margin_;
     uint32_t nPrims_ = 0;
     cl::Buffer sx_, sy_, sz_, sr_;
-    cl::Kernel cullGroups_, cullTiles_, intersect_, occluded_;
+    cl::Kernel build_, cullGroups_, cullTiles_, intersect_, occluded_;
     GrowingBuffer groupCones_, tileCones_, order_, sorted_;
     GrowingBuffer groupCounts_, groupOffsets_, groupList_, tileCounts_, tileOffsets_, tileList_;
     RayCounters counters_;
@@ -234,6 +248,19 @@ class ConesQuery final : public RayQuery {
 };
 
 }  // namespace
+
+ConeLevels BuildCones(clrt::Context& ctx, const cl::Program& program, std::span<const RcRay> sorted,
+                      double margin) {
+    const std::vector<RcRay> rays(sorted.begin(), sorted.end());
+    const uint32_t n = uint32_t(rays.size()), nTiles = TilesOf(n), nGroups = GroupsOf(nTiles);
+    const cl::Buffer raysDev = UploadVector(ctx, rays);
+    const cl::Buffer tiles = DeviceBuffer(ctx, std::max<size_t>(1, nTiles) * sizeof(RcCone));
+    const cl::Buffer groups = DeviceBuffer(ctx, std::max<size_t>(1, nGroups) * sizeof(RcCone));
+    cl::Kernel build(program, "rc_cones_build");
+    KernelTimer timer;
+    LaunchBuild(ctx, build, raysDev, n, margin, tiles, groups, timer);
+    return {ReadCones(ctx, tiles, nTiles), ReadCones(ctx, groups, nGroups)};
+}
 
 std::unique_ptr<RayQuery> MakeConesQuery(clrt::Context& ctx, const cl::Program& program,
                                          const SceneBuffers& buffers, const scene::Scene& scene) {

@@ -1,7 +1,6 @@
 #include "ray_order.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <future>
 
@@ -50,15 +49,14 @@ uint32_t RayOrder::Key(const RcRay& ray) const {
 void RayOrder::Sort(std::span<const RcRay> rays, std::span<uint32_t> slots,
                     std::span<uint32_t> pixels) {
     const size_t n = slots.size();
-    keys_.resize(n);
-    nextKeys_.resize(n);
+    std::vector<uint32_t>& keys = radix_.bits;
+    keys.resize(n);
     order_.resize(n);
-    nextOrder_.resize(n);
     // The keys read every ray once, from memory the shading kernel has just written: the
     // render thread is alone on the host then, so two threads read them.
     auto keysOf = [&](size_t begin, size_t end) {
         for (size_t i = begin; i < end; ++i) {
-            keys_[i] = Key(rays[slots[i]]);
+            keys[i] = Key(rays[slots[i]]);
             order_[i] = uint32_t(i);
         }
     };
@@ -69,26 +67,8 @@ void RayOrder::Sort(std::span<const RcRay> rays, std::span<uint32_t> slots,
         keysOf(0, n / 2);
         half.get();
     }
-    // Least significant digit first: each pass is stable, so equal keys keep their order.
-    constexpr int kDigitBits = 12;
-    constexpr uint32_t kBuckets = 1u << kDigitBits;
-    for (int shift = 0; shift < kKeyBits; shift += kDigitBits) {
-        std::array<uint32_t, kBuckets> start{};
-        for (size_t i = 0; i < n; ++i) ++start[(keys_[i] >> shift) & (kBuckets - 1)];
-        uint32_t at = 0;
-        for (uint32_t& s : start) {
-            const uint32_t count = s;
-            s = at;
-            at += count;
-        }
-        for (size_t i = 0; i < n; ++i) {
-            const uint32_t to = start[(keys_[i] >> shift) & (kBuckets - 1)]++;
-            nextKeys_[to] = keys_[i];
-            nextOrder_[to] = order_[i];
-        }
-        keys_.swap(nextKeys_);
-        order_.swap(nextOrder_);
-    }
+    // Stable: equal keys keep their order.
+    RadixSortByBits<12>(keys, order_, kKeyBits, radix_);
     scratch_.assign(slots.begin(), slots.end());
     for (size_t i = 0; i < n; ++i) slots[i] = scratch_[order_[i]];
     scratch_.assign(pixels.begin(), pixels.end());

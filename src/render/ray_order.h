@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "rayclass/core/bounds.h"
+#include "rayclass/core/radix_sort.h"
 #include "rc_types.h"
 
 namespace rayclass::render {
@@ -28,8 +29,8 @@ class RayOrder {
     uint32_t Key(const RcRay& ray) const;
 
     float lo_[3], scale_[3];
-    std::vector<uint32_t> keys_, nextKeys_;
-    std::vector<uint32_t> order_, nextOrder_, scratch_;
+    RadixScratch radix_;  // radix_.bits holds the keys
+    std::vector<uint32_t> order_, scratch_;
 };
 
 }  // namespace rayclass::render

@@ -1,7 +1,8 @@
 // The enclosing cones of the hierarchical ray engine hold their rays: every origin inside the
 // cone and every direction within its half-angle, checked in double on coherent sets (a pinhole's
 // tiles, parallel rays from a plane, rays spread from scattered origins) and on sets that must
-// come out unbounded (directions over a whole sphere).
+// come out unbounded (directions over a whole sphere), for the host's construction (which
+// decides whether a batch keeps its order) and the device's (the cones the kernels cull with).
 #include "rayclass/accel/cones.h"
 
 #include <gtest/gtest.h>
@@ -10,12 +11,17 @@
 #include <cmath>
 #include <random>
 
+#include "accel_support.h"
+
 namespace rayclass::accel {
 namespace {
 
 // How far outside the cone (radians) the worst ray of the set lies; <= 0 when all are inside.
 double WorstExcess(const RcCone& c, const std::vector<RcRay>& rays) {
-    const glm::dvec3 apex(c.apex.x, c.apex.y, c.apex.z), axis(c.axis.x, c.axis.y, c.axis.z);
+    // The kernels' test depends on the axis' direction only; a float axis is unit only to
+    // rounding, which an acos near 1 would turn into 1e-4 radians.
+    const glm::dvec3 apex(c.apex.x, c.apex.y, c.apex.z),
+        axis = glm::normalize(glm::dvec3(c.axis.x, c.axis.y, c.axis.z));
     const double phi = std::atan(std::sqrt(double(c.apex.w)));
     double worst = -1.0;
     for (const RcRay& r : rays) {
@@ -73,35 +79,55 @@ TEST(EnclosingCone, OriginStepPutsTheApexWhereTheGeneratorsCross) {
     EXPECT_LE(WorstExcess(ConeOf(behind), behind), 0.0);
 }
 
-// The level above the tiles: a cone of the cones of four tiles holds every ray of the four.
-TEST(EnclosingCone, ConeOfConesHoldsEveryRayOfItsTiles) {
+// The device's cones (cl/cones.cl, in float) hold their rays as the host's do: coherent sets
+// of four tiles (pinholes, parallel rays from a plane, spread rays from scattered origins), each
+// tile's cone holds its rays, the group's cone every ray of the four.
+TEST(DeviceCones, TileAndGroupConesHoldTheirRays) {
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
     for (int set = 0; set < 100; ++set) {
         const glm::vec3 axis = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)));
         const float spread = 0.02f * float(set % 5), origins = set % 2 == 0 ? 0.0f : 2.0f;
+        const float tilt = set % 3 == 0 ? 0.0f : 0.1f;
         std::vector<RcRay> rays;
-        std::vector<RcCone> tiles;
         for (int t = 0; t < 4; ++t) {
-            std::vector<RcRay> tile;
-            const glm::vec3 tileAxis = axis + 0.1f * glm::vec3(u(rng), u(rng), u(rng));
-            for (int i = 0; i < 64; ++i) {
+            const glm::vec3 tileAxis = axis + tilt * glm::vec3(u(rng), u(rng), u(rng));
+            for (uint32_t i = 0; i < kConeTileRays; ++i) {
                 const glm::vec3 o = origins * glm::vec3(u(rng), u(rng), u(rng));
-                tile.push_back(Ray(o, tileAxis + spread * glm::vec3(u(rng), u(rng), u(rng))));
+                rays.push_back(Ray(o, tileAxis + spread * glm::vec3(u(rng), u(rng), u(rng))));
             }
-            tiles.push_back(ConeOf(tile));
-            rays.insert(rays.end(), tile.begin(), tile.end());
         }
-        const RcCone c = EnclosingConeOfCones(tiles, 1e-6);
-        ASSERT_GE(c.apex.w, 0.0f) << "set " << set;
-        EXPECT_LE(WorstExcess(c, rays), 0.0) << "set " << set;
+        const render::ConeLevels c = render::BuildCones(Ctx(), Program(), rays, 1e-6);
+        ASSERT_EQ(c.tiles.size(), 4u);
+        ASSERT_EQ(c.groups.size(), 1u);
+        for (size_t t = 0; t < 4; ++t) {
+            const std::vector<RcRay> tile(rays.begin() + t * kConeTileRays,
+                                          rays.begin() + (t + 1) * kConeTileRays);
+            ASSERT_GE(c.tiles[t].apex.w, 0.0f) << "set " << set << " tile " << t;
+            EXPECT_LE(WorstExcess(c.tiles[t], tile), 0.0) << "set " << set << " tile " << t;
+        }
+        ASSERT_GE(c.groups[0].apex.w, 0.0f) << "set " << set;
+        EXPECT_LE(WorstExcess(c.groups[0], rays), 0.0) << "set " << set;
     }
-    EXPECT_LT(
-        EnclosingConeOfCones(
-            std::vector<RcCone>{ConeOf({Ray({0, 0, 0}, {1, 0, 0}), Ray({0, 0, 0}, {-1, 0, 0})})},
-            1e-6)
-            .apex.w,
-        0.0f);
+}
+
+// Directions over a whole sphere, or two opposite ones, make an unbounded tile cone on the
+// device too, and so an unbounded group; a batch's last tile and group may be short.
+TEST(DeviceCones, WideTilesAreUnboundedAndShortTilesCount) {
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::vector<RcRay> rays;
+    for (uint32_t i = 0; i < kConeTileRays; ++i) {
+        rays.push_back(Ray({0, 0, 0}, {u(rng), u(rng), u(rng)}));
+    }
+    rays.push_back(Ray({0, 0, 0}, {1, 0, 0}));
+    rays.push_back(Ray({0, 0, 0}, {-1, 0, 0}));
+    const render::ConeLevels c = render::BuildCones(Ctx(), Program(), rays, 1e-6);
+    ASSERT_EQ(c.tiles.size(), 2u);
+    ASSERT_EQ(c.groups.size(), 1u);
+    EXPECT_LT(c.tiles[0].apex.w, 0.0f);
+    EXPECT_LT(c.tiles[1].apex.w, 0.0f);
+    EXPECT_LT(c.groups[0].apex.w, 0.0f);
 }
 
 // A pinhole's rays in scanline order (rows of 1024 pixels over 40 degrees: a tile, 64 of them,

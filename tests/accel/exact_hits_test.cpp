@@ -54,6 +54,43 @@ uint32_t NearestMismatches(const Loaded& l, render::RayQuery& q, const std::vect
     return mismatches;
 }
 
+// Brute force's hits among the eye rays of a set, and how many there are.
+struct EyeHits {
+    uint32_t hits = 0;
+    size_t rays = 0;
+};
+
+// The eye rays `eye` (`width` of them a row) and the rays spawned from brute force's hits on
+// them, toward `light` for shadow rays: every kind answered by `backend` as brute force answers
+// it. `label` starts each failure's description.
+EyeHits ExpectSpawnedLikeBruteForce(const Loaded& l, const std::string& backend,
+                                    const std::vector<bench::BenchRay>& eye, const glm::vec3& light,
+                                    uint32_t width, const std::string& label) {
+    const std::vector<RcHit> eyeHits = render::NearestHits(Ctx(), *l.brute, ToRc(eye));
+    std::vector<bench::BenchHit> benchHits;
+    for (const RcHit& h : eyeHits) benchHits.push_back({h.t, h.prim});
+    const bench::RaySets sets = bench::MakeRaySets(l.scene, eye, benchHits, light, 7, width);
+    const auto query = l.Make(backend);
+    EyeHits eyeKind;
+    for (int k = 0; k < bench::kNumKinds; ++k) {
+        const std::vector<RcRay> rays = ToRc(sets.sets[k]);
+        if (rays.empty()) continue;
+        const std::string what = label + bench::kKinds[k];
+        if (bench::IsShadowKind(k)) {
+            const auto got = render::BlockedAnswers(Ctx(), *query, rays);
+            const auto want = render::BlockedAnswers(Ctx(), *l.brute, rays);
+            uint32_t mismatches = 0;
+            for (size_t i = 0; i < rays.size(); ++i) mismatches += got[i] != want[i];
+            EXPECT_EQ(mismatches, 0u) << what;
+        } else {
+            uint32_t hits = 0;
+            EXPECT_EQ(NearestMismatches(l, *query, rays, &hits, what), 0u) << what;
+            if (k == 0) eyeKind = {hits, rays.size()};
+        }
+    }
+    return eyeKind;
+}
+
 class ExactHits : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ExactHits, EveryRayKindOfEveryTestSceneHitsWhatBruteForceHits) {
@@ -96,30 +133,11 @@ TEST_P(ExactHits, CoherentPacketsHitWhatBruteForceHits) {
     const scene::Camera cam = bench::NamedCamera(l.scene, "scene", 96, 72);
     const std::vector<bench::BenchRay> all = bench::EyeRays(cam);
     const std::vector<bench::BenchRay> eye(all.begin() + 96 * 32, all.begin() + 96 * 40);
-    const std::vector<RcHit> eyeHits = render::NearestHits(Ctx(), *l.brute, ToRc(eye));
-    std::vector<bench::BenchHit> benchHits;
-    for (const RcHit& h : eyeHits) benchHits.push_back({h.t, h.prim});
-    const bench::RaySets sets = bench::MakeRaySets(
-        l.scene, eye, benchHits, l.scene.lights.empty() ? cam.position : l.scene.lights[0].position,
-        7, 96);
-    const auto query = l.Make(GetParam());
-    for (int k = 0; k < bench::kNumKinds; ++k) {
-        const std::vector<RcRay> rays = ToRc(sets.sets[k]);
-        if (rays.empty()) continue;
-        const std::string what = std::string("bunny 96x72 ") + bench::kKinds[k];
-        if (bench::IsShadowKind(k)) {
-            const auto got = render::BlockedAnswers(Ctx(), *query, rays);
-            const auto want = render::BlockedAnswers(Ctx(), *l.brute, rays);
-            uint32_t mismatches = 0;
-            for (size_t i = 0; i < rays.size(); ++i) mismatches += got[i] != want[i];
-            EXPECT_EQ(mismatches, 0u) << what;
-        } else {
-            uint32_t hits = 0;
-            EXPECT_EQ(NearestMismatches(l, *query, rays, &hits, what), 0u) << what;
-            if (k == 0) {
-                EXPECT_GT(hits, rays.size() / 4) << what;
-            }
-        }
+    const EyeHits e = ExpectSpawnedLikeBruteForce(
+        l, GetParam(), eye, l.scene.lights.empty() ? cam.position : l.scene.lights[0].position, 96,
+        "bunny 96x72 ");
+    if (e.rays > 0) {
+        EXPECT_GT(e.hits, e.rays / 4) << "bunny 96x72 " << bench::kKinds[0];
     }
 }
 
@@ -132,27 +150,8 @@ TEST_P(ExactHits, FullSizeScanlinesHitWhatBruteForceHits) {
     const std::vector<bench::BenchRay> all = bench::EyeRays(cam);
     const std::vector<bench::BenchRay> eye(all.begin() + 1024 * 376, all.begin() + 1024 * 392);
     ASSERT_TRUE(accel::CoherentAsGiven(ToRc(eye)));
-    const std::vector<RcHit> eyeHits = render::NearestHits(Ctx(), *l.brute, ToRc(eye));
-    std::vector<bench::BenchHit> benchHits;
-    for (const RcHit& h : eyeHits) benchHits.push_back({h.t, h.prim});
-    const bench::RaySets sets =
-        bench::MakeRaySets(l.scene, eye, benchHits, l.scene.lights[0].position, 7, 1024);
-    const auto query = l.Make(GetParam());
-    for (int k = 0; k < bench::kNumKinds; ++k) {
-        const std::vector<RcRay> rays = ToRc(sets.sets[k]);
-        if (rays.empty()) continue;
-        const std::string what = std::string("cornell 1024x768 ") + bench::kKinds[k];
-        if (bench::IsShadowKind(k)) {
-            const auto got = render::BlockedAnswers(Ctx(), *query, rays);
-            const auto want = render::BlockedAnswers(Ctx(), *l.brute, rays);
-            uint32_t mismatches = 0;
-            for (size_t i = 0; i < rays.size(); ++i) mismatches += got[i] != want[i];
-            EXPECT_EQ(mismatches, 0u) << what;
-        } else {
-            uint32_t hits = 0;
-            EXPECT_EQ(NearestMismatches(l, *query, rays, &hits, what), 0u) << what;
-        }
-    }
+    ExpectSpawnedLikeBruteForce(l, GetParam(), eye, l.scene.lights[0].position, 1024,
+                                "cornell 1024x768 ");
 }
 
 // Rays from a half-unit lattice (on the planes of a grid of unit squares) along the 26 lattice

@@ -1,7 +1,7 @@
 // The host side of Szecsi's hierarchical ray engine (--accel cones): rays sorted so that each
-// tile of consecutive rays is coherent, a cone enclosing each tile (and each group of tiles, the
-// level above), and a bounding sphere per primitive for the kernels' cone-sphere culling
-// (cl/cones.cl).
+// tile of consecutive rays is coherent, the cone construction (the query's cones are built on the
+// device by the same steps, cl/cones.cl; the host's decides whether a batch keeps its order), and
+// a bounding sphere per primitive for the kernels' cone-sphere culling.
 #pragma once
 
 #include <cstdint>
@@ -37,13 +37,6 @@ bool CoherentAsGiven(std::span<const RcRay> rays);
 // degrees or more is marked unbounded. Rays without a direction (empty shadow slots) are left
 // out. `margin` is an absolute distance the apex backs off further.
 RcCone EnclosingCone(std::span<const RcRay> rays, double margin);
-
-// A cone holding every one of `cones` (the level above the tiles): a cone holds another when its
-// directions hold the other's (the angle between their axes plus the other's half-angle, widened
-// by the margin) and the other's apex lies inside it (the apex backs off along the axis until
-// each does), so it holds every ray theirs hold. Unbounded when one of them is, or where no cone
-// under 89 degrees holds them.
-RcCone EnclosingConeOfCones(std::span<const RcCone> cones, double margin);
 
 // Bounding spheres of every primitive (global ids) as structure of arrays, x, y, z and radius,
 // each padded to a multiple of 16 entries; radii grown by `pad`.
