@@ -17,11 +17,12 @@
 #include "rayclass/render/ray_query.h"
 #include "raysets.h"
 #include "render/query_io.h"
+#include "test_device.h"
 
 namespace rayclass::accel {
 
 inline clrt::Context& Ctx() {
-    static clrt::Context ctx("cpu");
+    static clrt::Context ctx(TestDeviceSpec());
     return ctx;
 }
 

@@ -62,12 +62,19 @@ size_t Count(const std::string& text, const std::string& what) {
     return n;
 }
 
-TEST(Context, CpuSelectsPoclsCpuDeviceAndRunsKernels) {
+TEST(Context, TestDeviceIsTheOneAskedForAndRunsKernels) {
     Context& ctx = TestContext();
-    EXPECT_EQ(ctx.info().type, "cpu");
+    const std::string spec = TestDeviceSpec();
+    if (spec == "cpu") {
+        EXPECT_EQ(ctx.info().type, "cpu");
+        EXPECT_THAT(ctx.info().platform, HasSubstr("Portable Computing Language"));
+    } else if (spec == "gpu") {
+        EXPECT_EQ(ctx.info().type, "gpu");
+    } else if (spec != "auto") {
+        EXPECT_EQ(std::to_string(ctx.info().index), spec);
+    }
     EXPECT_FALSE(ctx.info().name.empty());
     EXPECT_GT(ctx.info().computeUnits, 0u);
-    EXPECT_THAT(ctx.info().platform, HasSubstr("Portable Computing Language"));
     // The device it chose is the one ListDevices reports at its index.
     const auto devices = ListDevices();
     ASSERT_LT(size_t(ctx.info().index), devices.size());

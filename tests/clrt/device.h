@@ -6,11 +6,12 @@
 #include <vector>
 
 #include "rayclass/clrt/context.h"
+#include "test_device.h"
 
 namespace rayclass::clrt::testing {
 
 inline Context& TestContext() {
-    static Context context("cpu");
+    static Context context(TestDeviceSpec());
     return context;
 }
 

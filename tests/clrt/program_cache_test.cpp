@@ -193,7 +193,7 @@ std::vector<uint32_t> RunProbe(Context& ctx, const cl::Program& program) {
 
 TEST(ProgramCache, SecondBuildLoadsTheFirstOnesBinary) {
     TempDir dir;
-    Context ctx("cpu");
+    Context ctx(TestDeviceSpec());
     ctx.SetProgramCache(ProgramCache(dir.path()));
     bool fromCache = true;
     const std::vector<uint32_t> fromSource =
@@ -219,7 +219,7 @@ TEST(ProgramCache, SecondBuildLoadsTheFirstOnesBinary) {
 
 TEST(ProgramCache, BinaryTheDriverRefusesIsRebuiltFromSource) {
     TempDir dir;
-    Context ctx("cpu");
+    Context ctx(TestDeviceSpec());
     ctx.SetProgramCache(ProgramCache(dir.path()));
     const std::string key = ctx.ProgramKey({"layout_probe.cl"}, kProbeOptions);
     // A whole, well-formed entry whose binary is no program.
@@ -237,7 +237,7 @@ TEST(ProgramCache, BinaryTheDriverRefusesIsRebuiltFromSource) {
 }
 
 TEST(ProgramCache, OffBuildsFromSourceEveryTime) {
-    Context ctx("cpu");
+    Context ctx(TestDeviceSpec());
     ctx.SetProgramCache(ProgramCache());
     bool fromCache = true;
     ctx.BuildProgram({"layout_probe.cl"}, kProbeOptions, &fromCache);

@@ -18,6 +18,7 @@
 #include "rayclass/render/cl_renderer.h"
 #include "rayclass/render/reference.h"
 #include "rayclass/scene/loader.h"
+#include "test_device.h"
 
 namespace rayclass::bench {
 namespace {
@@ -82,7 +83,7 @@ class EmbreeWhittedMatchesRayclass : public testing::TestWithParam<Case> {};
 TEST_P(EmbreeWhittedMatchesRayclass, WithinBounds) {
     const Case& c = GetParam();
     const scene::Scene scene = TestScene(c.file, c.width, c.height);
-    static clrt::Context ctx("cpu");
+    static clrt::Context ctx(TestDeviceSpec());
     render::RenderStats rcStats;
     const image::Image rc = render::ClRenderer(ctx, scene, Options()).Render(rcStats);
     WhittedStats stats;

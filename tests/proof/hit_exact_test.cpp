@@ -20,6 +20,7 @@
 #include "rayclass/raster/raster_pass.h"
 #include "rayclass/render/cl_renderer.h"
 #include "rayclass/scene/loader.h"
+#include "test_device.h"
 
 namespace rayclass::proof {
 namespace {
@@ -33,7 +34,7 @@ std::filesystem::path SceneDir() {
 }
 
 clrt::Context& Ctx() {
-    static clrt::Context ctx("cpu");
+    static clrt::Context ctx(TestDeviceSpec());
     return ctx;
 }
 

@@ -13,6 +13,7 @@
 #include "rayclass/raster/raster_pass.h"
 #include "rayclass/render/brute_query.h"
 #include "rayclass/scene/scene.h"
+#include "test_device.h"
 
 namespace rayclass::raster::testing_support {
 
@@ -34,7 +35,7 @@ inline GlContext* Gl() {
     if (!gl) GTEST_SKIP() << "no headless OpenGL context";
 
 inline clrt::Context& Cl() {
-    static clrt::Context ctx("cpu");
+    static clrt::Context ctx(TestDeviceSpec());
     return ctx;
 }
 

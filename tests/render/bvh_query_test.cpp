@@ -19,12 +19,13 @@
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/brute_query.h"
 #include "rayclass/render/device_scene.h"
+#include "test_device.h"
 
 namespace rayclass::render {
 namespace {
 
 clrt::Context& Ctx() {
-    static clrt::Context ctx("cpu");
+    static clrt::Context ctx(TestDeviceSpec());
     return ctx;
 }
 

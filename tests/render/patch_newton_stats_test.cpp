@@ -11,12 +11,13 @@
 #include "rayclass/render/launch.h"
 #include "rayclass/render/newton_stats.h"
 #include "rayclass/scene/patch.h"
+#include "test_device.h"
 
 namespace rayclass::render {
 namespace {
 
 clrt::Context& Ctx() {
-    static clrt::Context ctx("cpu");
+    static clrt::Context ctx(TestDeviceSpec());
     return ctx;
 }
 

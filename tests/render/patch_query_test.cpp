@@ -18,12 +18,13 @@
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/device_scene.h"
 #include "rayclass/scene/loader.h"
+#include "test_device.h"
 
 namespace rayclass::render {
 namespace {
 
 clrt::Context& Ctx() {
-    static clrt::Context ctx("cpu");
+    static clrt::Context ctx(TestDeviceSpec());
     return ctx;
 }
 

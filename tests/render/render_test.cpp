@@ -16,6 +16,7 @@
 #include "rayclass/render/launch.h"
 #include "rayclass/render/reference.h"
 #include "rayclass/scene/loader.h"
+#include "test_device.h"
 
 namespace rayclass::render {
 namespace {
@@ -26,7 +27,7 @@ std::filesystem::path SceneDir() {
 }
 
 clrt::Context& SharedContext() {
-    static clrt::Context ctx("cpu");
+    static clrt::Context ctx(TestDeviceSpec());
     return ctx;
 }
 
