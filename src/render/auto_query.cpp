@@ -31,14 +31,15 @@ struct Choice {
     double seconds = 0;
     uint64_t rays = 0;
 
-    // The current generation's measurements become the cost of whichever answered it; a new
-    // sample is to be taken.
-    void NextGeneration() {
+    // The current generation's measurements become the cost of whichever answered it (its rays
+    // classified from their camera or not); a new sample is to be taken.
+    void NextGeneration(bool fromCamera) {
         if (rays > 0 && onBvh) {
             costs.bvhMeasured = seconds / double(rays);
         } else if (rays > 0) {
             costs.classifiedBefore = costs.classified;
             costs.classified = seconds / double(rays);
+            costs.classifiedFromCamera = fromCamera;
         }
         costs.bvhSample = 0;
         seconds = 0;
@@ -74,8 +75,11 @@ class AutoQuery final : public RayQuery {
     void BeginGeneration(uint32_t generation, const cl::Buffer& rays, uint32_t n,
                          KernelTimer& timer) override {
         classified_->BeginGeneration(generation, rays, n, timer);
-        nearest_.NextGeneration();
-        shadow_.NextGeneration();
+        // Every Prepare of the last generation has returned: the count is final.
+        const uint64_t fromCamera = classified_->Stats().eyeRaysFromCamera;
+        nearest_.NextGeneration(fromCamera > eyeRaysFromCamera_);
+        shadow_.NextGeneration(false);
+        eyeRaysFromCamera_ = fromCamera;
         shadowSampled_ = false;
         Sample(rays, n, timer);
         lastReturn_ = Clock::now();
@@ -218,6 +222,7 @@ class AutoQuery final : public RayQuery {
     Clock::time_point lastReturn_;  // when the render thread last returned from this query
     Choice nearest_, shadow_;
     bool shadowSampled_ = false;
+    uint64_t eyeRaysFromCamera_ = 0;  // the classification's count at the generation's start
     std::vector<RcRay> sample_;
     GrowingBuffer sampleRays_, sampleHits_;
 };

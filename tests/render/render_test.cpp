@@ -182,6 +182,15 @@ TEST(AutoQueryCosts, AGenerationTheBvhAnsweredOutweighsACheaperSample) {
     EXPECT_TRUE((QueryCosts{3e-7, 2e-7, 0, 4e-7}.KeepBvh()));
 }
 
+TEST(AutoQueryCosts, EyeRaysFromTheCameraOnlyBoundTheClassificationsCost) {
+    // Measured only on eye rays classified from their camera, the classification does not take a
+    // generation back from a BVH that cost more than that bound ...
+    EXPECT_TRUE((QueryCosts{2e-7, 0, 0, 3e-7, true}.KeepBvh()));
+    // ... while a sample dearer than the bound still does not hand the BVH a generation.
+    EXPECT_FALSE((QueryCosts{2e-7, 0, 3e-7, 0, true}.PreferBvh()));
+    EXPECT_TRUE((QueryCosts{2e-7, 0, 1e-7, 0, true}.PreferBvh()));
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, RenderMatchesReference, testing::ValuesIn(kCases),
                          [](const auto& info) {
                              std::string name = std::filesystem::path(info.param.file).stem();

@@ -6,7 +6,8 @@
 // two generations it answered), the BVH answers this generation. A sample runs on rays and a tree
 // the caches hold, and so costs less per ray than a whole generation: once the BVH has answered
 // a generation, what that cost counts instead of any cheaper sample, and the classification
-// takes the next generation back when the BVH cost more than it is predicted to. Nearest-hit and
+// takes the next generation back when the BVH cost more than it is predicted to (unless the
+// classification was only measured on eye rays classified from their camera). Nearest-hit and
 // shadow queries decide apart (shadow rays toward a point light stay coherent at their light's
 // end), shadow queries only once the nearest-hit sample has built the BVH. Both answer every ray
 // exactly alike (the same primitive routines), so the choice changes the time, never the image.
@@ -27,6 +28,10 @@ struct QueryCosts {
     double classifiedBefore = 0;  // and on the one before that (0: not measured)
     double bvhSample = 0;         // the BVH's on a sample of this generation's rays
     double bvhMeasured = 0;       // the BVH's on the last generation it answered (0: none)
+    // `classified` was measured on eye rays classified from their camera, unread: the cheapest
+    // rays the classification answers, so a lower bound on a later generation's cost, not an
+    // estimate of it.
+    bool classifiedFromCamera = false;
 
     // The classification's cost on this generation if it grows by the factor it grew by on the
     // last (rays scatter further with each bounce), bounded to [1, 2] (a wider bound let one noisy
@@ -42,8 +47,12 @@ struct QueryCosts {
                std::max(bvhSample, bvhMeasured) < PredictedClassified();
     }
     // True when the BVH, which answered the last generation, should keep the next one: it cost
-    // no more than the classification is predicted to.
-    bool KeepBvh() const { return bvhMeasured <= PredictedClassified(); }
+    // no more than the classification is predicted to, or the classification was only measured
+    // on eye rays from their camera: a BVH dearer than that bound may still be far cheaper than
+    // the classification of the generation at hand, and on a loaded machine one slow generation
+    // was enough to hand a deep bounce back to a classification that then cost several times as
+    // much.
+    bool KeepBvh() const { return classifiedFromCamera || bvhMeasured <= PredictedClassified(); }
 };
 
 // `classified` and the query `makeBvh` makes answer the same scene; the BVH is made when the
