@@ -3,9 +3,15 @@
  * control points as their signed distances (a, b) from the two planes, and Newton's method on
  * F(u, v) = (a(u, v), b(u, v)) / w(u, v) = 0 from the box's parameter centre. A singular Jacobian
  * moves (u, v) by a fixed step towards the centre; the iteration stops when |F| < eps (a hit
- * when (u, v) is the box's own), when |F| grows (divergence) or at RC_PATCH_ITERATIONS. The
- * float16 twin rc_packet_patch (classified.cl's fragment style) and the host twin
- * (geometry/patch_intersect.h) do the same operations lane by lane. */
+ * when (u, v) is the box's own), when |F| grows (divergence) or at RC_PATCH_ITERATIONS. When the
+ * search from the centre ends without converging, more start from the centres of the box's
+ * quarters whose control points' hull the ray meets (RC_PATCH_STARTS) and the nearest of their
+ * hits counts (a root that is not a hit, outside the box or before tmin like a secondary ray's
+ * own origin, ends the test as before: restarts there found next to nothing for their cost): from the
+ * centre alone Newton misses the roots of strongly curved boxes seen at a slant, which only a
+ * split into many more boxes would otherwise find, and a box seen at a slant can hold two roots. The float16 twin rc_packet_patch (classified.cl's fragment style),
+ * the host twin (geometry/patch_intersect.h) and the raster pass's fragment shader
+ * (raster/patch_shaders.cpp) do the same operations lane by lane. */
 #include "rc_types.h"
 
 #pragma OPENCL FP_CONTRACT OFF
@@ -65,10 +71,95 @@ inline float3 rc_patch_channel(const float* c, const float* bu, const float* dbu
 #define RC_NEWTON_LEFT 3
 #define RC_NEWTON_CAP 4
 
-/* rc_intersect_patch_box, also telling how the search ended and after how many Newton steps. */
+/* Newton's starting points in a box's local (u, v): start 0 at its centre, starts 1 to 4 at its
+ * quarters' centres, (1/4, 1/4), (3/4, 1/4), (1/4, 3/4), (3/4, 3/4). */
+#define RC_PATCH_STARTS 5
+#define RC_PATCH_START_S(k) ((k) == 0 ? 0.5f : ((k) & 1) ? 0.25f : 0.75f)
+#define RC_PATCH_START_T(k) ((k) == 0 ? 0.5f : (k) <= 2 ? 0.25f : 0.75f)
+
+/* One Newton search on the projected channels from (*s, *t): how it ended (RC_NEWTON_*, never
+ * culled) after *steps updates; (*s, *t) and the weights are those of the last point evaluated. */
+inline int rc_patch_newton_search(const float* a, const float* b, const float* w, float eps,
+                                  float* sIo, float* tIo, float* bu, float* dbu, float* bv,
+                                  float* dbv, int* steps) {
+    float s = *sIo, t = *tIo, prev = INFINITY;
+    int outcome;
+    for (int it = 0;; ++it) {
+        rc_bernstein3(s, bu, dbu);
+        rc_bernstein3(t, bv, dbv);
+        const float3 A = rc_patch_channel(a, bu, dbu, bv, dbv);
+        const float3 B = rc_patch_channel(b, bu, dbu, bv, dbv);
+        const float3 W = rc_patch_channel(w, bu, dbu, bv, dbv);
+        const float f1 = A.x / W.x, f2 = B.x / W.x;
+        const float err = fmax(fabs(f1), fabs(f2));
+        *steps = it;
+        if (err < eps) {
+            outcome = RC_NEWTON_CONVERGED;
+            break;
+        }
+        if (!(err <= prev) || it == RC_PATCH_ITERATIONS) {
+            outcome = it == RC_PATCH_ITERATIONS ? RC_NEWTON_CAP : RC_NEWTON_DIVERGED;
+            break;
+        }
+        prev = err;
+        const float j11 = (A.y - f1 * W.y) / W.x, j12 = (A.z - f1 * W.z) / W.x;
+        const float j21 = (B.y - f2 * W.y) / W.x, j22 = (B.z - f2 * W.z) / W.x;
+        const float det = j11 * j22 - j12 * j21;
+        if (fabs(det) > 1e-7f * (fabs(j11 * j22) + fabs(j12 * j21))) {
+            s -= (j22 * f1 - j12 * f2) / det;
+            t -= (j11 * f2 - j21 * f1) / det;
+        } else {
+            s += s <= 0.5f ? 0.125f : -0.125f;
+            t += t <= 0.5f ? 0.0625f : -0.0625f;
+            prev = INFINITY;
+        }
+        if (!(s > -0.5f && s < 1.5f && t > -0.5f && t < 1.5f)) {
+            outcome = RC_NEWTON_LEFT;
+            *steps = it + 1;
+            break;
+        }
+    }
+    *sIo = s;
+    *tIo = t;
+    return outcome;
+}
+
+/* One half of the cubic curve (c0, c1, c2, c3) by de Casteljau: the half towards c3 when
+ * `upper`, else the half towards c0. */
+inline void rc_patch_half_curve(float c0, float c1, float c2, float c3, int upper, float* q) {
+    const float a = 0.5f * (c0 + c1), b = 0.5f * (c1 + c2), d = 0.5f * (c2 + c3);
+    const float ab = 0.5f * (a + b), bd = 0.5f * (b + d), m = 0.5f * (ab + bd);
+    q[0] = upper ? m : c0;
+    q[1] = upper ? bd : a;
+    q[2] = upper ? d : ab;
+    q[3] = upper ? c3 : m;
+}
+
+/* Whether channel x of the box's quarter (qu, qv) (1: the upper half of u, of v) takes both signs
+ * on the quarter's control points, zero counting as either: where it does not for a or b, the ray
+ * misses the quarter's hull and a restart there is spared. */
+inline int rc_patch_quarter_straddles(const float* x, int qu, int qv) {
+    float h[16];
+    for (int j = 0; j < 4; ++j) {
+        float q[4];
+        rc_patch_half_curve(x[j], x[4 + j], x[8 + j], x[12 + j], qu, q);
+        for (int i = 0; i < 4; ++i) h[4 * i + j] = q[i];
+    }
+    int signs = 0;
+    for (int i = 0; i < 4; ++i) {
+        float q[4];
+        rc_patch_half_curve(h[4 * i], h[4 * i + 1], h[4 * i + 2], h[4 * i + 3], qv, q);
+        for (int j = 0; j < 4; ++j) signs |= (q[j] >= 0.0f ? 1 : 0) | (q[j] <= 0.0f ? 2 : 0);
+    }
+    return signs == 3;
+}
+
+/* rc_intersect_patch_box, also telling how the search from the box's centre ended and after how
+ * many Newton steps, and the steps of the restarts in all (-1: none ran). */
 inline int rc_patch_box_newton(float3 o, float3 d, float tmin, float tmax,
                                __global const float4* analytic, __global const RcPatchBox* box,
-                               float* tOut, float* uOut, float* vOut, int* outcome, int* steps) {
+                               float* tOut, float* uOut, float* vOut, int* outcome, int* steps,
+                               int* restartSteps) {
     float3 n1, n2;
     rc_patch_planes(d, &n1, &n2);
     __global const float4* pts = analytic + box->points;
@@ -88,74 +179,58 @@ inline int rc_patch_box_newton(float3 o, float3 d, float tmin, float tmax,
     }
     *outcome = RC_NEWTON_CULLED;
     *steps = 0;
+    *restartSteps = -1;
     /* All control points on one side of a plane: the ray misses the convex hull. */
     if ((signs & 3) != 3 || (signs & 12) != 12) return 0;
     const float eps = spread / wMin * RC_PATCH_EPS;
-    float s = 0.5f, t = 0.5f, prev = INFINITY;
-    float bu[4], dbu[4], bv[4], dbv[4];
-    int converged = 0;
-    for (int it = 0;; ++it) {
-        rc_bernstein3(s, bu, dbu);
-        rc_bernstein3(t, bv, dbv);
-        const float3 A = rc_patch_channel(a, bu, dbu, bv, dbv);
-        const float3 B = rc_patch_channel(b, bu, dbu, bv, dbv);
-        const float3 W = rc_patch_channel(w, bu, dbu, bv, dbv);
-        const float f1 = A.x / W.x, f2 = B.x / W.x;
-        const float err = fmax(fabs(f1), fabs(f2));
-        *steps = it;
-        if (err < eps) {
-            converged = 1;
-            *outcome = RC_NEWTON_CONVERGED;
-            break;
-        }
-        if (!(err <= prev) || it == RC_PATCH_ITERATIONS) {
-            *outcome = it == RC_PATCH_ITERATIONS ? RC_NEWTON_CAP : RC_NEWTON_DIVERGED;
-            break;
-        }
-        prev = err;
-        const float j11 = (A.y - f1 * W.y) / W.x, j12 = (A.z - f1 * W.z) / W.x;
-        const float j21 = (B.y - f2 * W.y) / W.x, j22 = (B.z - f2 * W.z) / W.x;
-        const float det = j11 * j22 - j12 * j21;
-        if (fabs(det) > 1e-7f * (fabs(j11 * j22) + fabs(j12 * j21))) {
-            s -= (j22 * f1 - j12 * f2) / det;
-            t -= (j11 * f2 - j21 * f1) / det;
-        } else {
-            s += s <= 0.5f ? 0.125f : -0.125f;
-            t += t <= 0.5f ? 0.0625f : -0.0625f;
-            prev = INFINITY;
-        }
-        if (!(s > -0.5f && s < 1.5f && t > -0.5f && t < 1.5f)) {
-            *outcome = RC_NEWTON_LEFT;
-            *steps = it + 1;
-            break;
-        }
-    }
-    if (!converged) return 0;
-    if (!(s >= 0.0f && (s < 1.0f || (box->closedU && s == 1.0f)))) return 0;
-    if (!(t >= 0.0f && (t < 1.0f || (box->closedV && t == 1.0f)))) return 0;
     float c[16];
     for (int k = 0; k < 16; ++k) {
         const float4 p = pts[k];
         const float3 r = p.xyz - o * p.w;
         c[k] = RC_DOT3(d, r);
     }
-    const float3 C = rc_patch_channel(c, bu, dbu, bv, dbv);
-    const float3 W = rc_patch_channel(w, bu, dbu, bv, dbv);
-    const float th = C.x / W.x;
-    if (!(th > tmin && th < tmax)) return 0;
-    *tOut = th;
-    *uOut = s;
-    *vOut = t;
-    return 1;
+    int found = 0, centreConverged = 0;
+    float nearest = tmax;
+    for (int start = 0; start < RC_PATCH_STARTS && !centreConverged; ++start) {
+        float s = RC_PATCH_START_S(start), t = RC_PATCH_START_T(start);
+        if (start > 0 && !(rc_patch_quarter_straddles(a, s > 0.5f, t > 0.5f) &&
+                           rc_patch_quarter_straddles(b, s > 0.5f, t > 0.5f))) {
+            continue;
+        }
+        float bu[4], dbu[4], bv[4], dbv[4];
+        int searchSteps;
+        const int ending =
+            rc_patch_newton_search(a, b, w, eps, &s, &t, bu, dbu, bv, dbv, &searchSteps);
+        if (start == 0) {
+            *outcome = ending;
+            *steps = searchSteps;
+        } else {
+            *restartSteps = max(*restartSteps, 0) + searchSteps;
+        }
+        if (ending != RC_NEWTON_CONVERGED) continue;
+        centreConverged = start == 0;
+        if (!(s >= 0.0f && (s < 1.0f || (box->closedU && s == 1.0f)))) continue;
+        if (!(t >= 0.0f && (t < 1.0f || (box->closedV && t == 1.0f)))) continue;
+        const float3 C = rc_patch_channel(c, bu, dbu, bv, dbv);
+        const float3 W = rc_patch_channel(w, bu, dbu, bv, dbv);
+        const float th = C.x / W.x;
+        if (!(th > tmin && th < nearest)) continue;
+        nearest = th;
+        *tOut = th;
+        *uOut = s;
+        *vOut = t;
+        found = 1;
+    }
+    return found;
 }
 
 /* The nearest hit of the ray with the patch box in (tmin, tmax): t and the local (u, v). */
 inline int rc_intersect_patch_box(float3 o, float3 d, float tmin, float tmax,
                                   __global const float4* analytic, __global const RcPatchBox* box,
                                   float* tOut, float* uOut, float* vOut) {
-    int outcome, steps;
+    int outcome, steps, restartSteps;
     return rc_patch_box_newton(o, d, tmin, tmax, analytic, box, tOut, uOut, vOut, &outcome,
-                               &steps);
+                               &steps, &restartSteps);
 }
 
 /* The surface point and its unnormalised normal at local (s, t) of a patch box. Where the

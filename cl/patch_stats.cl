@@ -6,9 +6,10 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-/* counters: tests, Newton steps, then the tests that ended culled, converged, diverged, left
- * and on the cap (RC_NEWTON_*), then the hits. */
-#define RC_NEWTON_COUNTERS 8
+/* counters: tests, the Newton steps from the boxes' centres, then the tests whose search from the
+ * centre ended culled, converged, diverged, left and on the cap (RC_NEWTON_*), its hits, then the
+ * tests that restarted from the quarters, their steps and their hits. */
+#define RC_NEWTON_COUNTERS 11
 
 inline int rc_segment_meets_box(float3 o, float3 inv, float tmin, float tmax, float3 lo,
                                 float3 hi) {
@@ -27,19 +28,25 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_patc
     const float3 o = rays[i].origin.xyz, d = rays[i].direction.xyz;
     const float tmin = rays[i].origin.w, tmax = rays[i].direction.w;
     const float3 inv = 1.0f / d;
-    uint c[RC_NEWTON_COUNTERS] = {0, 0, 0, 0, 0, 0, 0, 0};
+    uint c[RC_NEWTON_COUNTERS] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
     for (uint k = 0; k < nQuadrics; ++k) {
         __global const RcPatchBox* box = (__global const RcPatchBox*)(quadrics + k);
         if (box->kind != RC_ANALYTIC_PATCH_BOX) continue;
         if (!rc_segment_meets_box(o, inv, tmin, tmax, box->boxMin.xyz, box->boxMax.xyz)) continue;
         float t, u, v;
-        int outcome, steps;
+        int outcome, steps, restartSteps;
         const int hit = rc_patch_box_newton(o, d, tmin, tmax, (__global const float4*)quadrics,
-                                            box, &t, &u, &v, &outcome, &steps);
+                                            box, &t, &u, &v, &outcome, &steps, &restartSteps);
         c[0] += 1;
         c[1] += (uint)steps;
         c[2 + outcome] += 1;
-        c[7] += (uint)hit;
+        if (restartSteps < 0) {
+            c[7] += (uint)hit;
+        } else {
+            c[8] += 1;
+            c[9] += (uint)restartSteps;
+            c[10] += (uint)hit;
+        }
     }
     for (int k = 0; k < RC_NEWTON_COUNTERS; ++k) {
         if (c[k]) atomic_add(counters + k, c[k]);

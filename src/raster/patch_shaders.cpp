@@ -53,6 +53,70 @@ vec3 Channel(float c[16], float bu[4], float dbu[4], float bv[4], float dbv[4]) 
     return r;
 }
 
+// cl/patch.cl rc_patch_half_curve: the half towards c3 when `upper`, else towards c0.
+void HalfCurve(float c0, float c1, float c2, float c3, bool upper, out float q[4]) {
+    precise float a = 0.5 * (c0 + c1), b = 0.5 * (c1 + c2), d = 0.5 * (c2 + c3);
+    precise float ab = 0.5 * (a + b), bd = 0.5 * (b + d), m = 0.5 * (ab + bd);
+    if (upper) {
+        q = float[4](m, bd, d, c3);
+    } else {
+        q = float[4](c0, a, ab, m);
+    }
+}
+
+// cl/patch.cl rc_patch_quarter_straddles.
+bool QuarterStraddles(float x[16], bool qu, bool qv) {
+    float h[16];
+    for (int j = 0; j < 4; ++j) {
+        float q[4];
+        HalfCurve(x[j], x[4 + j], x[8 + j], x[12 + j], qu, q);
+        for (int i = 0; i < 4; ++i) h[4 * i + j] = q[i];
+    }
+    int signs = 0;
+    for (int i = 0; i < 4; ++i) {
+        float q[4];
+        HalfCurve(h[4 * i], h[4 * i + 1], h[4 * i + 2], h[4 * i + 3], qv, q);
+        for (int j = 0; j < 4; ++j) signs |= (q[j] >= 0.0 ? 1 : 0) | (q[j] <= 0.0 ? 2 : 0);
+    }
+    return signs == 3;
+}
+
+// cl/patch.cl rc_patch_newton_search: whether the search from (s, q) converged; (s, q) and the
+// weights are those of the last point evaluated.
+bool Search(float a[16], float b[16], float w[16], float eps, inout float s, inout float q,
+            out float bu[4], out float dbu[4], out float bv[4], out float dbv[4]) {
+    float prev = Inf();
+    for (int it = 0; it <= kPatchIterations; ++it) {
+        Bernstein3(s, bu, dbu);
+        Bernstein3(q, bv, dbv);
+        precise vec3 A = Channel(a, bu, dbu, bv, dbv);
+        precise vec3 B = Channel(b, bu, dbu, bv, dbv);
+        precise vec3 W = Channel(w, bu, dbu, bv, dbv);
+        precise float f1 = A.x / W.x, f2 = B.x / W.x;
+        float err = FMax(abs(f1), abs(f2));
+        if (err < eps) return true;
+        if (!(err <= prev) || it == kPatchIterations) return false;
+        prev = err;
+        precise float j11 = (A.y - f1 * W.y) / W.x, j12 = (A.z - f1 * W.z) / W.x;
+        precise float j21 = (B.y - f2 * W.y) / W.x, j22 = (B.z - f2 * W.z) / W.x;
+        precise float det = j11 * j22 - j12 * j21;
+        precise float scale = 1e-7 * (abs(j11 * j22) + abs(j12 * j21));
+        precise float sNext, qNext;
+        if (abs(det) > scale) {
+            sNext = s - (j22 * f1 - j12 * f2) / det;
+            qNext = q - (j11 * f2 - j21 * f1) / det;
+        } else {
+            sNext = s + (s <= 0.5 ? 0.125 : -0.125);
+            qNext = q + (q <= 0.5 ? 0.0625 : -0.0625);
+            prev = Inf();
+        }
+        s = sNext;
+        q = qNext;
+        if (!(s > -0.5 && s < 1.5 && q > -0.5 && q < 1.5)) return false;
+    }
+    return false;
+}
+
 bool Intersect(uint i, vec3 o, vec3 d, out float t, out float u, out float v) {
     u = 0.0;
     v = 0.0;
@@ -63,7 +127,7 @@ bool Intersect(uint i, vec3 o, vec3 d, out float t, out float u, out float v) {
     precise float len = sqrt(Dot(n, n));
     precise vec3 n1 = n / len;
     precise vec3 n2 = Cross(d, n1);
-    precise float a[16], b[16], w[16];
+    precise float a[16], b[16], w[16], c[16];
     precise float spread = 0.0;
     float wMin = Inf();
     int signs = 0;
@@ -72,6 +136,7 @@ bool Intersect(uint i, vec3 o, vec3 d, out float t, out float u, out float v) {
         precise vec3 r = p.xyz - o * p.w;
         a[k] = Dot(n1, r);
         b[k] = Dot(n2, r);
+        c[k] = Dot(d, r);
         w[k] = p.w;
         precise float sum = abs(a[k]) + abs(b[k]);
         spread = FMax(spread, sum);
@@ -82,56 +147,34 @@ bool Intersect(uint i, vec3 o, vec3 d, out float t, out float u, out float v) {
     // All control points on one side of a plane: the ray misses the convex hull.
     if ((signs & 3) != 3 || (signs & 12) != 12) return false;
     precise float eps = spread / wMin * kPatchEps;
-    precise float s = 0.5, q = 0.5;
-    float prev = Inf();
-    float bu[4], dbu[4], bv[4], dbv[4];
-    bool converged = false;
-    for (int it = 0; it <= kPatchIterations; ++it) {
-        Bernstein3(s, bu, dbu);
-        Bernstein3(q, bv, dbv);
-        precise vec3 A = Channel(a, bu, dbu, bv, dbv);
-        precise vec3 B = Channel(b, bu, dbu, bv, dbv);
-        precise vec3 W = Channel(w, bu, dbu, bv, dbv);
-        precise float f1 = A.x / W.x, f2 = B.x / W.x;
-        float err = FMax(abs(f1), abs(f2));
-        if (err < eps) {
-            converged = true;
-            break;
-        }
-        if (!(err <= prev) || it == kPatchIterations) break;
-        prev = err;
-        precise float j11 = (A.y - f1 * W.y) / W.x, j12 = (A.z - f1 * W.z) / W.x;
-        precise float j21 = (B.y - f2 * W.y) / W.x, j22 = (B.z - f2 * W.z) / W.x;
-        precise float det = j11 * j22 - j12 * j21;
-        precise float scale = 1e-7 * (abs(j11 * j22) + abs(j12 * j21));
-        if (abs(det) > scale) {
-            s -= (j22 * f1 - j12 * f2) / det;
-            q -= (j11 * f2 - j21 * f1) / det;
-        } else {
-            s += s <= 0.5 ? 0.125 : -0.125;
-            q += q <= 0.5 ? 0.0625 : -0.0625;
-            prev = Inf();
-        }
-        if (!(s > -0.5 && s < 1.5 && q > -0.5 && q < 1.5)) break;
-    }
-    if (!converged) return false;
     bool closedU = prim[base].w != 0.0, closedV = prim[base + 1u].w != 0.0;
-    if (!(s >= 0.0 && (s < 1.0 || (closedU && s == 1.0)))) return false;
-    if (!(q >= 0.0 && (q < 1.0 || (closedV && q == 1.0)))) return false;
-    precise float c[16];
-    for (int k = 0; k < 16; ++k) {
-        vec4 p = prim[base + 2u + uint(k)];
-        precise vec3 r = p.xyz - o * p.w;
-        c[k] = Dot(d, r);
+    // cl/patch.cl RC_PATCH_STARTS: the box's centre, then, when that search does not converge,
+    // the centres of the quarters whose hull the ray meets, the nearest of their hits counting.
+    bool found = false, centreConverged = false;
+    float nearest = Inf();
+    for (int start = 0; start < 5 && !centreConverged; ++start) {
+        float s = start == 0 ? 0.5 : (start & 1) != 0 ? 0.25 : 0.75;
+        float q = start == 0 ? 0.5 : start <= 2 ? 0.25 : 0.75;
+        if (start > 0 && !(QuarterStraddles(a, s > 0.5, q > 0.5) &&
+                           QuarterStraddles(b, s > 0.5, q > 0.5))) {
+            continue;
+        }
+        float bu[4], dbu[4], bv[4], dbv[4];
+        if (!Search(a, b, w, eps, s, q, bu, dbu, bv, dbv)) continue;
+        centreConverged = start == 0;
+        if (!(s >= 0.0 && (s < 1.0 || (closedU && s == 1.0)))) continue;
+        if (!(q >= 0.0 && (q < 1.0 || (closedV && q == 1.0)))) continue;
+        precise vec3 C = Channel(c, bu, dbu, bv, dbv);
+        precise vec3 W = Channel(w, bu, dbu, bv, dbv);
+        precise float th = C.x / W.x;
+        if (!(th > 0.0 && th < nearest)) continue;
+        nearest = th;
+        t = th;
+        u = s;
+        v = q;
+        found = true;
     }
-    precise vec3 C = Channel(c, bu, dbu, bv, dbv);
-    precise vec3 W = Channel(w, bu, dbu, bv, dbv);
-    precise float th = C.x / W.x;
-    if (!(th > 0.0 && th < Inf())) return false;
-    t = th;
-    u = s;
-    v = q;
-    return true;
+    return found;
 }
 )GLSL";
 }

@@ -9,7 +9,7 @@ namespace rayclass::render {
 namespace {
 
 // cl/patch_stats.cl's counters, in order.
-constexpr size_t kCounters = 8;
+constexpr size_t kCounters = 11;
 
 }  // namespace
 
@@ -23,7 +23,10 @@ std::map<std::string, double> NewtonCounts::ToStats() const {
             {"diverged", double(diverged)},
             {"left_box", double(left)},
             {"on_cap", double(onCap)},
-            {"hits", double(hits)}};
+            {"hits", double(hits)},
+            {"restarted", double(restarted)},
+            {"restart_steps", double(restartSteps)},
+            {"restart_hits", double(restartHits)}};
 }
 
 NewtonCounts CountNewton(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene,
@@ -53,6 +56,9 @@ NewtonCounts CountNewton(clrt::Context& ctx, const cl::Program& program, const S
     counts.left = c[5];
     counts.onCap = c[6];
     counts.hits = c[7];
+    counts.restarted = c[8];
+    counts.restartSteps = c[9];
+    counts.restartHits = c[10];
     return counts;
 }
 

@@ -7,6 +7,7 @@
 #include <cstdlib>
 
 #include "rayclass/clrt/context.h"
+#include "rayclass/geometry/patch_intersect.h"
 #include "rayclass/render/device_scene.h"
 #include "rayclass/render/launch.h"
 #include "rayclass/render/newton_stats.h"
@@ -66,6 +67,19 @@ TEST(PatchNewtonStats, CountsEndingsOfKnownSearches) {
     EXPECT_EQ(c.diverged, 1u);
     EXPECT_EQ(c.left, 1u);
     EXPECT_DOUBLE_EQ(c.ToStats().at("steps_per_test"), 15.0 / 4.0);
+    // The three searches that did not converge restart from the quarters (each quarter's control
+    // points straddle both planes of its ray), and the restarts hit where the reference does.
+    EXPECT_EQ(c.restarted, 3u);
+    uint64_t referenceHits = 0;
+    for (size_t k = 1; k < 4; ++k) {
+        const glm::dvec3 o(rays[k].origin.x, rays[k].origin.y, rays[k].origin.z);
+        const glm::dvec3 d(rays[k].direction.x, rays[k].direction.y, rays[k].direction.z);
+        double t, u, v;
+        referenceHits +=
+            geometry::IntersectPatchReference(o, d, 0.0, INFINITY, s.patchBoxes[k], t, u, v);
+    }
+    EXPECT_EQ(referenceHits, 3u);
+    EXPECT_EQ(c.restartHits, referenceHits);
 }
 
 }  // namespace

@@ -76,8 +76,76 @@ bool InPatchBox(T s, T t, bool closedU, bool closedV) {
            (t < T(1) || (closedV && t == T(1)));
 }
 
+namespace patch_detail {
+
+// cl/patch.cl RC_PATCH_START_S and _T: the box's centre, then its quarters' centres.
+inline constexpr int kPatchStarts = 5;
+inline float PatchStartS(int k) { return k == 0 ? 0.5f : (k & 1) ? 0.25f : 0.75f; }
+inline float PatchStartT(int k) { return k == 0 ? 0.5f : k <= 2 ? 0.25f : 0.75f; }
+
+// cl/patch.cl rc_patch_half_curve: the half towards c3 when `upper`, else towards c0.
+inline void HalfCurve(float c0, float c1, float c2, float c3, bool upper, float* q) {
+    const float a = 0.5f * (c0 + c1), b = 0.5f * (c1 + c2), d = 0.5f * (c2 + c3);
+    const float ab = 0.5f * (a + b), bd = 0.5f * (b + d), m = 0.5f * (ab + bd);
+    q[0] = upper ? m : c0;
+    q[1] = upper ? bd : a;
+    q[2] = upper ? d : ab;
+    q[3] = upper ? c3 : m;
+}
+
+// cl/patch.cl rc_patch_quarter_straddles: whether channel x takes both signs on the control
+// points of the box's quarter (qu, qv).
+inline bool QuarterStraddles(const float* x, bool qu, bool qv) {
+    float h[16];
+    for (int j = 0; j < 4; ++j) {
+        float q[4];
+        HalfCurve(x[j], x[4 + j], x[8 + j], x[12 + j], qu, q);
+        for (int i = 0; i < 4; ++i) h[4 * i + j] = q[i];
+    }
+    int signs = 0;
+    for (int i = 0; i < 4; ++i) {
+        float q[4];
+        HalfCurve(h[4 * i], h[4 * i + 1], h[4 * i + 2], h[4 * i + 3], qv, q);
+        for (int j = 0; j < 4; ++j) signs |= (q[j] >= 0.0f ? 1 : 0) | (q[j] <= 0.0f ? 2 : 0);
+    }
+    return signs == 3;
+}
+
+// cl/patch.cl rc_patch_newton_search: whether the search from (s, t) converged; (s, t) and the
+// weights are those of the last point evaluated.
+inline bool NewtonSearch(const float* a, const float* b, const float* w, float eps, float& s,
+                         float& t, float* bu, float* dbu, float* bv, float* dbv) {
+    float prev = INFINITY;
+    for (int it = 0;; ++it) {
+        Bernstein3(s, bu, dbu);
+        Bernstein3(t, bv, dbv);
+        const glm::vec3 A = Channel(a, bu, dbu, bv, dbv);
+        const glm::vec3 B = Channel(b, bu, dbu, bv, dbv);
+        const glm::vec3 W = Channel(w, bu, dbu, bv, dbv);
+        const float f1 = A.x / W.x, f2 = B.x / W.x;
+        const float err = std::fmax(std::fabs(f1), std::fabs(f2));
+        if (err < eps) return true;
+        if (!(err <= prev) || it == kPatchIterations) return false;
+        prev = err;
+        const float j11 = (A.y - f1 * W.y) / W.x, j12 = (A.z - f1 * W.z) / W.x;
+        const float j21 = (B.y - f2 * W.y) / W.x, j22 = (B.z - f2 * W.z) / W.x;
+        const float det = j11 * j22 - j12 * j21;
+        if (std::fabs(det) > 1e-7f * (std::fabs(j11 * j22) + std::fabs(j12 * j21))) {
+            s -= (j22 * f1 - j12 * f2) / det;
+            t -= (j11 * f2 - j21 * f1) / det;
+        } else {
+            s += s <= 0.5f ? 0.125f : -0.125f;
+            t += t <= 0.5f ? 0.0625f : -0.0625f;
+            prev = INFINITY;
+        }
+        if (!(s > -0.5f && s < 1.5f && t > -0.5f && t < 1.5f)) return false;
+    }
+}
+
+}  // namespace patch_detail
+
 // The kernels' Newton iteration (cl/patch.cl rc_intersect_patch_box) on control points `p` as
-// the device holds them (float). On a hit: t in (tMin, tMax), local (u, v).
+// the device holds them (float), restarts included. On a hit: t in (tMin, tMax), local (u, v).
 inline bool IntersectPatchNewton(const glm::vec3& o, const glm::vec3& d, float tMin, float tMax,
                                  const std::array<glm::vec4, 16>& p, bool closedU, bool closedV,
                                  float& tOut, float& uOut, float& vOut) {
@@ -99,45 +167,29 @@ inline bool IntersectPatchNewton(const glm::vec3& o, const glm::vec3& d, float t
     }
     if ((signs & 3) != 3 || (signs & 12) != 12) return false;
     const float eps = spread / wMin * kPatchEps;
-    float s = 0.5f, t = 0.5f, prev = INFINITY;
-    float bu[4], dbu[4], bv[4], dbv[4];
-    bool converged = false;
-    for (int it = 0;; ++it) {
-        Bernstein3(s, bu, dbu);
-        Bernstein3(t, bv, dbv);
-        const glm::vec3 A = Channel(a, bu, dbu, bv, dbv);
-        const glm::vec3 B = Channel(b, bu, dbu, bv, dbv);
-        const glm::vec3 W = Channel(w, bu, dbu, bv, dbv);
-        const float f1 = A.x / W.x, f2 = B.x / W.x;
-        const float err = std::fmax(std::fabs(f1), std::fabs(f2));
-        if (err < eps) {
-            converged = true;
-            break;
-        }
-        if (!(err <= prev) || it == kPatchIterations) break;
-        prev = err;
-        const float j11 = (A.y - f1 * W.y) / W.x, j12 = (A.z - f1 * W.z) / W.x;
-        const float j21 = (B.y - f2 * W.y) / W.x, j22 = (B.z - f2 * W.z) / W.x;
-        const float det = j11 * j22 - j12 * j21;
-        if (std::fabs(det) > 1e-7f * (std::fabs(j11 * j22) + std::fabs(j12 * j21))) {
-            s -= (j22 * f1 - j12 * f2) / det;
-            t -= (j11 * f2 - j21 * f1) / det;
-        } else {
-            s += s <= 0.5f ? 0.125f : -0.125f;
-            t += t <= 0.5f ? 0.0625f : -0.0625f;
-            prev = INFINITY;
-        }
-        if (!(s > -0.5f && s < 1.5f && t > -0.5f && t < 1.5f)) break;
-    }
-    if (!converged || !InPatchBox(s, t, closedU, closedV)) return false;
     float c[16];
     for (int k = 0; k < 16; ++k) c[k] = Dot(d, glm::vec3(p[k]) - o * p[k].w);
-    const float th = Channel(c, bu, dbu, bv, dbv).x / Channel(w, bu, dbu, bv, dbv).x;
-    if (!(th > tMin && th < tMax)) return false;
-    tOut = th;
-    uOut = s;
-    vOut = t;
-    return true;
+    bool found = false, centreConverged = false;
+    float nearest = tMax;
+    for (int start = 0; start < kPatchStarts && !centreConverged; ++start) {
+        float s = PatchStartS(start), t = PatchStartT(start);
+        if (start > 0 &&
+            !(QuarterStraddles(a, s > 0.5f, t > 0.5f) && QuarterStraddles(b, s > 0.5f, t > 0.5f))) {
+            continue;
+        }
+        float bu[4], dbu[4], bv[4], dbv[4];
+        if (!NewtonSearch(a, b, w, eps, s, t, bu, dbu, bv, dbv)) continue;
+        centreConverged = start == 0;
+        if (!InPatchBox(s, t, closedU, closedV)) continue;
+        const float th = Channel(c, bu, dbu, bv, dbv).x / Channel(w, bu, dbu, bv, dbv).x;
+        if (!(th > tMin && th < nearest)) continue;
+        nearest = th;
+        tOut = th;
+        uOut = s;
+        vOut = t;
+        found = true;
+    }
+    return found;
 }
 
 // The box's control points as the device holds them.

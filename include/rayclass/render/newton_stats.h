@@ -20,15 +20,19 @@
 namespace rayclass::render {
 
 struct NewtonCounts {
-    uint64_t rays = 0;       // rays tested
-    uint64_t tests = 0;      // ray-box pairs whose box the ray's segment enters
-    uint64_t steps = 0;      // Newton steps (updates of (u, v)) of all tests
+    uint64_t rays = 0;   // rays tested
+    uint64_t tests = 0;  // ray-box pairs whose box the ray's segment enters
+    uint64_t steps = 0;  // Newton steps (updates of (u, v)) from the boxes' centres
+    // How the search from the box's centre ended:
     uint64_t culled = 0;     // the ray missed the control points' hull: no step
     uint64_t converged = 0;  // |F| < eps (a hit, or a root outside the box or the segment)
     uint64_t diverged = 0;   // |F| grew
     uint64_t left = 0;       // (u, v) left the window around the box
     uint64_t onCap = 0;      // the iteration cap came first
     uint64_t hits = 0;       // converged inside the box's range and the segment
+    // The tests that searched again from the box's quarters (the centre's did not converge),
+    // those searches' Newton steps and how many of the tests hit.
+    uint64_t restarted = 0, restartSteps = 0, restartHits = 0;
 
     // As --stats writes it (patch_newton): the counts and steps per test.
     std::map<std::string, double> ToStats() const;
