@@ -23,7 +23,7 @@ import statistics
 
 BOXES = ["1", "4", "16", "64", "256", "1024", "flat"]
 QUICK_BOXES = ["1", "flat"]
-TESSELLATIONS = [1, 2, 3, 4, 6, 8, 12, 16, 24]
+TESSELLATIONS = [1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48]
 QUICK_TESSELLATIONS = [1, 3]
 FIELDS = ["experiment", "setting", "primitives", "scene_bytes", "median_s", "min_s", "max_s",
           "eye_s", "id_mismatch", "silhouette_mismatch", "flip", "rmse"]

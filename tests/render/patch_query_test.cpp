@@ -140,8 +140,10 @@ TEST(PatchQuery, HostNewtonIsTheKernelsTwin) {
 
 // Against the reference: the rays that hit, and where. A hit the kernels miss is a hole (the
 // box's Newton iteration diverged or stopped outside it while the surface is there); a hit at
-// another distance is mostly a box that the ray meets twice, where the iteration from the box's
-// centre found the far root. Both shrink with flatter boxes; the bounds are stated per split.
+// another distance is a nearer box missed the same way, or a box that the ray meets twice, where
+// the iteration from the box's centre found the far root. Both shrink with flatter boxes and
+// with the restarts from the box's quarters; the bounds are stated per split, and the default
+// split's fail without the restarts.
 struct ReferenceCounts {
     uint32_t hits = 0, holes = 0, extra = 0, far = 0;
 };
@@ -172,9 +174,9 @@ ReferenceCounts CompareWithReference(float flatness) {
 TEST(PatchQuery, BruteForceAgreesWithTheReferenceAtTheDefaultSplit) {
     const ReferenceCounts c = CompareWithReference(scene::PatchSplit{}.flatness);
     EXPECT_GT(c.hits, 800u);
-    EXPECT_LE(c.holes, c.hits / 100) << c.holes << " holes of " << c.hits;
+    EXPECT_LE(c.holes, c.hits / 500) << c.holes << " holes of " << c.hits;
     EXPECT_EQ(c.extra, 0u);
-    EXPECT_LE(c.far, c.hits / 40) << c.far << " hits at another distance of " << c.hits;
+    EXPECT_LE(c.far, c.hits / 150) << c.far << " hits at another distance of " << c.hits;
 }
 
 TEST(PatchQuery, BruteForceAgreesWithTheReferenceAtAFineSplit) {
