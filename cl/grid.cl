@@ -126,10 +126,11 @@ inline int rc_grid_macro_any(__global const uchar* macroOccupied, uint4 mres, ui
  * a slab of macro cells at a time: a slab whose macro cells under the lanes are all empty is
  * passed over whole. */
 inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit, __global const uint* cellStart,
-                                   __global const float4* refTriangles,
+                                   __global const uint* primIndex,
                                    __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
-                                   float4 cellSize, uint4 res, float16* bt, uint16* bp, float16* bu,
-                                   float16* bv, int16* blocked, uint16* visits) {
+                                   float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+                                   float16* bt, uint16* bp, float16* bu, float16* bv,
+                                   int16* blocked, uint16* visits) {
     const float slackAbs = boxLo.w;
     float16 tn, tf;
     rc_accel_clip16(p, boxLo, boxHi, &tn, &tf);
@@ -192,12 +193,13 @@ inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit, __global co
                     *visits += as_uint16(in) & (uint16)(1);
                     const uint end = cellStart[c + 1];
                     for (uint j = cellStart[c]; j < end; ++j) {
-                        const float4 v0 = refTriangles[3 * j];
+                        const uint id = primIndex[j];
+                        const RcTriangle tri = triangles[id];
                         const int16 lanes = in & (t0 <= reach);
                         tests += as_uint16(lanes) & (uint16)(1);
-                        const int16 hit = rc_accel_triangle16(
-                            p, lanes, v0.xyz, refTriangles[3 * j + 1].xyz,
-                            refTriangles[3 * j + 2].xyz, as_uint(v0.w), bt, bp, bu, bv);
+                        const int16 hit =
+                            rc_accel_triangle16(p, lanes, tri.v0.xyz, tri.v1.xyz - tri.v0.xyz,
+                                                tri.v2.xyz - tri.v0.xyz, id, bt, bp, bu, bv);
                         if (anyHit) {
                             *blocked |= hit;
                             reach = select(reach, (float16)(-INFINITY), hit);
@@ -219,16 +221,17 @@ inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit, __global co
 /* The coherent-packet walk's answers for rays [first, first + 16): nearest hits, or blocked
  * flags when anyHit. */
 inline void rc_grid_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
-                           __global const uint* cellStart, __global const float4* refTriangles,
+                           __global const uint* cellStart, __global const uint* primIndex,
                            __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
-                           float4 cellSize, uint4 res, __global RcHit* hits,
-                           __global uchar* blockedOut, __global uint* counters) {
+                           float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+                           __global RcHit* hits, __global uchar* blockedOut,
+                           __global uint* counters) {
     float16 bt = p->tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
     uint16 bp = (uint16)(RC_NO_HIT), visits = (uint16)(0);
     int16 blocked = (int16)(0);
     const uint16 tests =
-        rc_grid_trace_packet(p, anyHit, cellStart, refTriangles, macroOccupied, boxLo, boxHi,
-                             cellSize, res, &bt, &bp, &bu, &bv, &blocked, &visits);
+        rc_grid_trace_packet(p, anyHit, cellStart, primIndex, macroOccupied, boxLo, boxHi, cellSize,
+                             res, triangles, &bt, &bp, &bu, &bv, &blocked, &visits);
     rc_accel_store_packet(anyHit, first, n, bt, bp, bu, bv, blocked, tests, visits, hits,
                           blockedOut, counters);
 }
@@ -237,16 +240,15 @@ inline void rc_grid_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
  * their counters. A coherent packet walks the grid once, other rays one by one. */
 inline void rc_grid_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
                            __global const uint* cellStart, __global const uint* primIndex,
-                           __global const float4* refTriangles, __global const uchar* macroOccupied,
-                           float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
-                           __global const RcTriangle* triangles, __global const RcSphere* spheres,
-                           __global const RcQuadric* quadrics,
+                           __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
+                           float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+                           __global const RcSphere* spheres, __global const RcQuadric* quadrics,
                            __constant const RcRenderParams* params, __global RcHit* hits,
                            __global uchar* blockedOut, __global uint* counters) {
     RcBvhPacket p;
     if (rc_accel_load_packet(rays, first, n, anyHit, boxLo, boxHi, params, &p)) {
-        rc_grid_packet(&p, anyHit, first, n, cellStart, refTriangles, macroOccupied, boxLo, boxHi,
-                       cellSize, res, hits, blockedOut, counters);
+        rc_grid_packet(&p, anyHit, first, n, cellStart, primIndex, macroOccupied, boxLo, boxHi,
+                       cellSize, res, triangles, hits, blockedOut, counters);
         return;
     }
     for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
@@ -262,28 +264,25 @@ inline void rc_grid_answer(int anyHit, __global const RcRay* rays, uint first, u
 /* One work-item per 16 rays rays[16 i, 16 i + 16). */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_grid(
     __global const RcRay* rays, uint n, __global const uint* cellStart,
-    __global const uint* primIndex, __global const float4* refTriangles,
-    __global const uchar* macroOccupied, float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
-    __global const RcTriangle* triangles, __global const RcSphere* spheres,
-    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
-    __global RcHit* hits, __global uint* counters) {
+    __global const uint* primIndex, __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
+    float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+    __constant const RcRenderParams* params, __global RcHit* hits, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    rc_grid_answer(0, rays, first, n, cellStart, primIndex, refTriangles, macroOccupied, boxLo,
-                   boxHi, cellSize, res, triangles, spheres, quadrics, params, hits, 0, counters);
+    rc_grid_answer(0, rays, first, n, cellStart, primIndex, macroOccupied, boxLo, boxHi, cellSize,
+                   res, triangles, spheres, quadrics, params, hits, 0, counters);
 }
 
 /* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_grid(
     __global const RcRay* rays, uint n, __global const uint* cellStart,
-    __global const uint* primIndex, __global const float4* refTriangles,
-    __global const uchar* macroOccupied, float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
-    __global const RcTriangle* triangles, __global const RcSphere* spheres,
-    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
-    __global uchar* blocked, __global uint* counters) {
+    __global const uint* primIndex, __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
+    float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+    __constant const RcRenderParams* params, __global uchar* blocked, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    rc_grid_answer(1, rays, first, n, cellStart, primIndex, refTriangles, macroOccupied, boxLo,
-                   boxHi, cellSize, res, triangles, spheres, quadrics, params, 0, blocked,
-                   counters);
+    rc_grid_answer(1, rays, first, n, cellStart, primIndex, macroOccupied, boxLo, boxHi, cellSize,
+                   res, triangles, spheres, quadrics, params, 0, blocked, counters);
 }

@@ -1,7 +1,6 @@
 #include "rayclass/accel/grid.h"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -26,19 +25,6 @@ std::pair<glm::ivec3, glm::ivec3> CellRange(const Grid& g, const Bounds3d& b) {
 Bounds3d CellBox(const Grid& g, const glm::ivec3& c) {
     const glm::dvec3 lo(g.box.lo), size(g.cellSize);
     return {lo + glm::dvec3(c) * size, lo + glm::dvec3(c + 1) * size};
-}
-
-void FillRefTriangles(Grid& g, const scene::Scene& scene) {
-    g.refTriangles.assign(3 * g.primIndex.size(), glm::vec4(0.0f));
-    for (size_t j = 0; j < g.primIndex.size(); ++j) {
-        const uint32_t id = g.primIndex[j];
-        g.refTriangles[3 * j].w = std::bit_cast<float>(id);
-        if (id >= scene.triangles.size()) continue;
-        const auto& p = scene.triangles[id].p;
-        g.refTriangles[3 * j] = glm::vec4(p[0], std::bit_cast<float>(id));
-        g.refTriangles[3 * j + 1] = glm::vec4(p[1] - p[0], 0.0f);
-        g.refTriangles[3 * j + 2] = glm::vec4(p[2] - p[0], 0.0f);
-    }
 }
 
 void FlagMacroCells(Grid& g, uint32_t macroSize) {
@@ -114,7 +100,6 @@ Grid BuildGrid(const scene::Scene& scene, const GridParams& params) {
     g.cellStart = count;
     g.primIndex.resize(refs.size());
     for (const auto& [c, id] : refs) g.primIndex[count[c]++] = id;
-    FillRefTriangles(g, scene);
     FlagMacroCells(g, std::max(1u, params.macroSize));
     return g;
 }

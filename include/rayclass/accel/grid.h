@@ -35,10 +35,6 @@ struct Grid {
     // primIndex[cellStart[c], cellStart[c + 1]).
     std::vector<uint32_t> cellStart;
     std::vector<uint32_t> primIndex;
-    // The triangles in reference order, so that a cell's lie side by side: reference j's are
-    // refTriangles[3 j] = (v0, the id's bits), [3 j + 1] = (v1 - v0, 0), [3 j + 2] = (v2 - v0, 0),
-    // in float as the kernels compute them; zeros for other primitives.
-    std::vector<glm::vec4> refTriangles;
     uint32_t emptyCells = 0;
     uint32_t macroSize = 1;
     glm::uvec3 macroResolution{1};  // (resolution + macroSize - 1) / macroSize
@@ -48,8 +44,7 @@ struct Grid {
 
     uint32_t Cells() const { return resolution.x * resolution.y * resolution.z; }
     size_t Bytes() const {
-        return (cellStart.size() + primIndex.size()) * sizeof(uint32_t) +
-               refTriangles.size() * sizeof(glm::vec4) + macroOccupied.size();
+        return (cellStart.size() + primIndex.size()) * sizeof(uint32_t) + macroOccupied.size();
     }
 };
 
