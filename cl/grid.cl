@@ -174,6 +174,9 @@ inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit, __global co
         rc_grid_lane_range(ou, du, t0, t1, inSlab, lo[u], size[u], r[u], &u0, &u1);
         rc_grid_lane_range(ow, dw, t0, t1, inSlab, lo[w], size[w], r[w], &w0, &w1);
         if (!rc_grid_macro_any(macroOccupied, mres, k, u, w, mk, u0, u1, w0, w1)) continue;
+        /* A slab box of at most 2 x 2 cells serves each of its slices (it holds their boxes):
+         * fewer reductions for a few more cells. */
+        const int slabBox = u1 - u0 <= 1 && w1 - w0 <= 1;
         for (int s = backwards ? s1 : s0; s >= s0 && s <= s1; s += step) {
             rc_grid_slab(lo[k], size[k], s, s, ok, ik, tn, tf, slackAbs, &t0, &t1);
             const int16 pending = inGrid & (t0 <= reach);
@@ -181,8 +184,10 @@ inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit, __global co
             if (!any(pending & (t0 <= tf))) return tests;
             int16 in = pending & (t0 <= t1);
             if (!any(in)) continue;
-            rc_grid_lane_range(ou, du, t0, t1, in, lo[u], size[u], r[u], &u0, &u1);
-            rc_grid_lane_range(ow, dw, t0, t1, in, lo[w], size[w], r[w], &w0, &w1);
+            if (!slabBox) {
+                rc_grid_lane_range(ou, du, t0, t1, in, lo[u], size[u], r[u], &u0, &u1);
+                rc_grid_lane_range(ow, dw, t0, t1, in, lo[w], size[w], r[w], &w0, &w1);
+            }
             uint cell[3];
             cell[k] = (uint)s;
             for (int cw = w0; cw <= w1; ++cw) {
