@@ -14,10 +14,10 @@
  * from the cell where the ray enters the grid; a cell's exit is computed afresh from its
  * index, so no rounding accumulates along the walk. counters[i] counts primitive tests of ray i,
  * counters[n + i] the cells visited for it. */
-#include "rc_types.h"
-#include "intersect.cl"
-#include "bvh.cl"
 #include "accel_common.cl"
+#include "bvh.cl"
+#include "intersect.cl"
+#include "rc_types.h"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -87,15 +87,50 @@ inline void rc_grid_lane_range(float16 o, float16 d, float16 t0, float16 t1, int
     *c1 = clamp((int)floor((highest - lo) / size), 0, (int)res - 1);
 }
 
+/* The lanes' parameter intervals [*t0, *t1] inside slices [s0, s1] along the slicing axis
+ * (origin component ok, inverse direction ik), widened by the slack and clipped to [tn, tf]. */
+inline void rc_grid_slab(float lo, float size, int s0, int s1, float16 ok, float16 ik, float16 tn,
+                         float16 tf, float slackAbs, float16* t0, float16* t1) {
+    const float16 ta = (lo + (float)s0 * size - ok) * ik;
+    const float16 tb = (lo + (float)(s1 + 1) * size - ok) * ik;
+    const float16 ea = fmin(ta, tb), eb = fmax(ta, tb);
+    *t0 = fmax(tn, ea - (1e-5f * fabs(ea) + slackAbs));
+    *t1 = fmin(tf, eb + (1e-5f * fabs(eb) + slackAbs));
+}
+
+/* Whether a macro cell of slab mk along axis k, rows [u0, u1] x [w0, w1] of cells (one more on
+ * each side, against rounding) along axes u and w, holds a primitive. mres: macro cells an
+ * axis, mres.w: cells a macro cell along each axis. */
+inline int rc_grid_macro_any(__global const uchar* macroOccupied, uint4 mres, uint k, uint u,
+                             uint w, int mk, int u0, int u1, int w0, int w1) {
+    const uint m = mres.w;
+    const uint r[3] = {mres.x, mres.y, mres.z};
+    uint mc[3];
+    mc[k] = (uint)mk;
+    const int mu1 = min((u1 + 1) / (int)m, (int)r[u] - 1);
+    const int mw1 = min((w1 + 1) / (int)m, (int)r[w] - 1);
+    for (int mw = max(w0 - 1, 0) / (int)m; mw <= mw1; ++mw) {
+        mc[w] = (uint)mw;
+        for (int mu = max(u0 - 1, 0) / (int)m; mu <= mu1; ++mu) {
+            mc[u] = (uint)mu;
+            if (macroOccupied[mc[0] + mres.x * (mc[1] + mres.y * mc[2])]) return 1;
+        }
+    }
+    return 0;
+}
+
 /* Walks the grid once for a coherent packet (triangles only): nearest hits in (bt, bp, bu, bv),
  * or with anyHit the lanes that found a hit in *blocked. Per lane the primitive tests (returned)
  * and the cells visited (*visits). A lane takes part in a slice while its interval reaches
- * into the slice and its nearest hit (-inf once blocked) does not lie before it. */
-inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit,
-                                   __global const uint* cellStart, __global const uint* primIndex,
-                                   float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
-                                   __global const RcTriangle* triangles, float16* bt, uint16* bp,
-                                   float16* bu, float16* bv, int16* blocked, uint16* visits) {
+ * into the slice and its nearest hit (-inf once blocked) does not lie before it. The slices go
+ * a slab of macro cells at a time: a slab whose macro cells under the lanes are all empty is
+ * passed over whole. */
+inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit, __global const uint* cellStart,
+                                   __global const uint* primIndex,
+                                   __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
+                                   float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+                                   float16* bt, uint16* bp, float16* bu, float16* bv,
+                                   int16* blocked, uint16* visits) {
     const float slackAbs = boxLo.w;
     float16 tn, tf;
     rc_accel_clip16(p, boxLo, boxHi, &tn, &tf);
@@ -111,6 +146,8 @@ inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit,
     const uint u = k == 0 ? 1 : 0, w = k == 2 ? 1 : 2;
     const float lo[3] = {boxLo.x, boxLo.y, boxLo.z}, size[3] = {cellSize.x, cellSize.y, cellSize.z};
     const uint r[3] = {res.x, res.y, res.z};
+    const int m = (int)res.w;
+    const uint4 mres = (uint4)((res.xyz + res.w - 1) / res.w, res.w);
     const float16 ok = rc_grid_lane_axis(p->ox, p->oy, p->oz, k);
     const float16 ik = rc_grid_lane_axis(p->ix, p->iy, p->iz, k);
     const float16 ou = rc_grid_lane_axis(p->ox, p->oy, p->oz, u);
@@ -125,49 +162,62 @@ inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit,
     last = min(last + 1, (int)r[k] - 1);
     const int backwards = any(inGrid & (as_int16(dk) < 0));
     const int step = backwards ? -1 : 1;
-    for (int s = backwards ? last : first; s >= first && s <= last; s += step) {
-        const float16 ta = (lo[k] + (float)s * size[k] - ok) * ik;
-        const float16 tb = (lo[k] + (float)(s + 1) * size[k] - ok) * ik;
-        const float16 ea = fmin(ta, tb), eb = fmax(ta, tb);
-        const float16 t0 = fmax(tn, ea - (1e-5f * fabs(ea) + slackAbs));
-        const float16 t1 = fmin(tf, eb + (1e-5f * fabs(eb) + slackAbs));
-        const int16 pending = inGrid & (t0 <= reach);
-        /* No lane reaches beyond this slice, or every lane has its hit before it. */
-        if (!any(pending & (t0 <= tf))) break;
-        int16 in = pending & (t0 <= t1);
-        if (!any(in)) continue;
-        int u0, u1, w0, w1;
-        rc_grid_lane_range(ou, du, t0, t1, in, lo[u], size[u], r[u], &u0, &u1);
-        rc_grid_lane_range(ow, dw, t0, t1, in, lo[w], size[w], r[w], &w0, &w1);
-        uint cell[3];
-        cell[k] = (uint)s;
-        for (int cw = w0; cw <= w1; ++cw) {
-            cell[w] = (uint)cw;
-            for (int cu = u0; cu <= u1; ++cu) {
-                cell[u] = (uint)cu;
-                const uint c = cell[0] + res.x * (cell[1] + res.y * cell[2]);
-                *visits += as_uint16(in) & (uint16)(1);
-                const uint end = cellStart[c + 1];
-                for (uint j = cellStart[c]; j < end; ++j) {
-                    const uint id = primIndex[j];
-                    const RcTriangle tri = triangles[id];
-                    const int16 lanes = in & (t0 <= reach);
-                    tests += as_uint16(lanes) & (uint16)(1);
-                    const int16 hit =
-                        rc_accel_triangle16(p, lanes, tri.v0.xyz, tri.v1.xyz - tri.v0.xyz,
-                                            tri.v2.xyz - tri.v0.xyz, id, bt, bp, bu, bv);
-                    if (anyHit) {
-                        *blocked |= hit;
-                        reach = select(reach, (float16)(-INFINITY), hit);
-                        in &= ~hit;
-                        if (!any(in)) break;
-                    } else {
-                        reach = *bt;
+    int u0, u1, w0, w1;
+    float16 t0, t1;
+    for (int mk = (backwards ? last : first) / m; mk >= first / m && mk <= last / m; mk += step) {
+        const int s0 = max(mk * m, first), s1 = min(mk * m + m - 1, last);
+        rc_grid_slab(lo[k], size[k], s0, s1, ok, ik, tn, tf, slackAbs, &t0, &t1);
+        const int16 pendingSlab = inGrid & (t0 <= reach);
+        if (!any(pendingSlab & (t0 <= tf))) break;
+        const int16 inSlab = pendingSlab & (t0 <= t1);
+        if (!any(inSlab)) continue;
+        rc_grid_lane_range(ou, du, t0, t1, inSlab, lo[u], size[u], r[u], &u0, &u1);
+        rc_grid_lane_range(ow, dw, t0, t1, inSlab, lo[w], size[w], r[w], &w0, &w1);
+        if (!rc_grid_macro_any(macroOccupied, mres, k, u, w, mk, u0, u1, w0, w1)) continue;
+        /* A slab box of at most 2 x 2 cells serves each of its slices (it holds their boxes):
+         * fewer reductions for a few more cells. */
+        const int slabBox = u1 - u0 <= 1 && w1 - w0 <= 1;
+        for (int s = backwards ? s1 : s0; s >= s0 && s <= s1; s += step) {
+            rc_grid_slab(lo[k], size[k], s, s, ok, ik, tn, tf, slackAbs, &t0, &t1);
+            const int16 pending = inGrid & (t0 <= reach);
+            /* No lane reaches beyond this slice, or every lane has its hit before it. */
+            if (!any(pending & (t0 <= tf))) return tests;
+            int16 in = pending & (t0 <= t1);
+            if (!any(in)) continue;
+            if (!slabBox) {
+                rc_grid_lane_range(ou, du, t0, t1, in, lo[u], size[u], r[u], &u0, &u1);
+                rc_grid_lane_range(ow, dw, t0, t1, in, lo[w], size[w], r[w], &w0, &w1);
+            }
+            uint cell[3];
+            cell[k] = (uint)s;
+            for (int cw = w0; cw <= w1; ++cw) {
+                cell[w] = (uint)cw;
+                for (int cu = u0; cu <= u1; ++cu) {
+                    cell[u] = (uint)cu;
+                    const uint c = cell[0] + res.x * (cell[1] + res.y * cell[2]);
+                    *visits += as_uint16(in) & (uint16)(1);
+                    const uint end = cellStart[c + 1];
+                    for (uint j = cellStart[c]; j < end; ++j) {
+                        const uint id = primIndex[j];
+                        const RcTriangle tri = triangles[id];
+                        const int16 lanes = in & (t0 <= reach);
+                        tests += as_uint16(lanes) & (uint16)(1);
+                        const int16 hit =
+                            rc_accel_triangle16(p, lanes, tri.v0.xyz, tri.v1.xyz - tri.v0.xyz,
+                                                tri.v2.xyz - tri.v0.xyz, id, bt, bp, bu, bv);
+                        if (anyHit) {
+                            *blocked |= hit;
+                            reach = select(reach, (float16)(-INFINITY), hit);
+                            in &= ~hit;
+                            if (!any(in)) break;
+                        } else {
+                            reach = *bt;
+                        }
                     }
+                    if (!any(in)) break;
                 }
                 if (!any(in)) break;
             }
-            if (!any(in)) break;
         }
     }
     return tests;
@@ -177,15 +227,16 @@ inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit,
  * flags when anyHit. */
 inline void rc_grid_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
                            __global const uint* cellStart, __global const uint* primIndex,
-                           float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
-                           __global const RcTriangle* triangles, __global RcHit* hits,
-                           __global uchar* blockedOut, __global uint* counters) {
+                           __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
+                           float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+                           __global RcHit* hits, __global uchar* blockedOut,
+                           __global uint* counters) {
     float16 bt = p->tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
     uint16 bp = (uint16)(RC_NO_HIT), visits = (uint16)(0);
     int16 blocked = (int16)(0);
     const uint16 tests =
-        rc_grid_trace_packet(p, anyHit, cellStart, primIndex, boxLo, boxHi, cellSize, res,
-                             triangles, &bt, &bp, &bu, &bv, &blocked, &visits);
+        rc_grid_trace_packet(p, anyHit, cellStart, primIndex, macroOccupied, boxLo, boxHi, cellSize,
+                             res, triangles, &bt, &bp, &bu, &bv, &blocked, &visits);
     rc_accel_store_packet(anyHit, first, n, bt, bp, bu, bv, blocked, tests, visits, hits,
                           blockedOut, counters);
 }
@@ -194,23 +245,23 @@ inline void rc_grid_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
  * their counters. A coherent packet walks the grid once, other rays one by one. */
 inline void rc_grid_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
                            __global const uint* cellStart, __global const uint* primIndex,
-                           float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
-                           __global const RcTriangle* triangles, __global const RcSphere* spheres,
-                           __global const RcQuadric* quadrics,
+                           __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
+                           float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+                           __global const RcSphere* spheres, __global const RcQuadric* quadrics,
                            __constant const RcRenderParams* params, __global RcHit* hits,
                            __global uchar* blockedOut, __global uint* counters) {
     RcBvhPacket p;
     if (rc_accel_load_packet(rays, first, n, anyHit, boxLo, boxHi, params, &p)) {
-        rc_grid_packet(&p, anyHit, first, n, cellStart, primIndex, boxLo, boxHi, cellSize, res,
-                       triangles, hits, blockedOut, counters);
+        rc_grid_packet(&p, anyHit, first, n, cellStart, primIndex, macroOccupied, boxLo, boxHi,
+                       cellSize, res, triangles, hits, blockedOut, counters);
         return;
     }
     for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
         RcHit best = rc_no_hit(rays[i].direction.w);
         uint visits = 0;
-        const uint tests = rc_grid_trace(rays[i], anyHit, cellStart, primIndex, boxLo, boxHi,
-                                         cellSize, res, triangles, spheres, quadrics, params, &best,
-                                         &visits);
+        const uint tests =
+            rc_grid_trace(rays[i], anyHit, cellStart, primIndex, boxLo, boxHi, cellSize, res,
+                          triangles, spheres, quadrics, params, &best, &visits);
         rc_accel_store_ray(anyHit, i, n, best, tests, visits, hits, blockedOut, counters);
     }
 }
@@ -218,25 +269,25 @@ inline void rc_grid_answer(int anyHit, __global const RcRay* rays, uint first, u
 /* One work-item per 16 rays rays[16 i, 16 i + 16). */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_grid(
     __global const RcRay* rays, uint n, __global const uint* cellStart,
-    __global const uint* primIndex, float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
-    __global const RcTriangle* triangles, __global const RcSphere* spheres,
-    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
-    __global RcHit* hits, __global uint* counters) {
+    __global const uint* primIndex, __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
+    float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+    __constant const RcRenderParams* params, __global RcHit* hits, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    rc_grid_answer(0, rays, first, n, cellStart, primIndex, boxLo, boxHi, cellSize, res,
-                   triangles, spheres, quadrics, params, hits, 0, counters);
+    rc_grid_answer(0, rays, first, n, cellStart, primIndex, macroOccupied, boxLo, boxHi, cellSize,
+                   res, triangles, spheres, quadrics, params, hits, 0, counters);
 }
 
 /* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_grid(
     __global const RcRay* rays, uint n, __global const uint* cellStart,
-    __global const uint* primIndex, float4 boxLo, float4 boxHi, float4 cellSize, uint4 res,
-    __global const RcTriangle* triangles, __global const RcSphere* spheres,
-    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
-    __global uchar* blocked, __global uint* counters) {
+    __global const uint* primIndex, __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
+    float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+    __constant const RcRenderParams* params, __global uchar* blocked, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    rc_grid_answer(1, rays, first, n, cellStart, primIndex, boxLo, boxHi, cellSize, res,
-                   triangles, spheres, quadrics, params, 0, blocked, counters);
+    rc_grid_answer(1, rays, first, n, cellStart, primIndex, macroOccupied, boxLo, boxHi, cellSize,
+                   res, triangles, spheres, quadrics, params, 0, blocked, counters);
 }

@@ -27,6 +27,26 @@ Bounds3d CellBox(const Grid& g, const glm::ivec3& c) {
     return {lo + glm::dvec3(c) * size, lo + glm::dvec3(c + 1) * size};
 }
 
+void FlagMacroCells(Grid& g, uint32_t macroSize) {
+    g.macroSize = macroSize;
+    g.macroResolution = (g.resolution + macroSize - 1u) / macroSize;
+    const glm::uvec3 m = g.macroResolution;
+    g.macroOccupied.assign(size_t(m.x) * m.y * m.z, 0);
+    for (uint32_t z = 0; z < g.resolution.z; ++z) {
+        for (uint32_t y = 0; y < g.resolution.y; ++y) {
+            for (uint32_t x = 0; x < g.resolution.x; ++x) {
+                const uint32_t c = x + g.resolution.x * (y + g.resolution.y * z);
+                if (g.cellStart[c] == g.cellStart[c + 1]) {
+                    ++g.emptyCells;
+                    continue;
+                }
+                const glm::uvec3 mc = glm::uvec3(x, y, z) / macroSize;
+                g.macroOccupied[mc.x + m.x * (mc.y + m.y * mc.z)] = 1;
+            }
+        }
+    }
+}
+
 }  // namespace
 
 glm::uvec3 GridResolution(const Bounds3f& box, uint32_t prims, const GridParams& params) {
@@ -80,7 +100,7 @@ Grid BuildGrid(const scene::Scene& scene, const GridParams& params) {
     g.cellStart = count;
     g.primIndex.resize(refs.size());
     for (const auto& [c, id] : refs) g.primIndex[count[c]++] = id;
-    for (uint32_t c = 0; c < g.Cells(); ++c) g.emptyCells += g.cellStart[c] == g.cellStart[c + 1];
+    FlagMacroCells(g, std::max(1u, params.macroSize));
     return g;
 }
 

@@ -24,19 +24,21 @@ class GridQuery final : public WalkQuery {
                     kPacketRays),
           cellStart_(UploadVector(ctx, grid.cellStart)),
           primIndex_(UploadVector(ctx, grid.primIndex)),
+          macroOccupied_(UploadVector(ctx, grid.macroOccupied)),
           boxLo_{grid.box.lo.x, grid.box.lo.y, grid.box.lo.z, grid.pad * 0.25f},
           boxHi_{grid.box.hi.x, grid.box.hi.y, grid.box.hi.z, 0.0f},
           cellSize_{grid.cellSize.x, grid.cellSize.y, grid.cellSize.z, 0.0f},
-          res_{grid.resolution.x, grid.resolution.y, grid.resolution.z, 0u} {}
+          res_{grid.resolution.x, grid.resolution.y, grid.resolution.z, grid.macroSize} {}
 
   private:
     void Bind(cl::Kernel& kernel, const cl::Buffer& rays, uint32_t n, const cl::Buffer& out,
               const cl::Buffer& counters) override {
-        SetArgs(kernel, rays, n, cellStart_, primIndex_, boxLo_, boxHi_, cellSize_, res_,
-                scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out, counters);
+        SetArgs(kernel, rays, n, cellStart_, primIndex_, macroOccupied_, boxLo_, boxHi_, cellSize_,
+                res_, scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params, out,
+                counters);
     }
 
-    cl::Buffer cellStart_, primIndex_;
+    cl::Buffer cellStart_, primIndex_, macroOccupied_;
     cl_float4 boxLo_, boxHi_, cellSize_;
     cl_uint4 res_;
 };

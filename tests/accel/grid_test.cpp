@@ -60,5 +60,39 @@ TEST(Grid, EveryPointOfEveryTriangleLiesInACellListingIt) {
     EXPECT_GT(g.emptyCells, g.Cells() / 2);
 }
 
+TEST(Grid, MacroCellsFlagExactlyThoseHoldingAPrimitive) {
+    const scene::Scene bunny = scene::LoadScene(SourceDir() / "scenes/bench/bunny.obj");
+    const Grid g = BuildGrid(bunny);
+    ASSERT_GT(g.macroSize, 1u);
+    const glm::uvec3 m = g.macroResolution;
+    ASSERT_EQ(g.macroOccupied.size(), size_t(m.x) * m.y * m.z);
+    uint32_t wrong = 0, occupied = 0;
+    for (uint32_t z = 0; z < m.z; ++z) {
+        for (uint32_t y = 0; y < m.y; ++y) {
+            for (uint32_t x = 0; x < m.x; ++x) {
+                // Scans the macro cell's cells' primitive lists directly.
+                uint32_t refs = 0;
+                const glm::uvec3 lo = glm::uvec3(x, y, z) * g.macroSize;
+                const glm::uvec3 hi = glm::min(lo + g.macroSize, g.resolution);
+                for (uint32_t cz = lo.z; cz < hi.z; ++cz) {
+                    for (uint32_t cy = lo.y; cy < hi.y; ++cy) {
+                        for (uint32_t cx = lo.x; cx < hi.x; ++cx) {
+                            const uint32_t c = cx + g.resolution.x * (cy + g.resolution.y * cz);
+                            refs += g.cellStart[c + 1] - g.cellStart[c];
+                        }
+                    }
+                }
+                const bool flagged = g.macroOccupied[x + m.x * (y + m.y * z)] != 0;
+                wrong += flagged != (refs > 0);
+                occupied += flagged;
+            }
+        }
+    }
+    EXPECT_EQ(wrong, 0u);
+    // The bunny leaves much of its box empty even at the macro cells' scale.
+    EXPECT_GT(occupied, 0u);
+    EXPECT_LT(occupied, g.macroOccupied.size());
+}
+
 }  // namespace
 }  // namespace rayclass::accel

@@ -6,6 +6,9 @@
 //
 // Robustness: each cell is tested grown by `pad` on every side, so a primitive lies in every
 // cell that comes within `pad` of it, more than the walk's rounding can move a ray.
+//
+// Macro cells of macroSize^3 cells each (fewer at the far faces) flag whether any of their cells
+// holds a primitive, so that a packet's walk passes over empty space a macro cell at a time.
 #pragma once
 
 #include <cstdint>
@@ -20,6 +23,7 @@ namespace rayclass::accel {
 struct GridParams {
     float density = 4.0f;          // cells per primitive (lambda)
     uint32_t maxResolution = 512;  // cells along an axis, at most
+    uint32_t macroSize = 4;        // cells along each axis of a macro cell
 };
 
 struct Grid {
@@ -32,9 +36,16 @@ struct Grid {
     std::vector<uint32_t> cellStart;
     std::vector<uint32_t> primIndex;
     uint32_t emptyCells = 0;
+    uint32_t macroSize = 1;
+    glm::uvec3 macroResolution{1};  // (resolution + macroSize - 1) / macroSize
+    // Macro cell (x, y, z) at x + macroResolution.x (y + macroResolution.y z): 1 where one of its
+    // cells holds a primitive, else 0.
+    std::vector<uint8_t> macroOccupied;
 
     uint32_t Cells() const { return resolution.x * resolution.y * resolution.z; }
-    size_t Bytes() const { return (cellStart.size() + primIndex.size()) * sizeof(uint32_t); }
+    size_t Bytes() const {
+        return (cellStart.size() + primIndex.size()) * sizeof(uint32_t) + macroOccupied.size();
+    }
 };
 
 // The resolution the density rule gives a box of `prims` primitives.
