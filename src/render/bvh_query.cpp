@@ -1,5 +1,7 @@
 #include "rayclass/render/bvh_query.h"
 
+#include <chrono>
+
 #include "rayclass/bvh/leaf_blocks.h"
 #include "rayclass/render/launch.h"
 
@@ -58,14 +60,31 @@ class BvhQuery final : public RayQuery {
     std::vector<uint32_t> tests_;
 };
 
+bvh::BlockedBvh BuildBlocked(const scene::Scene& scene, const bvh::BuildParams& params) {
+    const bvh::Bvh tree = bvh::Build(scene, params);
+    return bvh::BlockLeaves(bvh::Collapse(tree), tree.primIndex, scene);
+}
+
 }  // namespace
 
 std::unique_ptr<RayQuery> MakeBvhQuery(clrt::Context& ctx, const cl::Program& program,
                                        const SceneBuffers& buffers, const scene::Scene& scene,
                                        const bvh::BuildParams& params) {
-    const bvh::Bvh tree = bvh::Build(scene, params);
-    return std::make_unique<BvhQuery>(ctx, program, buffers,
-                                      bvh::BlockLeaves(bvh::Collapse(tree), tree.primIndex, scene));
+    return MakeBvhQuery(ctx, program, buffers, BuildBlocked(scene, params));
 }
+
+std::unique_ptr<RayQuery> MakeBvhQuery(clrt::Context& ctx, const cl::Program& program,
+                                       const SceneBuffers& buffers, const bvh::BlockedBvh& tree) {
+    return std::make_unique<BvhQuery>(ctx, program, buffers, tree);
+}
+
+BvhBuild::BvhBuild(const scene::Scene& scene, const bvh::BuildParams& params)
+    : result_(std::async(std::launch::async, [&scene, params] {
+          const auto t0 = std::chrono::steady_clock::now();
+          Result result{BuildBlocked(scene, params)};
+          result.seconds =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          return result;
+      })) {}
 
 }  // namespace rayclass::render

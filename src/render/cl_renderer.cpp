@@ -236,6 +236,8 @@ class Frame {
     RenderStats& stats_;
     const CameraBasis basis_;
     image::Image img_;
+    // Started before the program build and the scene upload, which it overlaps.
+    const std::shared_ptr<BvhBuild> bvhBuild_;
     const cl::Program program_;
     const RcRenderParams params_;
     const SceneBuffers sceneBuffers_;
@@ -274,10 +276,12 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
       stats_(stats),
       basis_(scene.camera, options.window),
       img_(NewImage(basis_, options.aovs)),
+      bvhBuild_(StartBvhBuild(scene, options)),
       program_(BuildProgram(ctx, options, stats)),
       params_(MakeRenderParams(scene, options)),
       sceneBuffers_(ctx, scene, params_),
-      query_(WrapQuery(MakeQuery(ctx, program_, sceneBuffers_, scene, options, stats), wrapQuery)),
+      query_(WrapQuery(MakeQuery(ctx, program_, sceneBuffers_, scene, options, stats, bvhBuild_),
+                       wrapQuery)),
       cam_(basis_.ToDevice()),
       camBuffer_(UploadVector(ctx, std::vector<RcCamera>{cam_})),
       eyeKernel_(program_, "rc_generate_eye_rays"),

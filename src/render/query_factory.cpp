@@ -1,5 +1,6 @@
 #include "rayclass/render/query_factory.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "rayclass/classify/params.h"
@@ -21,16 +22,33 @@ double SecondsSince(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+// Some material spawns mirror or refracted rays.
+bool SpawnsSecondaryRays(const scene::Scene& scene) {
+    return std::ranges::any_of(scene.materials, [](const scene::Material& m) {
+        return m.kr != glm::vec3(0.0f) || m.kt != glm::vec3(0.0f);
+    });
+}
+
 }  // namespace
+
+std::shared_ptr<BvhBuild> StartBvhBuild(const scene::Scene& scene, const RenderOptions& options) {
+    const bool auto_secondary =
+        options.accel == Accel::kAuto && options.maxDepth > 0 && SpawnsSecondaryRays(scene);
+    if (options.accel != Accel::kBvh && !auto_secondary) return nullptr;
+    return std::make_shared<BvhBuild>(scene);
+}
 
 std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& program,
                                     const SceneBuffers& buffers, const scene::Scene& scene,
-                                    const RenderOptions& options, RenderStats& stats) {
+                                    const RenderOptions& options, RenderStats& stats,
+                                    std::shared_ptr<BvhBuild> bvhBuild) {
     if (options.accel == Accel::kBrute) return MakeBruteForceQuery(ctx, program, buffers);
-    auto makeBvh = [&ctx, &program, &buffers, &scene, &stats] {
+    auto makeBvh = [&ctx, &program, &buffers, &scene, &stats, bvhBuild] {
         const auto t0 = Clock::now();
-        auto query = MakeBvhQuery(ctx, program, buffers, scene);
+        BvhBuild::Result built = bvhBuild ? bvhBuild->Take() : BvhBuild(scene).Take();
+        auto query = MakeBvhQuery(ctx, program, buffers, built.tree);
         stats.timeS["bvh_build"] = SecondsSince(t0);
+        stats.timeS["bvh_build_thread"] = built.seconds;
         return query;
     };
     if (options.accel == Accel::kBvh) return makeBvh();
