@@ -124,16 +124,20 @@ inline int rc_patch_newton_search(const float* a, const float* b, const float* w
     return outcome;
 }
 
-/* One half of the cubic curve (c0, c1, c2, c3) by de Casteljau: the half towards c3 when
- * `upper`, else the half towards c0. */
-inline void rc_patch_half_curve(float c0, float c1, float c2, float c3, int upper, float* q) {
-    const float a = 0.5f * (c0 + c1), b = 0.5f * (c1 + c2), d = 0.5f * (c2 + c3);
-    const float ab = 0.5f * (a + b), bd = 0.5f * (b + d), m = 0.5f * (ab + bd);
-    q[0] = upper ? m : c0;
-    q[1] = upper ? bd : a;
-    q[2] = upper ? d : ab;
-    q[3] = upper ? c3 : m;
-}
+/* Defines `qualifiers void name(T c0, T c1, T c2, T c3, int upper, T* q)`: one half of the
+ * cubic curve (c0, c1, c2, c3) by de Casteljau, the half towards c3 when `upper`, else the half
+ * towards c0; T float here and float16 in the packets, as RC_DEFINE_BERNSTEIN3. */
+#define RC_DEFINE_HALF_CURVE(qualifiers, name, T)                                        \
+    qualifiers void name(T c0, T c1, T c2, T c3, int upper, T* q) {                       \
+        const T a = 0.5f * (c0 + c1), b = 0.5f * (c1 + c2), d = 0.5f * (c2 + c3);         \
+        const T ab = 0.5f * (a + b), bd = 0.5f * (b + d), m = 0.5f * (ab + bd);           \
+        q[0] = upper ? m : c0;                                                            \
+        q[1] = upper ? bd : a;                                                            \
+        q[2] = upper ? d : ab;                                                            \
+        q[3] = upper ? c3 : m;                                                            \
+    }
+
+RC_DEFINE_HALF_CURVE(inline, rc_patch_half_curve, float)
 
 /* Whether channel x of the box's quarter (qu, qv) (1: the upper half of u, of v) takes both signs
  * on the quarter's control points, zero counting as either: where it does not for a or b, the ray

@@ -46,15 +46,7 @@ RC_SHADE_INLINE void rc_patch_weights16(const float* c, const float16* bu, const
 }
 
 /* rc_patch_half_curve per lane (`upper` the same for all). */
-RC_SHADE_INLINE void rc_patch_half_curve16(float16 c0, float16 c1, float16 c2, float16 c3,
-                                           int upper, float16* q) {
-    const float16 a = 0.5f * (c0 + c1), b = 0.5f * (c1 + c2), d = 0.5f * (c2 + c3);
-    const float16 ab = 0.5f * (a + b), bd = 0.5f * (b + d), m = 0.5f * (ab + bd);
-    q[0] = upper ? m : c0;
-    q[1] = upper ? bd : a;
-    q[2] = upper ? d : ab;
-    q[3] = upper ? c3 : m;
-}
+RC_DEFINE_HALF_CURVE(RC_SHADE_INLINE, rc_patch_half_curve16, float16)
 
 /* rc_patch_quarter_straddles per lane. */
 RC_SHADE_INLINE int16 rc_patch_quarter_straddles16(const float16* x, int qu, int qv) {
