@@ -2,12 +2,12 @@
 // kernel path's eye-ray hits, and hit-buffer comparison.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "rayclass/clrt/context.h"
 #include "rayclass/raster/raster_pass.h"
@@ -30,8 +30,8 @@ inline GlContext* Gl() {
     return gl;
 }
 
-#define RC_REQUIRE_GL()                                              \
-    GlContext* gl = ::rayclass::raster::testing_support::Gl();       \
+#define RC_REQUIRE_GL()                                        \
+    GlContext* gl = ::rayclass::raster::testing_support::Gl(); \
     if (!gl) GTEST_SKIP() << "no headless OpenGL context";
 
 inline clrt::Context& Cl() {
@@ -71,11 +71,11 @@ inline std::vector<RcHit> KernelHits(const scene::Scene& scene) {
 
 struct HitComparison {
     size_t pixels = 0;
-    size_t idMismatch = 0;      // different primitive (or hit vs miss)
-    size_t tDiffer = 0;         // same primitive, different t bits
-    size_t uvDiffer = 0;        // same triangle, different barycentrics
-    size_t missVsHit = 0;       // one path hit, the other missed
-    double maxRelTGap = 0;      // over id mismatches with two hits: |t_a - t_b| / t_b
+    size_t idMismatch = 0;  // different primitive (or hit vs miss)
+    size_t tDiffer = 0;     // same primitive, different t bits
+    size_t uvDiffer = 0;    // same triangle, different barycentrics
+    size_t missVsHit = 0;   // one path hit, the other missed
+    double maxRelTGap = 0;  // over id mismatches with two hits: |t_a - t_b| / t_b
     std::vector<size_t> mismatchPixels;
 };
 
