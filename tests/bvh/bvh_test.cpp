@@ -177,6 +177,38 @@ TEST(BvhBuild, ThreadsBuildTheSameTreeNodeForNode) {
     }
 }
 
+// Every node's box is the union of its primitives' boxes, padded as Build documents: the builder
+// bounds children while it partitions their parent, and a primitive left out there would leave a
+// box too small (or too large) for the kernels.
+TEST(BvhBuild, NodeBoxesAreTheirPrimitivesBoxesPadded) {
+    const float pad = 1e-4f;
+    for (uint32_t seed : {5u, 6u}) {
+        const std::vector<Bounds3f> boxes = RandomBoxes(seed, 100000, 1.0f, /*flat=*/seed == 5);
+        const Bvh t = Build(boxes, pad);
+        CheckTree(t, boxes, {});
+        auto outward = [&](float x, float dir) {
+            return x + dir * (pad + std::abs(x) * std::ldexp(1.0f, -20));
+        };
+        // Children come after their parent: bottom up is back to front.
+        std::vector<Bounds3f> tight(t.nodes.size());
+        for (size_t i = t.nodes.size(); i-- > 0;) {
+            const BinaryNode& n = t.nodes[i];
+            if (n.count > 0) {
+                for (uint32_t k = 0; k < n.count; ++k)
+                    tight[i].Grow(boxes[t.primIndex[n.first + k]]);
+            } else {
+                tight[i].Grow(tight[i + 1]);
+                tight[i].Grow(tight[n.first]);
+            }
+            for (int a = 0; a < 3; ++a) {
+                ASSERT_EQ(n.box.lo[a], outward(tight[i].lo[a], -1))
+                    << "node " << i << " axis " << a;
+                ASSERT_EQ(n.box.hi[a], outward(tight[i].hi[a], 1)) << "node " << i << " axis " << a;
+            }
+        }
+    }
+}
+
 TEST(BvhBuild, CoincidentCentroidsAreSplitByCount) {
     std::vector<Bounds3f> boxes(100);
     for (auto& b : boxes) {
