@@ -1,6 +1,7 @@
-/* Ray queries through the SAH kd-tree (include/rayclass/accel/kdtree.h), whose leaves hold their
- * primitives in the BVH's leaf blocks (RcBvhLeafBlock8), tested with the BVH's leaf routines
- * (bvh.cl), so the hits equal brute force's (lower id wins ties).
+/* Ray queries through the SAH kd-tree (include/rayclass/accel/kdtree.h). A leaf names a run of
+ * the tree's primitive ids (`prims`, ascending within the leaf); the primitives themselves are
+ * the scene's own arrays, tested with the routines brute force uses (intersect.cl) or their
+ * 16-lane twin, so the hits equal brute force's (lower id wins ties).
  *
  * A work-item answers 16 consecutive rays. A coherent packet (rc_bvh_load_packet's test: one
  * octant, a narrow cone, nearby origins) walks the tree once, float16 over its rays: each lane
@@ -29,10 +30,10 @@
 /* Walks the tree, unless the ray needs no walk (rc_ray_walks); with anyHit it returns at the
  * first hit. Returns the primitive tests done and adds the nodes visited to *visits. */
 inline uint rc_kd_trace(RcRay ray, int anyHit, __global const RcKdNode* nodes,
-                        __global const RcBvhLeafBlock8* blocks, float4 boxLo, float4 boxHi,
+                        __global const uint* prims, float4 boxLo, float4 boxHi,
                         __global const RcTriangle* triangles, __global const RcSphere* spheres,
-                        __global const RcQuadric* quadrics,
-                        __constant const RcRenderParams* params, RcHit* best, uint* visits) {
+                        __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
+                        RcHit* best, uint* visits) {
     const float3 o = ray.origin.xyz, d = ray.direction.xyz;
     float3 inv;
     float tn, tf;
@@ -74,10 +75,14 @@ inline uint rc_kd_trace(RcRay ray, int anyHit, __global const RcKdNode* nodes,
             continue;
         }
         const uint count = nd.word >> 2;
-        if (count > 0 && RC_BVH_LEAF(count, blocks + nd.data, o, d, ray.origin.w, ray.direction.w,
-                                     anyHit, triangles, spheres, quadrics, params->nTriangles,
-                                     params->nSpheres, best, &tests))
-            return tests;
+        for (uint k = nd.data; k < nd.data + count; ++k) {
+            ++tests;
+            if (rc_intersect_primitive(prims[k], o, d, ray.origin.w, ray.direction.w, triangles,
+                                       spheres, quadrics, params->nTriangles, params->nSpheres,
+                                       best) &&
+                anyHit)
+                return tests;
+        }
         for (;;) {
             if (sp == 0) return tests;
             --sp;
@@ -95,9 +100,9 @@ inline uint rc_kd_trace(RcRay ray, int anyHit, __global const RcKdNode* nodes,
  * its interval there is not empty and does not begin beyond its reach (its nearest hit, or -inf
  * once blocked). */
 inline uint16 rc_kd_trace_packet(const RcBvhPacket* p, int anyHit, __global const RcKdNode* nodes,
-                                 __global const RcBvhLeafBlock8* blocks, float4 boxLo,
-                                 float4 boxHi, float16* bt, uint16* bp, float16* bu, float16* bv,
-                                 int16* blocked, uint16* visits) {
+                                 __global const uint* prims, __global const RcTriangle* triangles,
+                                 float4 boxLo, float4 boxHi, float16* bt, uint16* bp, float16* bu,
+                                 float16* bv, int16* blocked, uint16* visits) {
     const float slackAbs = boxLo.w;
     float16 tn, tf;
     rc_accel_clip16(p, boxLo, boxHi, &tn, &tf);
@@ -148,17 +153,14 @@ inline uint16 rc_kd_trace_packet(const RcBvhPacket* p, int anyHit, __global cons
                 continue;
             }
             const uint count = nd.word >> 2;
-            __global const RcBvhLeafBlock8* blk = blocks + nd.data;
-            for (uint k = 0; k < count; ++k) {
+            for (uint k = nd.data; k < nd.data + count; ++k) {
                 const int16 lanes = (tn <= reach) & (tn <= tf);
                 tests += as_uint16(lanes) & (uint16)(1);
-                __global const RcBvhLeafBlock8* b = blk + k / 8;
-                const uint lane = k % 8;
-                const int16 hit = rc_accel_triangle16(
-                    p, lanes, (float3)(b->v0x[lane], b->v0y[lane], b->v0z[lane]),
-                    (float3)(b->e1x[lane], b->e1y[lane], b->e1z[lane]),
-                    (float3)(b->e2x[lane], b->e2y[lane], b->e2z[lane]), b->prim[lane], bt, bp, bu,
-                    bv);
+                const uint prim = prims[k];
+                const float3 v0 = triangles[prim].v0.xyz;
+                const int16 hit =
+                    rc_accel_triangle16(p, lanes, v0, triangles[prim].v1.xyz - v0,
+                                        triangles[prim].v2.xyz - v0, prim, bt, bp, bu, bv);
                 if (anyHit) {
                     *blocked |= hit;
                     reach = select(reach, (float16)(-INFINITY), hit);
@@ -179,14 +181,15 @@ inline uint16 rc_kd_trace_packet(const RcBvhPacket* p, int anyHit, __global cons
 /* The coherent-packet walk's answers for rays [first, first + 16): nearest hits, or blocked
  * flags when anyHit. */
 inline void rc_kd_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
-                         __global const RcKdNode* nodes, __global const RcBvhLeafBlock8* blocks,
-                         float4 boxLo, float4 boxHi, __global RcHit* hits,
-                         __global uchar* blockedOut, __global uint* counters) {
+                         __global const RcKdNode* nodes, __global const uint* prims,
+                         __global const RcTriangle* triangles, float4 boxLo, float4 boxHi,
+                         __global RcHit* hits, __global uchar* blockedOut,
+                         __global uint* counters) {
     float16 bt = p->tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
     uint16 bp = (uint16)(RC_NO_HIT), visits = (uint16)(0);
     int16 blocked = (int16)(0);
-    const uint16 tests = rc_kd_trace_packet(p, anyHit, nodes, blocks, boxLo, boxHi, &bt, &bp, &bu,
-                                            &bv, &blocked, &visits);
+    const uint16 tests = rc_kd_trace_packet(p, anyHit, nodes, prims, triangles, boxLo, boxHi, &bt,
+                                            &bp, &bu, &bv, &blocked, &visits);
     rc_accel_store_packet(anyHit, first, n, bt, bp, bu, bv, blocked, tests, visits, hits,
                           blockedOut, counters);
 }
@@ -194,21 +197,21 @@ inline void rc_kd_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
 /* The answers of rays [first, first + 16): nearest hits, or with anyHit blocked flags, and
  * their counters. A coherent packet walks the tree once, other rays one by one. */
 inline void rc_kd_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
-                         __global const RcKdNode* nodes, __global const RcBvhLeafBlock8* blocks,
-                         float4 boxLo, float4 boxHi, __global const RcTriangle* triangles,
+                         __global const RcKdNode* nodes, __global const uint* prims, float4 boxLo,
+                         float4 boxHi, __global const RcTriangle* triangles,
                          __global const RcSphere* spheres, __global const RcQuadric* quadrics,
                          __constant const RcRenderParams* params, __global RcHit* hits,
                          __global uchar* blockedOut, __global uint* counters) {
     RcBvhPacket p;
     if (rc_accel_load_packet(rays, first, n, anyHit, boxLo, boxHi, params, &p)) {
-        rc_kd_packet(&p, anyHit, first, n, nodes, blocks, boxLo, boxHi, hits, blockedOut,
+        rc_kd_packet(&p, anyHit, first, n, nodes, prims, triangles, boxLo, boxHi, hits, blockedOut,
                      counters);
         return;
     }
     for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
         RcHit best = rc_no_hit(rays[i].direction.w);
         uint visits = 0;
-        const uint tests = rc_kd_trace(rays[i], anyHit, nodes, blocks, boxLo, boxHi, triangles,
+        const uint tests = rc_kd_trace(rays[i], anyHit, nodes, prims, boxLo, boxHi, triangles,
                                        spheres, quadrics, params, &best, &visits);
         rc_accel_store_ray(anyHit, i, n, best, tests, visits, hits, blockedOut, counters);
     }
@@ -216,26 +219,24 @@ inline void rc_kd_answer(int anyHit, __global const RcRay* rays, uint first, uin
 
 /* One work-item per 16 rays rays[16 i, 16 i + 16). */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_kdtree(
-    __global const RcRay* rays, uint n, __global const RcKdNode* nodes,
-    __global const RcBvhLeafBlock8* blocks, float4 boxLo, float4 boxHi,
-    __global const RcTriangle* triangles, __global const RcSphere* spheres,
-    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
-    __global RcHit* hits, __global uint* counters) {
+    __global const RcRay* rays, uint n, __global const RcKdNode* nodes, __global const uint* prims,
+    float4 boxLo, float4 boxHi, __global const RcTriangle* triangles,
+    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+    __constant const RcRenderParams* params, __global RcHit* hits, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    rc_kd_answer(0, rays, first, n, nodes, blocks, boxLo, boxHi, triangles, spheres, quadrics,
+    rc_kd_answer(0, rays, first, n, nodes, prims, boxLo, boxHi, triangles, spheres, quadrics,
                  params, hits, 0, counters);
 }
 
 /* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_kdtree(
-    __global const RcRay* rays, uint n, __global const RcKdNode* nodes,
-    __global const RcBvhLeafBlock8* blocks, float4 boxLo, float4 boxHi,
-    __global const RcTriangle* triangles, __global const RcSphere* spheres,
-    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
-    __global uchar* blocked, __global uint* counters) {
+    __global const RcRay* rays, uint n, __global const RcKdNode* nodes, __global const uint* prims,
+    float4 boxLo, float4 boxHi, __global const RcTriangle* triangles,
+    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+    __constant const RcRenderParams* params, __global uchar* blocked, __global uint* counters) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    rc_kd_answer(1, rays, first, n, nodes, blocks, boxLo, boxHi, triangles, spheres, quadrics,
+    rc_kd_answer(1, rays, first, n, nodes, prims, boxLo, boxHi, triangles, spheres, quadrics,
                  params, 0, blocked, counters);
 }

@@ -20,10 +20,18 @@ class BvhQuery final : public RayQuery {
           scene_(scene),
           nodes_(UploadVector(ctx, tree.nodes)),
           blocks_(UploadVector(ctx, tree.blocks)),
+          bytes_(double(tree.nodes.size() * sizeof(RcBvh8Node) +
+                        tree.blocks.size() * sizeof(RcBvhLeafBlock8))),
           intersect_(program, "rc_intersect_bvh"),
           occluded_(program, "rc_occluded_bvh") {}
 
     std::string Name() const override { return "bvh"; }
+
+    QueryStats Stats() const override {
+        QueryStats stats;
+        stats.accel["bvh_bytes"] = bytes_;
+        return stats;
+    }
 
     QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch*,
                           const cl::Buffer& hits, const ShadeBuffers&,
@@ -55,6 +63,7 @@ class BvhQuery final : public RayQuery {
     clrt::Context& ctx_;
     const SceneBuffers& scene_;
     cl::Buffer nodes_, blocks_;
+    double bytes_;
     cl::Kernel intersect_, occluded_;
     GrowingBuffer testsBuffer_;
     std::vector<uint32_t> tests_;
