@@ -13,6 +13,7 @@
 #include "intersect.cl"
 #include "bvh.cl"
 #include "accel_common.cl"
+#include "vec16.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -57,28 +58,6 @@ inline int rc_cone_sphere(RcCone cone, float cx, float cy, float cz, float r) {
 #define RC_CONE_MAX_HALF_ANGLE (89.0f * M_PI_F / 180.0f)
 #define RC_CONE_ANGLE_MARGIN 1e-4f
 
-/* A 3-vector a lane. */
-typedef struct RcVec16 {
-    float16 x, y, z;
-} RcVec16;
-
-inline RcVec16 rc_v16(float16 x, float16 y, float16 z) {
-    RcVec16 v;
-    v.x = x, v.y = y, v.z = z;
-    return v;
-}
-inline RcVec16 rc_v16_add(RcVec16 a, RcVec16 b) { return rc_v16(a.x + b.x, a.y + b.y, a.z + b.z); }
-inline RcVec16 rc_v16_sub(RcVec16 a, RcVec16 b) { return rc_v16(a.x - b.x, a.y - b.y, a.z - b.z); }
-inline RcVec16 rc_v16_scale(RcVec16 a, float16 s) { return rc_v16(a.x * s, a.y * s, a.z * s); }
-inline float16 rc_v16_dot(RcVec16 a, RcVec16 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline float16 rc_v16_length(RcVec16 a) { return sqrt(rc_v16_dot(a, a)); }
-inline RcVec16 rc_v16_cross(RcVec16 a, RcVec16 b) {
-    return rc_v16(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
-/* b where `take`, else a. */
-inline RcVec16 rc_v16_select(RcVec16 a, RcVec16 b, int16 take) {
-    return rc_v16(select(a.x, b.x, take), select(a.y, b.y, take), select(a.z, b.z, take));
-}
 /* The angle between a and b (any lengths), accurate down to 0. */
 inline float16 rc_v16_angle(RcVec16 a, RcVec16 b) {
     return atan2(rc_v16_length(rc_v16_cross(a, b)), rc_v16_dot(a, b));

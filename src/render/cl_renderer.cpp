@@ -285,7 +285,7 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
       cam_(basis_.ToDevice()),
       camBuffer_(UploadVector(ctx, std::vector<RcCamera>{cam_})),
       eyeKernel_(program_, "rc_generate_eye_rays"),
-      shadeKernel_(program_, "rc_shade"),
+      shadeKernel_(program_, "rc_shade16"),
       batch_(BatchRays(options.batchRays, basis_.window.PixelCount(), params_.nLights,
                        ctx.info().maxAllocBytes)),
       buffers_(ctx, batch_, params_.nLights),
@@ -400,7 +400,7 @@ void Frame::Shade(const Batch& b) {
             s.triangleShading, s.spheres, s.quadrics, s.materials, s.lights, s.params,
             shade.radiance, shade.NormalsOut(), shade.shadow.rays, shade.shadow.contribution,
             shade.secondary.rays, shade.secondary.info, shade.spawned);
-    Launch(ctx_, shadeKernel_, b.n, timer_);
+    Launch(ctx_, shadeKernel_, (b.n + 15) / 16, timer_);  // 16 rays a work-item
 }
 
 void Frame::Occlude(const ShadowSlots& shadow) {

@@ -33,9 +33,9 @@ cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extr
                                bool* fromCache) {
     const std::string options = "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
                                 (extraOptions.empty() ? "" : " " + extraOptions);
-    return ctx.BuildProgram({"camera.cl", "intersect.cl", "encoding.cl", "shade.cl",
-                             "generation.cl", "brute.cl", "classified.cl", "bvh.cl",
-                             "kdtree.cl", "grid.cl", "cones.cl", "patch_stats.cl"},
+    return ctx.BuildProgram({"camera.cl", "intersect.cl", "encoding.cl", "shade.cl", "shade16.cl",
+                             "generation.cl", "brute.cl", "classified.cl", "bvh.cl", "kdtree.cl",
+                             "grid.cl", "cones.cl", "patch_stats.cl"},
                             options, fromCache);
 }
 
