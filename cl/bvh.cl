@@ -3,10 +3,9 @@
  * first, a leaf's triangles eight at a time from its blocks (bvh/leaf_blocks.h) with the
  * operations of the scalar routine, its other primitives through the routines every other query
  * uses (intersect.cl, lower id wins ties), so the hits equal brute force's exactly. Node
- * boxes are padded on the host, quantised outward (RcBvh8QNode), and the slab test's far
- * distance is widened by 2 gamma(3) (Ize 2013), so rounding never culls a primitive the routines
- * would hit. tests[i] counts primitive tests (in a packet, the tests of every leaf the packet
- * visits while ray i is active). */
+ * boxes are padded on the host and the slab test's far distance is widened by 2 gamma(3) (Ize
+ * 2013), so rounding never culls a primitive the routines would hit. tests[i] counts primitive
+ * tests (in a packet, the tests of every leaf the packet visits while ray i is active). */
 #include "rc_types.h"
 #include "intersect.cl"
 
@@ -14,14 +13,6 @@
 
 /* bvh::kStackEntries: the host keeps every walk within it. */
 #define RC_BVH_STACK 128
-
-/* The float a quantised node's grid step along one axis is (RcBvh8QNode), and its children's
- * bounds there: the values the host bracketed their boxes with. */
-inline float rc_bvh_step(uchar exponent) { return as_float((uint)exponent << 23); }
-inline float rc_bvh_bound(float origin, float step, uchar q) { return origin + (float)q * step; }
-inline float8 rc_bvh_bounds8(float origin, float step, __global const uchar* q) {
-    return origin + convert_float8(vload8(0, q)) * step;
-}
 
 /* min and max as one instruction each: the slab test below never meets a NaN. */
 inline float8 rc_min8(float8 a, float8 b) { return select(b, a, a < b); }
@@ -151,7 +142,7 @@ inline int rc_bvh_leaf(uint count, __global const RcBvhLeafBlock8* blk, float3 o
 
 /* Walks the tree; with anyHit it returns at the first hit. Returns the primitive tests done. */
 inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
-                         __global const RcBvh8QNode* nodes, __global const RcBvhLeafBlock8* blocks,
+                         __global const RcBvh8Node* nodes, __global const RcBvhLeafBlock8* blocks,
                          __global const RcTriangle* triangles, __global const RcSphere* spheres,
                          __global const RcQuadric* quadrics, uint nT, uint nS, RcHit* best) {
     const float8 ox = (float8)(o.x), oy = (float8)(o.y), oz = (float8)(o.z);
@@ -171,15 +162,10 @@ inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
                             triangles, spheres, quadrics, nT, nS, best, &tests))
                 return tests;
         } else {
-            __global const RcBvh8QNode* nd = nodes + ref;
-            const float sx = rc_bvh_step(nd->exponent[0]), sy = rc_bvh_step(nd->exponent[1]),
-                        sz = rc_bvh_step(nd->exponent[2]);
-            const float8 ax = (rc_bvh_bounds8(nd->origin[0], sx, nd->loX) - ox) * ix;
-            const float8 bx = (rc_bvh_bounds8(nd->origin[0], sx, nd->hiX) - ox) * ix;
-            const float8 ay = (rc_bvh_bounds8(nd->origin[1], sy, nd->loY) - oy) * iy;
-            const float8 by = (rc_bvh_bounds8(nd->origin[1], sy, nd->hiY) - oy) * iy;
-            const float8 az = (rc_bvh_bounds8(nd->origin[2], sz, nd->loZ) - oz) * iz;
-            const float8 bz = (rc_bvh_bounds8(nd->origin[2], sz, nd->hiZ) - oz) * iz;
+            __global const RcBvh8Node* nd = nodes + ref;
+            const float8 ax = (vload8(0, nd->loX) - ox) * ix, bx = (vload8(0, nd->hiX) - ox) * ix;
+            const float8 ay = (vload8(0, nd->loY) - oy) * iy, by = (vload8(0, nd->hiY) - oy) * iy;
+            const float8 az = (vload8(0, nd->loZ) - oz) * iz, bz = (vload8(0, nd->hiZ) - oz) * iz;
             const float8 tn = rc_max8(rc_max8(rc_min8(ax, bx), rc_min8(ay, by)),
                                       rc_max8(rc_min8(az, bz), (float8)(tmin)));
             const float8 tf =
@@ -302,16 +288,11 @@ inline void rc_packet_store_blocked(uint first, uint n, int16 blocked, __global 
 /* The largest spread of a packet's origins that walks as one, squared: a 32nd of the diagonal
  * of the root's children's boxes. Rays from scattered points share few nodes even when their
  * directions agree (shadow rays toward one light after several bounces). */
-inline float rc_bvh_max_spread2(__global const RcBvh8QNode* root) {
-    const float3 origin = (float3)(root->origin[0], root->origin[1], root->origin[2]);
-    const float3 step = (float3)(rc_bvh_step(root->exponent[0]), rc_bvh_step(root->exponent[1]),
-                                 rc_bvh_step(root->exponent[2]));
+inline float rc_bvh_max_spread2(__global const RcBvh8Node* root) {
     float3 lo = (float3)(INFINITY), hi = (float3)(-INFINITY);
     for (uint c = 0; c < root->nChildren; ++c) {
-        const uchar3 qlo = (uchar3)(root->loX[c], root->loY[c], root->loZ[c]);
-        const uchar3 qhi = (uchar3)(root->hiX[c], root->hiY[c], root->hiZ[c]);
-        lo = fmin(lo, origin + convert_float3(qlo) * step);
-        hi = fmax(hi, origin + convert_float3(qhi) * step);
+        lo = fmin(lo, (float3)(root->loX[c], root->loY[c], root->loZ[c]));
+        hi = fmax(hi, (float3)(root->hiX[c], root->hiY[c], root->hiZ[c]));
     }
     const float3 e = (hi - lo) * (1.0f / 32.0f);
     return dot(e, e);
@@ -370,7 +351,7 @@ inline int rc_bvh_load_packet(__global const RcRay* rays, uint first, uint n, in
 /* Walks the tree once for the packet: nearest hits in (bt, bp, bu, bv), or with anyHit the lanes
  * that found a hit in *blocked (a lane stops at its first). Returns primitive tests per lane. */
 inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
-                                  __global const RcBvh8QNode* nodes,
+                                  __global const RcBvh8Node* nodes,
                                   __global const RcBvhLeafBlock8* blocks, float16* bt, uint16* bp,
                                   float16* bu, float16* bv, int16* blocked) {
     uint stackRef[RC_BVH_STACK];
@@ -421,23 +402,15 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                 }
             }
         } else {
-            __global const RcBvh8QNode* nd = nodes + ref;
+            __global const RcBvh8Node* nd = nodes + ref;
             const float16 reach = rc_min16(p->tmax, *bt);
             uint r[8];
             float t[8];
             int k = 0;
-            const float sx = rc_bvh_step(nd->exponent[0]), sy = rc_bvh_step(nd->exponent[1]),
-                        sz = rc_bvh_step(nd->exponent[2]);
             for (uint c = 0; c < nd->nChildren; ++c) {
-                const float loX = rc_bvh_bound(nd->origin[0], sx, nd->loX[c]);
-                const float hiX = rc_bvh_bound(nd->origin[0], sx, nd->hiX[c]);
-                const float loY = rc_bvh_bound(nd->origin[1], sy, nd->loY[c]);
-                const float hiY = rc_bvh_bound(nd->origin[1], sy, nd->hiY[c]);
-                const float loZ = rc_bvh_bound(nd->origin[2], sz, nd->loZ[c]);
-                const float hiZ = rc_bvh_bound(nd->origin[2], sz, nd->hiZ[c]);
-                const float16 ax = (loX - p->ox) * p->ix, bx = (hiX - p->ox) * p->ix;
-                const float16 ay = (loY - p->oy) * p->iy, by = (hiY - p->oy) * p->iy;
-                const float16 az = (loZ - p->oz) * p->iz, bz = (hiZ - p->oz) * p->iz;
+                const float16 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
+                const float16 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
+                const float16 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
                 const float16 tn = rc_max16(rc_max16(rc_min16(ax, bx), rc_min16(ay, by)),
                                             rc_max16(rc_min16(az, bz), p->tmin));
                 const float16 tf =
@@ -520,7 +493,7 @@ inline void rc_ray_store_answer(int anyHit, uint i, RcHit best, __global RcHit* 
  * tests[ray] its primitive tests. A coherent packet walks the tree once, other rays one by
  * one. */
 inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
-                          __global const RcBvh8QNode* nodes, __global const RcBvhLeafBlock8* blocks,
+                          __global const RcBvh8Node* nodes, __global const RcBvhLeafBlock8* blocks,
                           __global const RcTriangle* triangles, __global const RcSphere* spheres,
                           __global const RcQuadric* quadrics,
                           __constant const RcRenderParams* params, __global RcHit* hits,
@@ -552,7 +525,7 @@ inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, ui
 
 /* One work-item per 16 rays rays[16 i, 16 i + 16). */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_bvh(
-    __global const RcRay* rays, uint n, __global const RcBvh8QNode* nodes,
+    __global const RcRay* rays, uint n, __global const RcBvh8Node* nodes,
     __global const RcBvhLeafBlock8* blocks, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
     __constant const RcRenderParams* params, __global RcHit* hits, __global uint* tests) {
@@ -564,7 +537,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
 
 /* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_bvh(
-    __global const RcRay* rays, uint n, __global const RcBvh8QNode* nodes,
+    __global const RcRay* rays, uint n, __global const RcBvh8Node* nodes,
     __global const RcBvhLeafBlock8* blocks, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
     __constant const RcRenderParams* params, __global uchar* blocked, __global uint* tests) {

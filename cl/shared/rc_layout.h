@@ -139,18 +139,6 @@
     FIELD(RcBvh8Node, child)             \
     FIELD(RcBvh8Node, nChildren)         \
     FIELD(RcBvh8Node, pad)               \
-    STRUCT(RcBvh8QNode)                  \
-    FIELD(RcBvh8QNode, origin)           \
-    FIELD(RcBvh8QNode, exponent)         \
-    FIELD(RcBvh8QNode, nChildren)        \
-    FIELD(RcBvh8QNode, loX)              \
-    FIELD(RcBvh8QNode, loY)              \
-    FIELD(RcBvh8QNode, loZ)              \
-    FIELD(RcBvh8QNode, hiX)              \
-    FIELD(RcBvh8QNode, hiY)              \
-    FIELD(RcBvh8QNode, hiZ)              \
-    FIELD(RcBvh8QNode, child)            \
-    FIELD(RcBvh8QNode, pad)              \
     STRUCT(RcKdNode)                     \
     FIELD(RcKdNode, word)                \
     FIELD(RcKdNode, data)                \

@@ -9,12 +9,10 @@
 
 #ifdef __OPENCL_VERSION__
 typedef uint rc_uint;
-typedef uchar rc_uchar;
 typedef float4 rc_float4;
 #else
 #include <cstdint>
 typedef uint32_t rc_uint;
-typedef uint8_t rc_uchar;
 struct alignas(16) rc_float4 {
     float x, y, z, w;
 };
@@ -223,12 +221,12 @@ typedef struct RcTriangleBlock16 {
     rc_uint pad[13];
 } RcTriangleBlock16;
 
-/* A node of the 8-wide bounding volume hierarchy as the host collapses it (include/rayclass/bvh/
- * bvh.h); the kernels walk it quantised (RcBvh8QNode). The boxes of up to eight children as
- * structure of arrays. Boxes are padded so that float rounding in the slab test never loses a
- * primitive the intersection routines would hit. child[c] for c < nChildren: another node's
- * index, or RC_BVH8_LEAF | (count - 1) << RC_BVH8_COUNT_SHIFT | first for a leaf whose
- * primitives' global ids are primIndex[first, first + count). 256 bytes. */
+/* A node of the 8-wide bounding volume hierarchy that cl/bvh.cl walks (--accel bvh;
+ * include/rayclass/bvh/bvh.h): the boxes of up to eight children as structure of arrays, one
+ * float8 per bound, so that one slab test covers them all. Boxes are padded so that float rounding
+ * in the slab test never loses a primitive the intersection routines would hit. child[c] for
+ * c < nChildren: another node's index, or RC_BVH8_LEAF | (count - 1) << RC_BVH8_COUNT_SHIFT | first
+ * for a leaf whose primitives' global ids are primIndex[first, first + count). 256 bytes. */
 #define RC_BVH8_LEAF 0x80000000u
 #define RC_BVH8_COUNT_SHIFT 27
 #define RC_BVH8_MAX_LEAF 16u           /* primitives in a leaf */
@@ -240,23 +238,6 @@ typedef struct RcBvh8Node {
     rc_uint nChildren;
     rc_uint pad[7];
 } RcBvh8Node;
-
-/* A node of the 8-wide hierarchy as cl/bvh.cl walks it (--accel bvh; include/rayclass/bvh/
- * leaf_blocks.h): RcBvh8Node's child boxes on a grid of 255 steps over the node's box, one byte
- * per bound, so that a node takes two cache lines instead of four. Along axis a, grid value q is
- * the float origin[a] + (float)q * 2^(exponent[a] - 127), computed in float (the product is
- * exact); lo and hi bracket the child's RcBvh8Node box in those floats, so the slab test sees a
- * box at least as large and loses no hit. The first 64 bytes hold what the slab test reads, the
- * next 32 the child references (RcBvh8Node's). 128 bytes. */
-typedef struct RcBvh8QNode {
-    float origin[3];
-    rc_uchar exponent[3];
-    rc_uchar nChildren;
-    rc_uchar loX[8], loY[8], loZ[8];
-    rc_uchar hiX[8], hiY[8], hiZ[8];
-    rc_uint child[8];
-    rc_uint pad[8];
-} RcBvh8QNode;
 
 /* A node of the SAH kd-tree that cl/kdtree.cl walks (--accel kdtree; include/rayclass/accel/
  * kdtree.h). word & 3 is the split axis of an inner node, 3 for a leaf; word >> 2 is the index

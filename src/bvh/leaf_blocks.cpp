@@ -3,8 +3,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "rayclass/bvh/quantised_node.h"
-
 namespace rayclass::bvh {
 
 namespace {
@@ -55,8 +53,7 @@ BlockedBvh BlockLeaves(std::vector<RcBvh8Node> nodes, std::span<const uint32_t> 
             node.child[c] = (ref & ~RC_BVH8_FIRST_MASK) | uint32_t(block);
         }
     }
-    out.nodes.reserve(nodes.size());
-    for (const RcBvh8Node& node : nodes) out.nodes.push_back(Quantise(node));
+    out.nodes = std::move(nodes);
     return out;
 }
 

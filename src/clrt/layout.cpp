@@ -6,7 +6,7 @@
 #include "rc_types.h"
 
 static_assert(sizeof(rc_float4) == 16 && alignof(rc_float4) == 16);
-static_assert(sizeof(rc_uint) == 4 && sizeof(rc_uchar) == 1);
+static_assert(sizeof(rc_uint) == 4);
 
 static_assert(sizeof(RcTriangle) == 48);
 static_assert(sizeof(RcTriangleShading) == 64);
@@ -24,7 +24,6 @@ static_assert(sizeof(RcLeaf) == 32);
 static_assert(sizeof(RcCandidate) == 8);
 static_assert(sizeof(RcTriangleBlock16) == 704);
 static_assert(sizeof(RcBvh8Node) == 256);
-static_assert(sizeof(RcBvh8QNode) == 128);
 static_assert(sizeof(RcKdNode) == 8);
 static_assert(sizeof(RcBvhLeafBlock8) == 320);
 static_assert(sizeof(RcCone) == 32 && alignof(RcCone) == 16);
@@ -46,5 +45,3 @@ static_assert(offsetof(RcMaterial, shininess) == 80);
 static_assert(offsetof(RcCamera, tanHalfFovX) == 64);
 static_assert(offsetof(RcRayInfo, depth) == 16);
 static_assert(offsetof(RcRenderParams, ambient) == 32);
-// The slab test reads only the first cache line of a quantised node.
-static_assert(offsetof(RcBvh8QNode, child) == 64);

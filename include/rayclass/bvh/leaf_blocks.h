@@ -1,7 +1,6 @@
 // The 8-wide hierarchy in the form cl/bvh.cl walks it: every leaf's primitives copied into blocks
 // of eight lanes (RcBvhLeafBlock8), so that the kernel tests a leaf's triangles with one float8
-// test per block instead of one primitive at a time, and reads them from one place; and its
-// nodes quantised (quantised_node.h).
+// test per block instead of one primitive at a time, and reads them from one place.
 #pragma once
 
 #include <cstdint>
@@ -14,15 +13,15 @@
 namespace rayclass::bvh {
 
 struct BlockedBvh {
-    // Collapse's nodes, quantised (quantised_node.h), each leaf reference RC_BVH8_LEAF |
-    // (count - 1) << RC_BVH8_COUNT_SHIFT | first naming the leaf's first block: its count
-    // primitives fill blocks[first, first + ceil(count / 8)) in primIndex order, lane by lane.
-    std::vector<RcBvh8QNode> nodes;
+    // Collapse's nodes, each leaf reference RC_BVH8_LEAF | (count - 1) << RC_BVH8_COUNT_SHIFT |
+    // first naming the leaf's first block: its count primitives fill blocks[first, first +
+    // ceil(count / 8)) in primIndex order, lane by lane.
+    std::vector<RcBvh8Node> nodes;
     std::vector<RcBvhLeafBlock8> blocks;
 };
 
 // `nodes` (Collapse's, whose leaves name positions in `primIndex`) over the primitives of
-// `scene` (global ids), quantised. Fails (std::runtime_error) when the blocks outnumber what a leaf
+// `scene` (global ids). Fails (std::runtime_error) when the blocks outnumber what a leaf
 // reference can address (RC_BVH8_FIRST_MASK + 1).
 BlockedBvh BlockLeaves(std::vector<RcBvh8Node> nodes, std::span<const uint32_t> primIndex,
                        const scene::Scene& scene);
