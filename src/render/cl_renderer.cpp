@@ -1,7 +1,6 @@
 #include "rayclass/render/cl_renderer.h"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cstdio>
 #include <functional>
@@ -124,43 +123,27 @@ struct ShadowSlots {
 
 // The batch's other outputs, read in place once the shadow query has answered: copies into host
 // arrays would fault in their pages again in every one-frame render. Hits and normals only for
-// the first-hit layers; the secondary rays only when they are to be ordered.
+// the first-hit layers.
 struct BatchOutputs {
     BatchOutputs(const cl::CommandQueue& q, const BatchBuffers& b, uint32_t n, uint32_t nLights,
-                 bool aovs, bool order)
+                 bool aovs)
         : radiance(q, b.shade.radiance, n),
           blocked(q, b.blocked, size_t(n) * nLights),
           spawned(q, b.shade.spawned, 2 * size_t(n)),
           hits(q, b.hits, aovs ? n : 0),
-          normals(q, b.shade.normals, aovs ? n : 0),
-          secondary(q, b.shade.secondary.rays, order ? 2 * size_t(n) : 0) {}
-    // Before the batch's compaction reads them and the batch after next writes them.
+          normals(q, b.shade.normals, aovs ? n : 0) {}
+    // Before the next batch's shading writes the buffers.
     void Unmap() {
         radiance.Unmap();
         blocked.Unmap();
         spawned.Unmap();
         hits.Unmap();
         normals.Unmap();
-        secondary.Unmap();
     }
     clrt::MappedRead<rc_float4> radiance;
     clrt::MappedRead<uint8_t> blocked, spawned;
     clrt::MappedRead<RcHit> hits;
     clrt::MappedRead<rc_float4> normals;
-    clrt::MappedRead<RcRay> secondary;
-};
-
-// A batch that the device has answered and shaded, its outputs mapped, whose host work (the
-// accumulation and the ray ordering) runs on a worker thread while the device traces the next
-// batch in the other set of buffers.
-struct AnsweredBatch {
-    AnsweredBatch(const Batch& batch, std::unique_ptr<ShadowSlots> shadowSlots,
-                  std::unique_ptr<BatchOutputs> outputs)
-        : b(batch), shadow(std::move(shadowSlots)), out(std::move(outputs)) {}
-    Batch b;
-    std::unique_ptr<ShadowSlots> shadow;
-    std::unique_ptr<BatchOutputs> out;
-    std::future<void> hostWork;  // declared last: an error path waits for it before the unmaps
 };
 
 // What a generation counts as its batches go by.
@@ -215,18 +198,12 @@ class Frame {
             Preparer preparer(
                 [this, generation, nRays](size_t page) { return Prepare(generation, nRays, page); },
                 nPages);
-            std::optional<AnsweredBatch> answered;
             for (size_t page = 0; page < nPages; ++page) {
                 const size_t first = page * batch_;
                 const Batch b{generation, page, first, uint32_t(std::min(batch_, nRays - first))};
-                auto shadow = TraceBatch(b, preparer.Next(page));
-                if (answered) FinishBatch(*answered);
-                answered.emplace(b, std::move(shadow), MapOutputs(b));
-                StartHostWork(*answered, tally);
-                tally.stats.rays += b.n;
+                TraceBatch(b, preparer.Next(page), tally);
                 ReportProgress(b, nRays);
             }
-            if (answered) FinishBatch(*answered);
             EndGeneration(generation, tally);
         }
         if (printedProgress_) std::fprintf(stderr, "\n");
@@ -242,19 +219,13 @@ class Frame {
     GenerationTally BeginGeneration(uint32_t generation, size_t nRays);
     void GenerateEyeRays(size_t nRays);
     std::unique_ptr<PreparedBatch> Prepare(uint32_t generation, size_t nRays, size_t page);
-    // The batch's buffers: consecutive batches alternate between two sets.
-    BatchBuffers& Buffers(const Batch& b) { return buffers_[b.page % buffers_.size()]; }
-    std::unique_ptr<ShadowSlots> TraceBatch(const Batch& b,
-                                            std::unique_ptr<PreparedBatch> prepared);
+    void TraceBatch(const Batch& b, std::unique_ptr<PreparedBatch> prepared,
+                    GenerationTally& tally);
     QueryResult Intersect(const Batch& b, std::unique_ptr<PreparedBatch> prepared);
     void Shade(const Batch& b);
-    void Occlude(const Batch& b, const ShadowSlots& shadow);
-    std::unique_ptr<BatchOutputs> MapOutputs(const Batch& b);
-    void StartHostWork(AnsweredBatch& answered, GenerationTally& tally);
-    void FinishBatch(AnsweredBatch& answered);
+    void Occlude(const ShadowSlots& shadow);
     void Accumulate(const Batch& b, const ShadowSlots& shadow, const BatchOutputs& out,
                     GenerationTally& tally);
-    void Order(const BatchOutputs& out);
     void Compact(const Batch& b);
     void ReportProgress(const Batch& b, size_t nRays);
     void EndGeneration(uint32_t generation, GenerationTally& tally);
@@ -277,12 +248,12 @@ class Frame {
     // Later generations are split into batches of the same size, so no buffer need be larger
     // than the image.
     const size_t batch_;
-    std::array<BatchBuffers, 2> buffers_;
+    BatchBuffers buffers_;
     cl::Kernel compactKernel_;
     PagePool pool_;
     RayPages rays_, next_;        // the generation in flight, and the one its batches spawn
     std::vector<uint32_t> live_;  // the batch's live secondary slots
-    RayOrder order_;              // the order Order gives them
+    RayOrder order_;              // the order Compact gives them
     // Some ray has spawned both a reflection and a refraction: a pixel may then have several
     // rays in a generation, whose contributions must reach it in the order they always did.
     bool branched_ = false;
@@ -317,7 +288,7 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
       shadeKernel_(program_, "rc_shade"),
       batch_(BatchRays(options.batchRays, basis_.window.PixelCount(), params_.nLights,
                        ctx.info().maxAllocBytes)),
-      buffers_{{{ctx, batch_, params_.nLights}, {ctx, batch_, params_.nLights}}},
+      buffers_(ctx, batch_, params_.nLights),
       compactKernel_(program_, "rc_compact_rays"),
       pool_(ctx, batch_),
       order_(scene.Bounds()),
@@ -382,45 +353,26 @@ std::unique_ptr<PreparedBatch> Frame::Prepare(uint32_t generation, size_t nRays,
                            uint32_t(std::min(batch_, nRays - page * batch_)), readQueue_, source);
 }
 
-// Intersect, shade, occlude; the shadow slots stay mapped for the accumulation.
-std::unique_ptr<ShadowSlots> Frame::TraceBatch(const Batch& b,
-                                               std::unique_ptr<PreparedBatch> prepared) {
+// Intersect, shade, occlude, accumulate, compact.
+void Frame::TraceBatch(const Batch& b, std::unique_ptr<PreparedBatch> prepared,
+                       GenerationTally& tally) {
     if (!Intersect(b, std::move(prepared)).shaded) Shade(b);
-    auto shadow = std::make_unique<ShadowSlots>(ctx_.queue(), Buffers(b).shade.shadow,
-                                                size_t(b.n) * params_.nLights);
-    Occlude(b, *shadow);
-    return shadow;
-}
-
-// Once the batch before has finished (its host work may branch the generation).
-std::unique_ptr<BatchOutputs> Frame::MapOutputs(const Batch& b) {
-    return std::make_unique<BatchOutputs>(ctx_.queue(), Buffers(b), b.n, params_.nLights,
-                                          b.generation == 0 && options_.aovs, !branched_);
-}
-
-// The accumulation and the ordering on a worker thread; the render thread goes on to the next
-// batch, whose kernels then have the other core. They need no OpenCL call: a call on the render
-// thread's queue would wait for the kernels enqueued there.
-void Frame::StartHostWork(AnsweredBatch& answered, GenerationTally& tally) {
-    answered.hostWork = std::async(std::launch::async, [this, &answered, &tally] {
-        Accumulate(answered.b, *answered.shadow, *answered.out, tally);
-        Order(*answered.out);
-    });
-}
-
-// Waits for the batch's host work, then compacts its live secondary rays.
-void Frame::FinishBatch(AnsweredBatch& answered) {
-    answered.hostWork.get();
-    answered.shadow->Unmap();
-    answered.out->Unmap();
-    Compact(answered.b);
+    ShadowSlots shadow(ctx_.queue(), buffers_.shade.shadow, size_t(b.n) * params_.nLights);
+    Occlude(shadow);
+    BatchOutputs out(ctx_.queue(), buffers_, b.n, params_.nLights,
+                     b.generation == 0 && options_.aovs);
+    Accumulate(b, shadow, out, tally);
+    shadow.Unmap();
+    out.Unmap();
+    Compact(b);
+    tally.stats.rays += b.n;
 }
 
 // The batch's nearest hits: the eye-hit source's for generation 0 where there is one, else the
 // query's.
 QueryResult Frame::Intersect(const Batch& b, std::unique_ptr<PreparedBatch> prepared) {
     const RayBuffers& rays = rays_.pages[b.page];
-    ShadeBuffers& shade = Buffers(b).shade;
+    ShadeBuffers& shade = buffers_.shade;
     // Eye rays have no infos (rc_types.h): the shading kernels take a null buffer for theirs.
     shade.rayInfo = b.generation == 0 ? cl::Buffer() : rays.info;
     shade.writeNormals = b.generation == 0 && options_.aovs;
@@ -428,11 +380,11 @@ QueryResult Frame::Intersect(const Batch& b, std::unique_ptr<PreparedBatch> prep
     if (newton_) newton_->Sample(rays.rays, b.n);
     if (HitsFromSource(b.generation)) {
         clrt::Check("clEnqueueWriteBuffer", [&] {
-            ctx_.queue().enqueueWriteBuffer(Buffers(b).hits, CL_FALSE, 0, b.n * sizeof(RcHit),
+            ctx_.queue().enqueueWriteBuffer(buffers_.hits, CL_FALSE, 0, b.n * sizeof(RcHit),
                                             eyeHits_.data() + b.first);
         });
     } else {
-        found = query_->Intersect(rays.rays, b.n, prepared.get(), Buffers(b).hits, shade, timer_);
+        found = query_->Intersect(rays.rays, b.n, prepared.get(), buffers_.hits, shade, timer_);
         query_->Recycle(std::move(prepared));
     }
     stats_.intersectionTests += found.tests;
@@ -442,19 +394,18 @@ QueryResult Frame::Intersect(const Batch& b, std::unique_ptr<PreparedBatch> prep
 // Shading of the batch's hits, for queries whose kernels do not shade: radiance, normals, the
 // shadow slots and the secondary rays it spawns.
 void Frame::Shade(const Batch& b) {
-    const ShadeBuffers& shade = Buffers(b).shade;
+    const ShadeBuffers& shade = buffers_.shade;
     const SceneBuffers& s = sceneBuffers_;
-    SetArgs(shadeKernel_, rays_.pages[b.page].rays, shade.rayInfo, Buffers(b).hits, b.n,
-            s.triangles, s.triangleShading, s.spheres, s.quadrics, s.materials, s.lights, s.params,
+    SetArgs(shadeKernel_, rays_.pages[b.page].rays, shade.rayInfo, buffers_.hits, b.n, s.triangles,
+            s.triangleShading, s.spheres, s.quadrics, s.materials, s.lights, s.params,
             shade.radiance, shade.NormalsOut(), shade.shadow.rays, shade.shadow.contribution,
             shade.secondary.rays, shade.secondary.info, shade.spawned);
     Launch(ctx_, shadeKernel_, b.n, timer_);
 }
 
-void Frame::Occlude(const Batch& b, const ShadowSlots& shadow) {
-    const BatchBuffers& buffers = Buffers(b);
+void Frame::Occlude(const ShadowSlots& shadow) {
     stats_.intersectionTests +=
-        query_->Occluded(buffers.shade.shadow.rays, shadow.rays.span(), buffers.blocked, timer_);
+        query_->Occluded(buffers_.shade.shadow.rays, shadow.rays.span(), buffers_.blocked, timer_);
 }
 
 // Adds the batch's radiance and unblocked shadow contributions to its pixels, in ray order (so a
@@ -496,28 +447,24 @@ void Frame::Accumulate(const Batch& b, const ShadowSlots& shadow, const BatchOut
     hostSeconds_ += SecondsSince(t0);
 }
 
-// Puts the batch's live secondary slots (and their pixels) in RayOrder's order while every pixel
-// has at most one ray in a generation: a pixel's contributions then arrive in generation order
-// whatever the order of the rays.
-void Frame::Order(const BatchOutputs& out) {
-    if (branched_ || live_.size() <= 1) return;
-    const auto t0 = Clock::now();
-    order_.Sort(out.secondary.span(), live_,
-                std::span(next_.pixels).subspan(next_.pixels.size() - live_.size()));
-    hostSeconds_ += SecondsSince(t0);
-}
-
 // Copies the batch's live secondary rays to the end of the next generation's pages (new pages
-// from the pool), in the order Order gave them; the batch's own page goes back to the pool,
-// answered and shaded.
+// from the pool), in RayOrder's order while every pixel has at most one ray in a generation (a
+// pixel's contributions then arrive in generation order whatever the order of the rays); the
+// batch's own page goes back to the pool, answered and shaded.
 void Frame::Compact(const Batch& b) {
     const size_t pageRays = pool_.PageRays();
     const size_t count = next_.pixels.size() - live_.size();  // rays on the pages before these
-    const BatchBuffers& buffers = Buffers(b);
-    const RayBuffers& secondary = buffers.shade.secondary;
+    const RayBuffers& secondary = buffers_.shade.secondary;
+    if (!branched_ && live_.size() > 1) {
+        const auto t0 = Clock::now();
+        clrt::MappedRead<RcRay> rays(ctx_.queue(), secondary.rays, 2 * size_t(b.n));
+        order_.Sort(rays.span(), live_, std::span(next_.pixels).subspan(count));
+        rays.Unmap();
+        hostSeconds_ += SecondsSince(t0);
+    }
     if (!live_.empty()) {
         clrt::Check("clEnqueueWriteBuffer", [&] {
-            ctx_.queue().enqueueWriteBuffer(buffers.liveSlots, CL_FALSE, 0,
+            ctx_.queue().enqueueWriteBuffer(buffers_.liveSlots, CL_FALSE, 0,
                                             live_.size() * sizeof(uint32_t), live_.data());
         });
     }
@@ -525,7 +472,7 @@ void Frame::Compact(const Batch& b) {
         const size_t offset = (count + done) % pageRays;
         if (offset == 0) next_.pages.push_back(pool_.Take());
         const uint32_t m = uint32_t(std::min(live_.size() - done, pageRays - offset));
-        SetArgs(compactKernel_, secondary.rays, secondary.info, buffers.liveSlots, uint32_t(done),
+        SetArgs(compactKernel_, secondary.rays, secondary.info, buffers_.liveSlots, uint32_t(done),
                 m, next_.pages.back().rays, next_.pages.back().info, uint32_t(offset));
         Launch(ctx_, compactKernel_, m, timer_);
         done += m;
