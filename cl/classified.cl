@@ -248,7 +248,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     hits[id] = hit;
     tests[slot] = tested;
     const RcRayInfo info = rc_ray_info(infos, id);
-    rc_shade_ray(id, &ray, &info, hit, 0, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
+    rc_shade_ray(id, &ray, &info, hit, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
 }
 
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_vertex(

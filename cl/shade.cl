@@ -193,32 +193,10 @@ RC_SHADE_INLINE void rc_spawn(__global RcRay* secondary, __global RcRayInfo* sec
     spawned[slot] = 1;
 }
 
-/* The surface of a hit as rc_shade_lights reads it back: p and the material, ng and whether the
- * ray enters (the shading normal is normals[i]). */
-RC_SHADE_INLINE void rc_save_surface(__global float4* saved, uint i, const RcSurface* s) {
-    saved[2 * i] = (float4)(s->p, as_float(s->material));
-    saved[2 * i + 1] = (float4)(s->ng, (float)s->entering);
-}
-
-RC_SHADE_INLINE RcSurface rc_saved_surface(__global const float4* saved,
-                                           __global const float4* normals, uint i) {
-    const float4 a = saved[2 * i], b = saved[2 * i + 1];
-    RcSurface s;
-    s.p = a.xyz;
-    s.material = as_uint(a.w);
-    s.ng = b.xyz;
-    s.entering = (int)b.w;
-    s.ns = normals[i].xyz;
-    return s;
-}
-
-/* Shades the hit of ray i: radiance, normal (unless `normals` is null), the reflection and
- * refraction rays and, when
- * `saved` is null, every light's shadow slot; else its surface goes to `saved` for the
- * per-(ray, light) pass, which then needs no second look at the primitive. */
+/* Shades the hit of ray i: radiance, normal (unless `normals` is null), every light's shadow
+ * slot, and the reflection and refraction rays. */
 RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* info, RcHit hit,
-                                  __global float4* saved, RC_SHADE_SCENE_PARAMS,
-                                  RC_SHADE_OUT_PARAMS) {
+                                  RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
     const uint nLights = params->nLights;
     const float3 weight = info->weight.xyz;
     spawned[2 * i] = 0;
@@ -226,10 +204,8 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* inf
     if (hit.prim == RC_NO_HIT) {
         radiance[i] = (float4)(weight * params->background.xyz, 0.0f);
         if (normals) normals[i] = (float4)(0.0f);
-        if (!saved) {
-            for (uint l = 0; l < nLights; ++l)
-                rc_no_shadow(shadowRays, shadowContribution, i * nLights + l);
-        }
+        for (uint l = 0; l < nLights; ++l)
+            rc_no_shadow(shadowRays, shadowContribution, i * nLights + l);
         return;
     }
     const float3 o = ray->origin.xyz, d = ray->direction.xyz;
@@ -238,12 +214,8 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* inf
     __global const RcMaterial* m = materials + s.material;
     radiance[i] = (float4)(weight * (m->emission.xyz + m->kd.xyz * params->ambient.xyz), 0.0f);
     if (normals) normals[i] = (float4)(s.ns, 0.0f);
-    if (saved) {
-        rc_save_surface(saved, i, &s);
-    } else {
-        for (uint l = 0; l < nLights; ++l)
-            rc_shade_light(i, l, ray, info, &s, m, lights, params, shadowRays, shadowContribution);
-    }
+    for (uint l = 0; l < nLights; ++l)
+        rc_shade_light(i, l, ray, info, &s, m, lights, params, shadowRays, shadowContribution);
 
     const float3 kr = m->kr.xyz, kt = m->kt.xyz;
     if (fmax(fmax(kr.x, fmax(kr.y, kr.z)), fmax(kt.x, fmax(kt.y, kt.z))) <= 0.0f) return;
@@ -279,7 +251,8 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* inf
     }
 }
 
-/* Every ray of the batch, lights included. */
+/* Every ray of the batch, lights included, a ray a work-item: the renderer shades with
+ * rc_shade16 (cl/shade16.cl), and the tests hold that to this. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade(
     __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits, uint n,
     RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
@@ -287,44 +260,5 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shad
     if (i >= n) return;
     const RcRay ray = rays[i];
     const RcRayInfo info = rc_ray_info(infos, i);
-    rc_shade_ray(i, &ray, &info, hits[i], 0, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
-}
-
-/* The rays ids[0, nIds) of the batch, or its rays [0, nIds) when ids is null (the fragment pass
- * answered them all, and a list 0, 1, 2, ... would cost a host pass and a copy); their lights
- * are rc_shade_lights', from the surfaces saved here (two float4 per ray of the batch), or,
- * when surfaces is null, shaded here. */
-__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade_ids(
-    __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits,
-    __global const uint* ids, uint nIds, __global float4* surfaces, RC_SHADE_SCENE_PARAMS,
-    RC_SHADE_OUT_PARAMS) {
-    const uint j = get_global_id(0);
-    if (j >= nIds) return;
-    const uint i = ids ? ids[j] : j;
-    const RcRay ray = rays[i];
-    const RcRayInfo info = rc_ray_info(infos, i);
-    rc_shade_ray(i, &ray, &info, hits[i], surfaces, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
-}
-
-/* The thesis's second fragment pass: one work-item per (ray, light) pair of the rays ids[0, nIds)
- * (or [0, nIds) when ids is null), so every lane of a vector does the same light computation. */
-__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade_lights(
-    __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits,
-    __global const uint* ids, uint nIds, __global const float4* surfaces,
-    __global const float4* normals, RC_SHADE_SCENE_PARAMS, __global RcRay* shadowRays,
-    __global float4* shadowContribution) {
-    const uint j = get_global_id(0);
-    const uint nLights = params->nLights;
-    if (j >= nIds * nLights) return;
-    const uint i = ids ? ids[j / nLights] : j / nLights, l = j % nLights;
-    const RcHit hit = hits[i];
-    if (hit.prim == RC_NO_HIT) {
-        rc_no_shadow(shadowRays, shadowContribution, i * nLights + l);
-        return;
-    }
-    const RcRay ray = rays[i];
-    const RcRayInfo info = rc_ray_info(infos, i);
-    const RcSurface s = rc_saved_surface(surfaces, normals, i);
-    rc_shade_light(i, l, &ray, &info, &s, materials + s.material, lights, params, shadowRays,
-                   shadowContribution);
+    rc_shade_ray(i, &ray, &info, hits[i], RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
 }

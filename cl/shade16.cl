@@ -11,13 +11,14 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-#define RC_FOR_LANES(M)                                                                           \
-    M(0, s0)                                                                                      \
-    M(1, s1)                                                                                      \
-    M(2, s2)                                                                                      \
-    M(3, s3)                                                                                      \
-    M(4, s4) M(5, s5) M(6, s6) M(7, s7) M(8, s8) M(9, s9) M(10, sa) M(11, sb) M(12, sc) M(13, sd) \
-        M(14, se) M(15, sf)
+#define RC_FOR_LANES(M)                                                                            \
+    M(0, s0)                                                                                       \
+    M(1, s1)                                                                                       \
+    M(2, s2)                                                                                       \
+    M(3, s3)                                                                                       \
+    M(4, s4)                                                                                       \
+    M(5, s5) M(6, s6) M(7, s7) M(8, s8) M(9, s9) M(10, sa) M(11, sb) M(12, sc) M(13, sd) M(14, se) \
+        M(15, sf)
 
 /* The components of 16 float4s as lanes: the float4s concatenated four to a float16 and their
  * components sorted by swizzles, shuffles of whole registers (a lane at a time took an insert
@@ -143,27 +144,34 @@ RC_SHADE_INLINE void rc_surface16(RcShadeLanes* L, RcVec16 o, float16 t, uint16 
                                   __global const RcSphere* spheres,
                                   __global const RcQuadric* quadrics,
                                   __constant const RcRenderParams* params) {
-    const float16 w = 1.0f - u - v;
-    L->p = rc_v16_add(rc_v16_add(rc_v16_scale(p0, w), rc_v16_scale(p1, u)), rc_v16_scale(p2, v));
-    RcVec16 n = rc_v16_cross(rc_v16_sub(p1, p0), rc_v16_sub(p2, p0));
-    const float16 nn = rc_v16_dot(n, n);
-    const float16 len = sqrt(nn);
-    n = rc_v16_select(rc_v16_neg(L->d), rc_v16(n.x / len, n.y / len, n.z / len), len > 0.0f);
-    L->ng = n;
-    L->ns = n;
     /* Lanes where length or normalize would rescale, and hits other than triangles. */
-    int16 scalar = L->hit & (~triangle | rc_rescaled16(nn));
-    if (any(hasNormals)) {
-        const RcVec16 ni = rc_v16_add(
-            rc_v16_add(rc_v16_scale(rc_lanes_xyz(n0), w), rc_v16_scale(rc_lanes_xyz(n1), u)),
-            rc_v16_scale(rc_lanes_xyz(n2), v));
-        const float16 ii = rc_v16_dot(ni, ni);
-        L->ns = rc_v16_select(n, rc_v16_scale(ni, 1.0f / sqrt(ii)), hasNormals);
-        scalar |= L->hit & hasNormals & rc_rescaled16(ii);
+    int16 scalar = L->hit & ~triangle;
+    const RcVec16 zero = rc_v16(0.0f, 0.0f, 0.0f);
+    L->p = L->ng = L->ns = zero;
+    L->entering = 0;
+    if (any(L->hit & triangle)) {
+        const float16 w = 1.0f - u - v;
+        L->p =
+            rc_v16_add(rc_v16_add(rc_v16_scale(p0, w), rc_v16_scale(p1, u)), rc_v16_scale(p2, v));
+        RcVec16 n = rc_v16_cross(rc_v16_sub(p1, p0), rc_v16_sub(p2, p0));
+        const float16 nn = rc_v16_dot(n, n);
+        const float16 len = sqrt(nn);
+        n = rc_v16_select(rc_v16_neg(L->d), rc_v16(n.x / len, n.y / len, n.z / len), len > 0.0f);
+        L->ng = n;
+        L->ns = n;
+        scalar |= L->hit & rc_rescaled16(nn);
+        if (any(hasNormals)) {
+            const RcVec16 ni = rc_v16_add(
+                rc_v16_add(rc_v16_scale(rc_lanes_xyz(n0), w), rc_v16_scale(rc_lanes_xyz(n1), u)),
+                rc_v16_scale(rc_lanes_xyz(n2), v));
+            const float16 ii = rc_v16_dot(ni, ni);
+            L->ns = rc_v16_select(n, rc_v16_scale(ni, 1.0f / sqrt(ii)), hasNormals);
+            scalar |= L->hit & hasNormals & rc_rescaled16(ii);
+        }
+        L->entering = rc_v16_dot(L->d, L->ng) < 0.0f;
+        L->ng = rc_v16_select(rc_v16_neg(L->ng), L->ng, L->entering);
+        L->ns = rc_v16_select(L->ns, rc_v16_neg(L->ns), rc_v16_dot(L->ns, L->ng) < 0.0f);
     }
-    L->entering = rc_v16_dot(L->d, L->ng) < 0.0f;
-    L->ng = rc_v16_select(rc_v16_neg(L->ng), L->ng, L->entering);
-    L->ns = rc_v16_select(L->ns, rc_v16_neg(L->ns), rc_v16_dot(L->ns, L->ng) < 0.0f);
     if (!any(scalar)) return;
     float4 sp[16], sng[16], sns[16];
     int m[16], entering[16];

@@ -508,7 +508,7 @@ Timings Measure(Bench& b, const Args& a, const std::string& method, const KindRa
         const double w = Since(tq);
         double ks = 0, ss = 0;
         for (const auto& [name, s] : timer.Seconds()) {
-            (name == "rc_shade_ids" || name == "rc_shade_lights" ? ss : ks) += s;
+            (name == "rc_shade16_ids" ? ss : ks) += s;
         }
         const double hs = q->Stats().hostSeconds - host0;
         if (r < a.warmup) continue;

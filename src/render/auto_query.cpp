@@ -51,7 +51,7 @@ struct Choice {
 // shading to the renderer, after its query returns, so these are not the classification's cost.
 double ShadingSeconds(const KernelTimer& timer) {
     double s = 0;
-    for (const char* kernel : {"rc_shade_ids", "rc_shade_lights"}) {
+    for (const char* kernel : {"rc_shade16_ids"}) {
         const auto it = timer.Seconds().find(kernel);
         if (it != timer.Seconds().end()) s += it->second;
     }

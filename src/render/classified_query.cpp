@@ -56,8 +56,7 @@ class ClassifiedQuery final : public RayQuery {
           occludedVertex_(program, "rc_occluded_vertex"),
           queryFragment_(program, "rc_query_fragment"),
           occludedFragment_(program, "rc_occluded_fragment"),
-          shadeIds_(program, "rc_shade_ids"),
-          shadeLights_(program, "rc_shade_lights"),
+          shadeIds_(program, "rc_shade16_ids"),
           writeMisses_(program, "rc_write_misses") {}
 
     std::string Name() const override {
@@ -418,34 +417,23 @@ class ClassifiedQuery final : public RayQuery {
         AddHostSeconds(Seconds(t0));
     }
 
-    // Shades the rays the vertex kernel left, in the thesis's fragment pass 2: per ray (radiance,
-    // secondary rays), then per (ray, light) pair (shadow rays).
+    // Shades the rays the vertex kernel left, in the thesis's fragment pass 2: 16 rays a
+    // work-item in float16 lanes, every light of a ray with it (the lanes are rays, so the
+    // thesis's per-(ray, light) pass has nothing left to spread over them).
     void ShadeUnshaded(const ClassifiedBatch& cb, const cl::Buffer& rays, const cl::Buffer& hits,
                        const ShadeBuffers& shade, KernelTimer& timer) {
         ListUnshaded(cb);
-        // Without vertex-style leaves every ray is left: the kernels take a null id list.
+        // Without vertex-style leaves every ray is left: the kernel takes a null id list.
         const bool allRays = cb.vertexLeaves.empty();
         if (!allRays && unshaded_.empty()) return;
         const uint32_t nIds = allRays ? cb.batch.nRays : uint32_t(unshaded_.size());
         const cl::Buffer ids = allRays ? cl::Buffer() : unshadedBuf_.Upload(ctx_, unshaded_);
-        // Below two lights the per-pair pass has nothing to spread over lanes: rc_shade_ids
-        // shades the light itself, and the saved surfaces' round trip through memory is saved.
-        const bool split = scene_.hostParams.nLights > 1;
-        const cl::Buffer surfaces =
-            split ? surfacesBuf_.Reserve(ctx_, size_t(cb.batch.nRays) * 2 * sizeof(rc_float4))
-                  : cl::Buffer();
-        SetArgs(shadeIds_, rays, shade.rayInfo, hits, ids, nIds, surfaces, scene_.triangles,
+        SetArgs(shadeIds_, rays, shade.rayInfo, hits, ids, nIds, scene_.triangles,
                 scene_.triangleShading, scene_.spheres, scene_.quadrics, scene_.materials,
-                scene_.lights, scene_.params, shade.radiance, shade.NormalsOut(split),
-                shade.shadow.rays, shade.shadow.contribution, shade.secondary.rays,
-                shade.secondary.info, shade.spawned);
-        Launch(ctx_, shadeIds_, nIds, timer);
-        if (!split) return;
-        SetArgs(shadeLights_, rays, shade.rayInfo, hits, ids, nIds, surfaces, shade.normals,
-                scene_.triangles, scene_.triangleShading, scene_.spheres, scene_.quadrics,
-                scene_.materials, scene_.lights, scene_.params, shade.shadow.rays,
-                shade.shadow.contribution);
-        Launch(ctx_, shadeLights_, size_t(nIds) * scene_.hostParams.nLights, timer);
+                scene_.lights, scene_.params, shade.radiance, shade.NormalsOut(), shade.shadow.rays,
+                shade.shadow.contribution, shade.secondary.rays, shade.secondary.info,
+                shade.spawned);
+        Launch(ctx_, shadeIds_, (nIds + 15) / 16, timer);  // 16 rays a work-item
     }
 
     static double Seconds(Clock::time_point t0) {
@@ -467,14 +455,14 @@ class ClassifiedQuery final : public RayQuery {
     KernelStyle style_;
     float gatherCost_;  // auto's price of a vertex-style candidate block (Params)
     cl::Kernel queryScalar_, occludedScalar_, gather_, queryVertexShade_, occludedVertex_,
-        queryFragment_, occludedFragment_, shadeIds_, shadeLights_, writeMisses_;
+        queryFragment_, occludedFragment_, shadeIds_, writeMisses_;
     ClassifiedBatch shadowBatch_;
     std::vector<uint32_t> allLeaves_, vertexSlots_, vertexRayLeaf_, blockLeaf_, blockFirst_,
         leafFirstBlock_, packetLeaf_, packetFirst_, testsHost_, unshaded_;
     std::vector<uint8_t> shadedByVertex_;
     GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,
         blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_, packetFirstBuf_,
-        fragmentTestsBuf_, unshadedBuf_, surfacesBuf_, missedBuf_;
+        fragmentTestsBuf_, unshadedBuf_, missedBuf_;
     mutable std::mutex mutex_;  // guards stats_ (Prepare runs on a worker thread) and pool_
     QueryStats stats_;
     std::vector<std::unique_ptr<ClassifiedBatch>> pool_;  // recycled batches

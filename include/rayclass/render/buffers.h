@@ -42,14 +42,11 @@ struct ShadeBuffers {
     cl::Buffer radiance, normals;
     // Whether the batch's shading normals are wanted (the renderer: for the normal AOV). Without
     // them a kernel gets no normals buffer and writes none, sparing a buffer's worth of memory
-    // traffic, unless a later pass of its own reads them.
+    // traffic.
     bool writeNormals = true;
 
-    // The normals buffer a shading kernel gets: none unless the normals are wanted or a later
-    // pass reads them (`passReadsThem`: rc_shade_lights reads what rc_shade_ids saved).
-    cl::Buffer NormalsOut(bool passReadsThem = false) const {
-        return writeNormals || passReadsThem ? normals : cl::Buffer();
-    }
+    // The normals buffer a shading kernel gets: none unless the normals are wanted.
+    cl::Buffer NormalsOut() const { return writeNormals ? normals : cl::Buffer(); }
     ShadowBuffers shadow;
     RayBuffers secondary;
     cl::Buffer spawned;
