@@ -20,6 +20,7 @@
 #endif
 
 #include "rayclass/bvh/bvh.h"
+#include "rayclass/core/simd.h"
 
 namespace rayclass::bvh {
 
@@ -130,8 +131,10 @@ struct alignas(32) BinBox {
 
 #if defined(__x86_64__)
 #define RC_BVH_AVX __attribute__((target("avx")))
+// RAYCLASS_SIMD=generic keeps the SSE2 twin, so that tests cover it on a CPU with AVX.
 bool UseAvx() {
-    static const bool avx = __builtin_cpu_supports("avx");
+    static const bool avx =
+        RequestedSimd() != SimdRequest::kGeneric && __builtin_cpu_supports("avx");
     return avx;
 }
 #endif

@@ -15,7 +15,7 @@
 namespace rayclass::classify {
 
 // Whether the AVX-512 paths run: the CPU has AVX-512 F, CD, BW, DQ, VL and VBMI2, and the
-// environment variable RAYCLASS_SIMD (auto, avx512 or generic; read once) does not ask for the
+// environment variable RAYCLASS_SIMD (rayclass/core/simd.h) does not ask for the
 // generic paths. Throws when RAYCLASS_SIMD is not one of those, or asks for AVX-512 on a CPU
 // without it.
 bool UseAvx512();

@@ -1,5 +1,4 @@
-#include <cstdlib>
-#include <string>
+#include "rayclass/core/simd.h"
 
 #include "avx512.h"
 #include "rayclass/core/error.h"
@@ -20,12 +19,13 @@ bool CpuHasAvx512() {
 }
 
 bool ChooseAvx512() {
-    const char* env = std::getenv("RAYCLASS_SIMD");
-    const std::string choice = env ? env : "auto";
-    if (choice == "generic") return false;
-    if (choice == "auto") return CpuHasAvx512();
-    if (choice != "avx512") {
-        throw Error("RAYCLASS_SIMD must be auto, avx512 or generic, not '" + choice + "'");
+    switch (RequestedSimd()) {
+        case SimdRequest::kGeneric:
+            return false;
+        case SimdRequest::kAuto:
+            return CpuHasAvx512();
+        case SimdRequest::kAvx512:
+            break;
     }
     if (!CpuHasAvx512()) {
         throw Error("RAYCLASS_SIMD=avx512: this CPU lacks AVX-512 F, CD, BW, DQ, VL or VBMI2");
