@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "clrt/device.h"
 #include "hit_oracle.h"
 #include "rayclass/classify/params.h"
 #include "rayclass/clrt/context.h"
@@ -20,22 +21,17 @@
 #include "rayclass/raster/raster_pass.h"
 #include "rayclass/render/cl_renderer.h"
 #include "rayclass/scene/loader.h"
-#include "test_device.h"
 
 namespace rayclass::proof {
 namespace {
 
+using clrt::testing::TestContext;
 using render::Accel;
 using render::KernelStyle;
 
 std::filesystem::path SceneDir() {
     const char* source = std::getenv("RAYCLASS_SOURCE_DIR");
     return std::filesystem::path(source ? source : ".") / "scenes";
-}
-
-clrt::Context& Ctx() {
-    static clrt::Context ctx(TestDeviceSpec());
-    return ctx;
 }
 
 scene::Material Mirror() {
@@ -163,9 +159,9 @@ Tally RenderChecked(const scene::Scene& s, const Path& path, uint32_t maxDepth,
         raster = std::make_unique<raster::RasterEyeHits>(*gl, raster::RasterOptions{});
         eyeHits = std::make_unique<CheckedEyeHits>(*raster, oracle);
     }
-    render::ClRenderer renderer(Ctx(), s, options, eyeHits.get(),
+    render::ClRenderer renderer(TestContext(), s, options, eyeHits.get(),
                                 [&](std::unique_ptr<render::RayQuery> q) {
-                                    return CheckedQuery(Ctx(), std::move(q), oracle);
+                                    return CheckedQuery(TestContext(), std::move(q), oracle);
                                 });
     render::RenderStats stats;
     renderer.Render(stats);

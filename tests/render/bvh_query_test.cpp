@@ -13,21 +13,18 @@
 #include <random>
 #include <vector>
 
+#include "clrt/device.h"
 #include "quad.h"
 #include "query_io.h"
 #include "rayclass/bvh/bvh.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/brute_query.h"
 #include "rayclass/render/device_scene.h"
-#include "test_device.h"
 
 namespace rayclass::render {
 namespace {
 
-clrt::Context& Ctx() {
-    static clrt::Context ctx(TestDeviceSpec());
-    return ctx;
-}
+using clrt::testing::TestContext;
 
 // Unit squares, two triangles each, in the planes x = k, y = k and z = k (k = 0..3) over [0, 3]^2.
 scene::Scene GridOfSquares() {
@@ -141,10 +138,10 @@ std::vector<RcRay> CoherentRays(float tmax, bool emptySlots) {
 
 struct Queries {
     scene::Scene scene = GridOfSquares();
-    cl::Program program = BuildRenderProgram(Ctx());
-    SceneBuffers buffers{Ctx(), scene, Params()};
-    std::unique_ptr<RayQuery> bvh = MakeBvhQuery(Ctx(), program, buffers, scene);
-    std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(Ctx(), program, buffers);
+    cl::Program program = BuildRenderProgram(TestContext());
+    SceneBuffers buffers{TestContext(), scene, Params()};
+    std::unique_ptr<RayQuery> bvh = MakeBvhQuery(TestContext(), program, buffers, scene);
+    std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(TestContext(), program, buffers);
 
     RcRenderParams Params() const {
         RcRenderParams p{};
@@ -155,8 +152,8 @@ struct Queries {
 
 // Nearest hits of `rays` by the BVH and by brute force must be equal: primitive, t, u and v.
 void ExpectBruteForcesHits(Queries& q, const std::vector<RcRay>& rays) {
-    const std::vector<RcHit> bvh = NearestHits(Ctx(), *q.bvh, rays),
-                             brute = NearestHits(Ctx(), *q.brute, rays);
+    const std::vector<RcHit> bvh = NearestHits(TestContext(), *q.bvh, rays),
+                             brute = NearestHits(TestContext(), *q.brute, rays);
     uint32_t hits = 0, mismatches = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
         hits += brute[i].prim != RC_NO_HIT;
@@ -178,8 +175,8 @@ void ExpectBruteForcesHits(Queries& q, const std::vector<RcRay>& rays) {
 
 // The any-hit answers of `rays` by the BVH and by brute force must be equal.
 void ExpectBruteForcesBlocked(Queries& q, const std::vector<RcRay>& rays) {
-    const std::vector<uint8_t> bvh = BlockedAnswers(Ctx(), *q.bvh, rays),
-                               brute = BlockedAnswers(Ctx(), *q.brute, rays);
+    const std::vector<uint8_t> bvh = BlockedAnswers(TestContext(), *q.bvh, rays),
+                               brute = BlockedAnswers(TestContext(), *q.brute, rays);
     uint32_t blocked = 0, mismatches = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
         blocked += brute[i] != 0;

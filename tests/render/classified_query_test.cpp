@@ -12,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "clrt/device.h"
 #include "quad.h"
 #include "query_io.h"
 #include "rayclass/clrt/context.h"
@@ -19,15 +20,11 @@
 #include "rayclass/render/brute_query.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/device_scene.h"
-#include "test_device.h"
 
 namespace rayclass::render {
 namespace {
 
-clrt::Context& Ctx() {
-    static clrt::Context ctx(TestDeviceSpec());
-    return ctx;
-}
+using clrt::testing::TestContext;
 
 // Two nested boxes, [-4, 4]^3 and [-1, 1]^3, their walls tiled with squares (16 x 16 and 8 x 8 a
 // wall, 3,840 triangles), lit by one light between them.
@@ -86,8 +83,8 @@ std::vector<RcRay> Segments(std::vector<RcRay> rays) {
 
 struct Fixture {
     scene::Scene scene = NestedTiledBoxes();
-    cl::Program program = BuildRenderProgram(Ctx());
-    SceneBuffers buffers{Ctx(), scene, Params()};
+    cl::Program program = BuildRenderProgram(TestContext());
+    SceneBuffers buffers{TestContext(), scene, Params()};
 
     RcRenderParams Params() const {
         RcRenderParams p{};
@@ -99,19 +96,19 @@ struct Fixture {
     }
 
     std::unique_ptr<RayQuery> NewQuery() const {
-        return MakeClassifiedQuery(Ctx(), program, buffers, scene,
+        return MakeClassifiedQuery(TestContext(), program, buffers, scene,
                                    classify::Params::ForScene(scene), KernelStyle::kFragment);
     }
 
     // Nearest hits of a batch, shaded as the renderer shades them; returns the tests done.
     uint64_t Nearest(RayQuery& q, const std::vector<RcRay>& rays,
                      std::vector<RcHit>* hitsOut = nullptr) const {
-        return NearestHits(Ctx(), q, rays, Params().nLights, hitsOut);
+        return NearestHits(TestContext(), q, rays, Params().nLights, hitsOut);
     }
 
     uint64_t Occluded(RayQuery& q, const std::vector<RcRay>& rays) const {
         uint64_t tests = 0;
-        BlockedAnswers(Ctx(), q, rays, &tests);
+        BlockedAnswers(TestContext(), q, rays, &tests);
         return tests;
     }
 };
@@ -131,7 +128,7 @@ void ExpectSameHits(const std::vector<RcHit>& got, const std::vector<RcHit>& wan
 
 void BeginGeneration(RayQuery& q, uint32_t generation, const std::vector<RcRay>& rays) {
     KernelTimer timer;
-    q.BeginGeneration(generation, UploadVector(Ctx(), rays), uint32_t(rays.size()), timer);
+    q.BeginGeneration(generation, UploadVector(TestContext(), rays), uint32_t(rays.size()), timer);
 }
 
 TEST(ClassifiedQuery, EachGenerationIsClassifiedAsByANewQuery) {
@@ -161,18 +158,20 @@ TEST(ClassifiedQuery, EachGenerationIsClassifiedAsByANewQuery) {
     EXPECT_EQ(f.Nearest(*q, second, &laterHits), fresh);
     EXPECT_EQ(f.Occluded(*q, secondShadow), freshShadow);
     // Both answer as brute force does, hit for hit and shadow ray for shadow ray.
-    const std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(Ctx(), f.program, f.buffers);
-    const std::vector<RcHit> bruteHits = NearestHits(Ctx(), *brute, second);
+    const std::unique_ptr<RayQuery> brute =
+        MakeBruteForceQuery(TestContext(), f.program, f.buffers);
+    const std::vector<RcHit> bruteHits = NearestHits(TestContext(), *brute, second);
     ExpectSameHits(freshHits, bruteHits);
     ExpectSameHits(laterHits, bruteHits);
-    const std::vector<uint8_t> bruteBlocked = BlockedAnswers(Ctx(), *brute, secondShadow);
-    EXPECT_EQ(BlockedAnswers(Ctx(), *f.NewQuery(), secondShadow), bruteBlocked);
+    const std::vector<uint8_t> bruteBlocked = BlockedAnswers(TestContext(), *brute, secondShadow);
+    EXPECT_EQ(BlockedAnswers(TestContext(), *f.NewQuery(), secondShadow), bruteBlocked);
 
     // --accel auto passes the new generation on to its classification. Its sample of the other
     // query is timed; brute force, some 3,840 tests a ray, never wins it, so the classification
     // answers every batch here.
-    const std::unique_ptr<RayQuery> a = MakeAutoQuery(
-        Ctx(), f.NewQuery(), [&f] { return MakeBruteForceQuery(Ctx(), f.program, f.buffers); });
+    const std::unique_ptr<RayQuery> a = MakeAutoQuery(TestContext(), f.NewQuery(), [&f] {
+        return MakeBruteForceQuery(TestContext(), f.program, f.buffers);
+    });
     BeginGeneration(*a, 0, first);
     f.Nearest(*a, first);
     f.Occluded(*a, firstShadow);
@@ -196,7 +195,7 @@ struct ShadeOutputs {
 template <typename T>
 std::vector<T> ReadAll(const cl::Buffer& b, size_t n) {
     std::vector<T> v(n);
-    Ctx().queue().enqueueReadBuffer(b, CL_TRUE, 0, n * sizeof(T), v.data());
+    TestContext().queue().enqueueReadBuffer(b, CL_TRUE, 0, n * sizeof(T), v.data());
     return v;
 }
 
@@ -218,19 +217,19 @@ ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
         i.weight = {1.0f, 1.0f, 1.0f, 1.0f};
         i.kind = RC_RAY_EYE;
     }
-    const cl::Buffer rayBuf = UploadVector(Ctx(), rays);
-    const cl::Buffer hits(Ctx().context(), CL_MEM_READ_WRITE, n * sizeof(RcHit));
-    ShadeBuffers shade = MakeShadeBuffers(Ctx(), n, nLights);
-    if (withInfos) shade.rayInfo = UploadVector(Ctx(), info);
+    const cl::Buffer rayBuf = UploadVector(TestContext(), rays);
+    const cl::Buffer hits(TestContext().context(), CL_MEM_READ_WRITE, n * sizeof(RcHit));
+    ShadeBuffers shade = MakeShadeBuffers(TestContext(), n, nLights);
+    if (withInfos) shade.rayInfo = UploadVector(TestContext(), info);
     shade.writeNormals = writeNormals;
     // Zeroed, so that slots no kernel writes compare equal.
     for (const cl::Buffer* b :
          {&shade.radiance, &shade.normals, &shade.shadow.rays, &shade.shadow.contribution,
           &shade.secondary.rays, &shade.secondary.info, &shade.spawned}) {
-        Ctx().queue().enqueueFillBuffer(*b, uint8_t(0), 0, b->getInfo<CL_MEM_SIZE>());
+        TestContext().queue().enqueueFillBuffer(*b, uint8_t(0), 0, b->getInfo<CL_MEM_SIZE>());
     }
     KernelTimer timer;
-    std::unique_ptr<PreparedBatch> prepared = q.Prepare(rayBuf, n, Ctx().queue(), {});
+    std::unique_ptr<PreparedBatch> prepared = q.Prepare(rayBuf, n, TestContext().queue(), {});
     const bool shaded = q.Intersect(rayBuf, n, prepared.get(), hits, shade, timer).shaded;
     q.Recycle(std::move(prepared));
     if (!shaded) {
@@ -244,8 +243,8 @@ ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
         arg(shade.shadow.rays), arg(shade.shadow.contribution), arg(shade.secondary.rays);
         arg(shade.secondary.info), arg(shade.spawned);
         const size_t items = scalarShade ? n : (n + 15) / 16;  // rc_shade16: 16 rays an item
-        Ctx().queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(clrt::RoundUp(items, 64)),
-                                           cl::NDRange(64));
+        TestContext().queue().enqueueNDRangeKernel(
+            k, cl::NullRange, cl::NDRange(clrt::RoundUp(items, 64)), cl::NDRange(64));
     }
     ShadeOutputs out;
     out.hits = ReadAll<RcHit>(hits, n);
@@ -285,18 +284,19 @@ TEST(ClassifiedQuery, EyeRaysWithoutInfosShadeAsWithEyeInfos) {
         params.nLights = uint32_t(s.lights.size());
         params.maxDepth = 6;
         params.minWeight = 0.001f;
-        const cl::Program program = BuildRenderProgram(Ctx());
-        const SceneBuffers buffers(Ctx(), s, params);
+        const cl::Program program = BuildRenderProgram(TestContext());
+        const SceneBuffers buffers(TestContext(), s, params);
         const std::vector<RcRay> rays = RaysNearOneCorner(3, 3000);
         std::vector<std::unique_ptr<RayQuery>> queries;
         for (KernelStyle style : {KernelStyle::kScalar, KernelStyle::kVertex,
                                   KernelStyle::kFragment, KernelStyle::kAuto}) {
-            queries.push_back(MakeClassifiedQuery(Ctx(), program, buffers, s,
+            queries.push_back(MakeClassifiedQuery(TestContext(), program, buffers, s,
                                                   classify::Params::ForScene(s), style));
         }
-        queries.push_back(MakeBvhQuery(Ctx(), program, buffers, s));
+        queries.push_back(MakeBvhQuery(TestContext(), program, buffers, s));
         // The oracle: brute-force hits shaded by rc_shade from explicit eye infos.
-        const std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(Ctx(), program, buffers);
+        const std::unique_ptr<RayQuery> brute =
+            MakeBruteForceQuery(TestContext(), program, buffers);
         const ShadeOutputs want =
             ShadeEyeRays(program, buffers, params, *brute, rays, true, true, true);
         size_t spawned = 0, lit = 0;

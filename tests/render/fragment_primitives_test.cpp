@@ -10,20 +10,17 @@
 #include <random>
 #include <vector>
 
+#include "clrt/device.h"
 #include "query_io.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/brute_query.h"
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/device_scene.h"
-#include "test_device.h"
 
 namespace rayclass::render {
 namespace {
 
-clrt::Context& Ctx() {
-    static clrt::Context ctx(TestDeviceSpec());
-    return ctx;
-}
+using clrt::testing::TestContext;
 
 scene::Scene SpheresAndQuadrics() {
     std::mt19937 rng(41);
@@ -75,11 +72,12 @@ std::vector<RcRay> Rays(float tmax) {
 
 struct Queries {
     scene::Scene scene = SpheresAndQuadrics();
-    cl::Program program = BuildRenderProgram(Ctx());
-    SceneBuffers buffers{Ctx(), scene, Params()};
-    std::unique_ptr<RayQuery> fragment = MakeClassifiedQuery(
-        Ctx(), program, buffers, scene, classify::Params::ForScene(scene), KernelStyle::kFragment);
-    std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(Ctx(), program, buffers);
+    cl::Program program = BuildRenderProgram(TestContext());
+    SceneBuffers buffers{TestContext(), scene, Params()};
+    std::unique_ptr<RayQuery> fragment =
+        MakeClassifiedQuery(TestContext(), program, buffers, scene,
+                            classify::Params::ForScene(scene), KernelStyle::kFragment);
+    std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(TestContext(), program, buffers);
 
     RcRenderParams Params() const {
         RcRenderParams p{};
@@ -92,8 +90,8 @@ struct Queries {
 TEST(FragmentQuery, SpheresAndQuadricsHitWhatBruteForceHits) {
     Queries q;
     const std::vector<RcRay> rays = Rays(INFINITY);
-    const std::vector<RcHit> got = NearestHits(Ctx(), *q.fragment, rays);
-    const std::vector<RcHit> brute = NearestHits(Ctx(), *q.brute, rays);
+    const std::vector<RcHit> got = NearestHits(TestContext(), *q.fragment, rays);
+    const std::vector<RcHit> brute = NearestHits(TestContext(), *q.brute, rays);
     const uint32_t nS = uint32_t(q.scene.spheres.size());
     uint32_t spheres = 0, quadrics = 0, mismatches = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
@@ -114,8 +112,8 @@ TEST(FragmentQuery, SpheresAndQuadricsBlockWhatBruteForceBlocks) {
     Queries q;
     for (const float tmax : {0.3f, 1.0f}) {
         const std::vector<RcRay> rays = Rays(tmax);
-        const std::vector<uint8_t> got = BlockedAnswers(Ctx(), *q.fragment, rays);
-        const std::vector<uint8_t> brute = BlockedAnswers(Ctx(), *q.brute, rays);
+        const std::vector<uint8_t> got = BlockedAnswers(TestContext(), *q.fragment, rays);
+        const std::vector<uint8_t> brute = BlockedAnswers(TestContext(), *q.brute, rays);
         uint32_t blocked = 0, mismatches = 0;
         for (size_t i = 0; i < rays.size(); ++i) {
             blocked += brute[i];

@@ -6,21 +6,18 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "clrt/device.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/geometry/patch_intersect.h"
 #include "rayclass/render/device_scene.h"
 #include "rayclass/render/launch.h"
 #include "rayclass/render/newton_stats.h"
 #include "rayclass/scene/patch.h"
-#include "test_device.h"
 
 namespace rayclass::render {
 namespace {
 
-clrt::Context& Ctx() {
-    static clrt::Context ctx(TestDeviceSpec());
-    return ctx;
-}
+using clrt::testing::TestContext;
 
 // x = x[i], y = y0 + y[j], z = z[i] at control point (i, j): the surface is z(u) over x(u),
 // extruded along y.
@@ -54,9 +51,9 @@ TEST(PatchNewtonStats, CountsEndingsOfKnownSearches) {
     };
     RcRenderParams params{};
     params.nQuadrics = AnalyticRecords(s);
-    const SceneBuffers buffers(Ctx(), s, params);
-    const cl::Program program = BuildRenderProgram(Ctx());
-    const NewtonCounts c = CountNewton(Ctx(), program, buffers, params.nQuadrics, rays);
+    const SceneBuffers buffers(TestContext(), s, params);
+    const cl::Program program = BuildRenderProgram(TestContext());
+    const NewtonCounts c = CountNewton(TestContext(), program, buffers, params.nQuadrics, rays);
     EXPECT_EQ(c.rays, 5u);
     EXPECT_EQ(c.tests, 4u);
     EXPECT_EQ(c.steps, 1u + 12u + 1u + 1u);

@@ -10,6 +10,7 @@
 #include <random>
 #include <vector>
 
+#include "clrt/device.h"
 #include "query_io.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/geometry/intersect.h"
@@ -18,20 +19,13 @@
 #include "rayclass/render/classified_query.h"
 #include "rayclass/render/device_scene.h"
 #include "rayclass/scene/loader.h"
-#include "test_device.h"
+#include "scene/test_files.h"
 
 namespace rayclass::render {
 namespace {
 
-clrt::Context& Ctx() {
-    static clrt::Context ctx(TestDeviceSpec());
-    return ctx;
-}
-
-std::filesystem::path ScenesDir() {
-    const char* source = std::getenv("RAYCLASS_SOURCE_DIR");
-    return std::filesystem::path(source ? source : ".") / "scenes";
-}
+using clrt::testing::TestContext;
+using scene::testing::ScenesDir;
 
 // The teapot alone (no floor, no sphere): every hit is a patch box's.
 scene::Scene Teapot() {
@@ -62,9 +56,9 @@ std::vector<RcRay> Rays(const scene::Scene& s, float tmax, int n) {
 
 struct Queries {
     scene::Scene scene = Teapot();
-    cl::Program program = BuildRenderProgram(Ctx());
-    SceneBuffers buffers{Ctx(), scene, Params()};
-    std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(Ctx(), program, buffers);
+    cl::Program program = BuildRenderProgram(TestContext());
+    SceneBuffers buffers{TestContext(), scene, Params()};
+    std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(TestContext(), program, buffers);
 
     RcRenderParams Params() const {
         RcRenderParams p{};
@@ -73,14 +67,14 @@ struct Queries {
     }
     std::vector<std::pair<const char*, std::unique_ptr<RayQuery>>> Others() {
         std::vector<std::pair<const char*, std::unique_ptr<RayQuery>>> out;
-        out.emplace_back("bvh", MakeBvhQuery(Ctx(), program, buffers, scene));
+        out.emplace_back("bvh", MakeBvhQuery(TestContext(), program, buffers, scene));
         const auto params = classify::Params::ForScene(scene);
-        out.emplace_back("scalar", MakeClassifiedQuery(Ctx(), program, buffers, scene, params,
-                                                       KernelStyle::kScalar));
-        out.emplace_back("vertex", MakeClassifiedQuery(Ctx(), program, buffers, scene, params,
-                                                       KernelStyle::kVertex));
-        out.emplace_back("fragment", MakeClassifiedQuery(Ctx(), program, buffers, scene, params,
-                                                         KernelStyle::kFragment));
+        out.emplace_back("scalar", MakeClassifiedQuery(TestContext(), program, buffers, scene,
+                                                       params, KernelStyle::kScalar));
+        out.emplace_back("vertex", MakeClassifiedQuery(TestContext(), program, buffers, scene,
+                                                       params, KernelStyle::kVertex));
+        out.emplace_back("fragment", MakeClassifiedQuery(TestContext(), program, buffers, scene,
+                                                         params, KernelStyle::kFragment));
         return out;
     }
 };
@@ -88,12 +82,12 @@ struct Queries {
 TEST(PatchQuery, EveryPathHitsWhatBruteForceHits) {
     Queries q;
     const std::vector<RcRay> rays = Rays(q.scene, INFINITY, 2000);
-    const std::vector<RcHit> brute = NearestHits(Ctx(), *q.brute, rays);
+    const std::vector<RcHit> brute = NearestHits(TestContext(), *q.brute, rays);
     uint32_t hits = 0;
     for (const RcHit& h : brute) hits += h.prim != RC_NO_HIT;
     EXPECT_GT(hits, 500u);
     for (auto& [name, query] : q.Others()) {
-        const std::vector<RcHit> got = NearestHits(Ctx(), *query, rays);
+        const std::vector<RcHit> got = NearestHits(TestContext(), *query, rays);
         uint32_t mismatches = 0;
         for (size_t i = 0; i < rays.size(); ++i) {
             const bool same =
@@ -112,12 +106,12 @@ TEST(PatchQuery, EveryPathHitsWhatBruteForceHits) {
 TEST(PatchQuery, EveryPathBlocksWhatBruteForceBlocks) {
     Queries q;
     const std::vector<RcRay> rays = Rays(q.scene, 8.0f, 1500);
-    const std::vector<uint8_t> brute = BlockedAnswers(Ctx(), *q.brute, rays);
+    const std::vector<uint8_t> brute = BlockedAnswers(TestContext(), *q.brute, rays);
     uint32_t blocked = 0;
     for (uint8_t b : brute) blocked += b;
     EXPECT_GT(blocked, 300u);
     for (auto& [name, query] : q.Others()) {
-        EXPECT_EQ(BlockedAnswers(Ctx(), *query, rays), brute) << name;
+        EXPECT_EQ(BlockedAnswers(TestContext(), *query, rays), brute) << name;
     }
 }
 
@@ -125,7 +119,7 @@ TEST(PatchQuery, EveryPathBlocksWhatBruteForceBlocks) {
 TEST(PatchQuery, HostNewtonIsTheKernelsTwin) {
     Queries q;
     const std::vector<RcRay> rays = Rays(q.scene, INFINITY, 500);
-    const std::vector<RcHit> brute = NearestHits(Ctx(), *q.brute, rays);
+    const std::vector<RcHit> brute = NearestHits(TestContext(), *q.brute, rays);
     for (size_t i = 0; i < rays.size(); ++i) {
         geometry::Ray<float> r;
         r.o = {rays[i].origin.x, rays[i].origin.y, rays[i].origin.z};
@@ -151,10 +145,10 @@ struct ReferenceCounts {
 ReferenceCounts CompareWithReference(float flatness) {
     Queries q;
     scene::SplitPatches(q.scene, {flatness, 0});
-    const SceneBuffers buffers{Ctx(), q.scene, q.Params()};
-    const std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(Ctx(), q.program, buffers);
+    const SceneBuffers buffers{TestContext(), q.scene, q.Params()};
+    const std::unique_ptr<RayQuery> brute = MakeBruteForceQuery(TestContext(), q.program, buffers);
     const std::vector<RcRay> rays = Rays(q.scene, INFINITY, 1500);
-    const std::vector<RcHit> got = NearestHits(Ctx(), *brute, rays);
+    const std::vector<RcHit> got = NearestHits(TestContext(), *brute, rays);
     ReferenceCounts c;
     for (size_t i = 0; i < rays.size(); ++i) {
         geometry::Ray<double> r;

@@ -12,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "clrt/device.h"
 #include "query_io.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/geometry/intersect.h"
@@ -19,15 +20,11 @@
 #include "rayclass/render/brute_query.h"
 #include "rayclass/render/device_scene.h"
 #include "rayclass/scene/loader.h"
-#include "test_device.h"
 
 namespace rayclass::render {
 namespace {
 
-clrt::Context& Ctx() {
-    static clrt::Context ctx(TestDeviceSpec());
-    return ctx;
-}
+using clrt::testing::TestContext;
 
 scene::Scene TestScene(const char* file, float scale) {
     const char* source = std::getenv("RAYCLASS_SOURCE_DIR");
@@ -42,9 +39,9 @@ scene::Scene TestScene(const char* file, float scale) {
 
 struct Brute {
     scene::Scene scene;
-    cl::Program program = BuildRenderProgram(Ctx());
-    SceneBuffers buffers{Ctx(), scene, Params()};
-    std::unique_ptr<RayQuery> query = MakeBruteForceQuery(Ctx(), program, buffers);
+    cl::Program program = BuildRenderProgram(TestContext());
+    SceneBuffers buffers{TestContext(), scene, Params()};
+    std::unique_ptr<RayQuery> query = MakeBruteForceQuery(TestContext(), program, buffers);
 
     RcRenderParams Params() const {
         RcRenderParams p{};
@@ -96,7 +93,7 @@ TEST_P(NurbsSphere, MatchesTheAnalyticSphere) {
     const float r = GetParam();
     Brute b{TestScene("nurbs_sphere.json", r)};
     const std::vector<RcRay> rays = RaysAtSphere(r, 3000, 11);
-    const std::vector<RcHit> hits = NearestHits(Ctx(), *b.query, rays);
+    const std::vector<RcHit> hits = NearestHits(TestContext(), *b.query, rays);
     uint32_t hitCount = 0, steepWrong = 0, glancingWrong = 0, wrongHit = 0;
     double worstT = 0.0, worstNormal = 0.0;
     for (size_t i = 0; i < rays.size(); ++i) {
@@ -137,7 +134,7 @@ INSTANTIATE_TEST_SUITE_P(Scales, NurbsSphere, testing::Values(1e-4f, 1.0f, 1e4f)
 TEST(NurbsSphereSurface, RaysLeavingTheSurfaceDoNotHitIt) {
     Brute b{TestScene("nurbs_sphere.json", 1.0f)};
     const std::vector<RcRay> eye = RaysAtSphere(1.0f, 2000, 12);
-    const std::vector<RcHit> hits = NearestHits(Ctx(), *b.query, eye);
+    const std::vector<RcHit> hits = NearestHits(TestContext(), *b.query, eye);
     std::mt19937 rng(13);
     std::uniform_real_distribution<float> uni(-1.0f, 1.0f);
     std::vector<RcRay> leaving;
@@ -162,7 +159,7 @@ TEST(NurbsSphereSurface, RaysLeavingTheSurfaceDoNotHitIt) {
         }
     }
     ASSERT_GT(leaving.size(), 4000u);
-    const std::vector<RcHit> again = NearestHits(Ctx(), *b.query, leaving);
+    const std::vector<RcHit> again = NearestHits(TestContext(), *b.query, leaving);
     uint32_t self = 0;
     for (const RcHit& h : again) self += h.prim != RC_NO_HIT;
     EXPECT_EQ(self, 0u) << self << " of " << leaving.size() << " rays hit the sphere again";
@@ -173,7 +170,7 @@ TEST(NurbsSphereSurface, RaysLeavingTheSurfaceDoNotHitIt) {
 TEST(NurbsTorus, HitsLieOnTheTorusAndMatchTheReference) {
     Brute b{TestScene("nurbs_torus.json", 1.0f)};
     const std::vector<RcRay> rays = RaysAtSphere(1.35f, 2000, 14);
-    const std::vector<RcHit> hits = NearestHits(Ctx(), *b.query, rays);
+    const std::vector<RcHit> hits = NearestHits(TestContext(), *b.query, rays);
     uint32_t refHits = 0, holes = 0, extra = 0;
     double worstSurface = 0.0, worstNormal = 0.0;
     for (size_t i = 0; i < rays.size(); ++i) {

@@ -14,25 +14,19 @@
 #include <random>
 #include <vector>
 
+#include "clrt/device.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/buffers.h"
 #include "rayclass/render/device_scene.h"
 #include "rayclass/render/launch.h"
 #include "rayclass/scene/loader.h"
-#include "test_device.h"
+#include "scene/test_files.h"
 
 namespace rayclass::render {
 namespace {
 
-clrt::Context& Ctx() {
-    static clrt::Context ctx(TestDeviceSpec());
-    return ctx;
-}
-
-std::filesystem::path ScenesDir() {
-    const char* source = std::getenv("RAYCLASS_SOURCE_DIR");
-    return std::filesystem::path(source ? source : ".") / "scenes";
-}
+using clrt::testing::TestContext;
+using scene::testing::ScenesDir;
 
 // The teapot scene (patch boxes, a sphere) with triangles, quadrics and more materials added.
 scene::Scene MixedScene() {
@@ -127,21 +121,22 @@ struct Outputs {
 
 std::vector<uint8_t> Bytes(const cl::Buffer& b) {
     std::vector<uint8_t> out(b.getInfo<CL_MEM_SIZE>());
-    Ctx().queue().enqueueReadBuffer(b, CL_TRUE, 0, out.size(), out.data());
+    TestContext().queue().enqueueReadBuffer(b, CL_TRUE, 0, out.size(), out.data());
     return out;
 }
 
 Outputs Shade(const cl::Program& program, const SceneBuffers& scene, const Batch& batch,
               bool withInfos, const char* kernel, size_t raysPerItem) {
     const uint32_t n = uint32_t(batch.rays.size()), nLights = scene.hostParams.nLights;
-    const cl::Buffer rays = UploadVector(Ctx(), batch.rays), hits = UploadVector(Ctx(), batch.hits);
-    ShadeBuffers shade = MakeShadeBuffers(Ctx(), n, nLights);
-    if (withInfos) shade.rayInfo = UploadVector(Ctx(), batch.infos);
+    const cl::Buffer rays = UploadVector(TestContext(), batch.rays),
+                     hits = UploadVector(TestContext(), batch.hits);
+    ShadeBuffers shade = MakeShadeBuffers(TestContext(), n, nLights);
+    if (withInfos) shade.rayInfo = UploadVector(TestContext(), batch.infos);
     // Filled, so that slots no kernel writes compare equal.
     for (const cl::Buffer* b :
          {&shade.radiance, &shade.normals, &shade.shadow.rays, &shade.shadow.contribution,
           &shade.secondary.rays, &shade.secondary.info, &shade.spawned}) {
-        Ctx().queue().enqueueFillBuffer(*b, uint8_t(0xA5), 0, b->getInfo<CL_MEM_SIZE>());
+        TestContext().queue().enqueueFillBuffer(*b, uint8_t(0xA5), 0, b->getInfo<CL_MEM_SIZE>());
     }
     cl::Kernel k(program, kernel);
     SetArgs(k, rays, shade.rayInfo, hits, n, scene.triangles, scene.triangleShading, scene.spheres,
@@ -149,7 +144,7 @@ Outputs Shade(const cl::Program& program, const SceneBuffers& scene, const Batch
             shade.normals, shade.shadow.rays, shade.shadow.contribution, shade.secondary.rays,
             shade.secondary.info, shade.spawned);
     KernelTimer timer;
-    Launch(Ctx(), k, (n + raysPerItem - 1) / raysPerItem, timer);
+    Launch(TestContext(), k, (n + raysPerItem - 1) / raysPerItem, timer);
     return {Bytes(shade.radiance),       Bytes(shade.normals),
             Bytes(shade.shadow.rays),    Bytes(shade.shadow.contribution),
             Bytes(shade.secondary.rays), Bytes(shade.secondary.info),
@@ -159,8 +154,8 @@ Outputs Shade(const cl::Program& program, const SceneBuffers& scene, const Batch
 TEST(Shade16, WritesWhatTheScalarKernelWrites) {
     const scene::Scene s = MixedScene();
     const RcRenderParams params = Params(s);
-    const cl::Program program = BuildRenderProgram(Ctx());
-    const SceneBuffers scene(Ctx(), s, params);
+    const cl::Program program = BuildRenderProgram(TestContext());
+    const SceneBuffers scene(TestContext(), s, params);
     const Batch batch = MadeUpHits(4001, uint32_t(s.triangles.size()), s.PrimitiveCount());
     for (bool withInfos : {true, false}) {
         SCOPED_TRACE(withInfos ? "with infos" : "eye rays without infos");
