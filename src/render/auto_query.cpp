@@ -47,15 +47,11 @@ struct Choice {
     }
 };
 
-// Seconds the classified query's separate shading kernels have run on `timer`. The BVH leaves
-// shading to the renderer, after its query returns, so these are not the classification's cost.
+// Seconds the classified query's shading kernel has run on `timer`. The BVH leaves shading to
+// the renderer, after its query returns, so this is not the classification's cost.
 double ShadingSeconds(const KernelTimer& timer) {
-    double s = 0;
-    for (const char* kernel : {"rc_shade16_ids"}) {
-        const auto it = timer.Seconds().find(kernel);
-        if (it != timer.Seconds().end()) s += it->second;
-    }
-    return s;
+    const auto it = timer.Seconds().find("rc_shade16_ids");
+    return it == timer.Seconds().end() ? 0.0 : it->second;
 }
 
 class AutoQuery final : public RayQuery {

@@ -9,9 +9,6 @@ namespace rayclass::render {
 
 namespace {
 
-// Rays per work-item of the kernels (RC_PACKET in cl/bvh.cl).
-constexpr uint32_t kPacketRays = 16;
-
 class BvhQuery final : public RayQuery {
   public:
     BvhQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene,
@@ -53,7 +50,7 @@ class BvhQuery final : public RayQuery {
         if (n == 0) return;
         SetArgs(kernel, rays, n, nodes_, blocks_, scene_.triangles, scene_.spheres, scene_.quadrics,
                 scene_.params, out, testsBuffer_.Reserve(ctx_, n * sizeof(uint32_t)));
-        Launch(ctx_, kernel, (n + kPacketRays - 1) / kPacketRays, timer);
+        Launch(ctx_, kernel, PacketItems(n), timer);
     }
 
     uint64_t SumTests(uint32_t n) {

@@ -400,7 +400,7 @@ void Frame::Shade(const Batch& b) {
             s.triangleShading, s.spheres, s.quadrics, s.materials, s.lights, s.params,
             shade.radiance, shade.NormalsOut(), shade.shadow.rays, shade.shadow.contribution,
             shade.secondary.rays, shade.secondary.info, shade.spawned);
-    Launch(ctx_, shadeKernel_, (b.n + 15) / 16, timer_);  // 16 rays a work-item
+    Launch(ctx_, shadeKernel_, PacketItems(b.n), timer_);
 }
 
 void Frame::Occlude(const ShadowSlots& shadow) {

@@ -433,7 +433,7 @@ class ClassifiedQuery final : public RayQuery {
                 scene_.lights, scene_.params, shade.radiance, shade.NormalsOut(), shade.shadow.rays,
                 shade.shadow.contribution, shade.secondary.rays, shade.secondary.info,
                 shade.spawned);
-        Launch(ctx_, shadeIds_, (nIds + 15) / 16, timer);  // 16 rays a work-item
+        Launch(ctx_, shadeIds_, PacketItems(nIds), timer);
     }
 
     static double Seconds(Clock::time_point t0) {

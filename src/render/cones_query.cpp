@@ -18,9 +18,6 @@ using Clock = std::chrono::steady_clock;
 
 constexpr uint32_t kAll = 0xFFFFFFFFu;  // RC_CONES_ALL
 
-// Rays per work-item of the query kernels (RC_PACKET in cl/bvh.cl).
-constexpr uint32_t kPacketRays = 16;
-
 // The most survivor ids one level's lists may hold; tiles or groups beyond it test every
 // primitive, which bounds the memory incoherent rays need.
 constexpr uint64_t kMaxListEntries = uint64_t(1) << 25;
@@ -206,7 +203,7 @@ class ConesQuery final : public RayQuery {
         SetArgs(kernel, sorted, n, order, tileOffsets_.Reserve(ctx_, 0),
                 tileCounts_.Reserve(ctx_, 0), tileList_.Reserve(ctx_, 0), scene_.triangles,
                 scene_.spheres, scene_.quadrics, scene_.params, out, counters_.Reserve(ctx_, n));
-        Launch(ctx_, kernel, (n + kPacketRays - 1) / kPacketRays, timer);
+        Launch(ctx_, kernel, PacketItems(n), timer);
         const CounterSums sums = counters_.Sum(ctx_, n);
         Count(n, ReadCones(ctx_, tileCones, nTiles), ReadCones(ctx_, groupCones, nGroups),
               groupCounts, groupOffsets, tileCounts, tileOffsets);

@@ -6,9 +6,6 @@ namespace rayclass::render {
 
 namespace {
 
-// Rays per work-item of the kernels (RC_PACKET in cl/bvh.cl).
-constexpr uint32_t kPacketRays = 16;
-
 class KdTreeQuery final : public WalkQuery {
   public:
     KdTreeQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene,

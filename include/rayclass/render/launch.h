@@ -70,6 +70,11 @@ void SetArgs(cl::Kernel& kernel, const Args&... args) {
 // its device time to `timer`.
 void Launch(clrt::Context& ctx, cl::Kernel& kernel, size_t n, KernelTimer& timer);
 
+// Rays a work-item of the 16-lane kernels (RC_PACKET in cl/bvh.cl, rc_shade16), and the
+// work-items they take for n rays.
+constexpr uint32_t kPacketRays = 16;
+constexpr size_t PacketItems(size_t n) { return (n + kPacketRays - 1) / kPacketRays; }
+
 // Reads n uint32 counters back and sums them (`scratch` is reused host memory).
 uint64_t SumCounters(clrt::Context& ctx, const cl::Buffer& counters, uint32_t n,
                      std::vector<uint32_t>& scratch);
