@@ -22,10 +22,10 @@ class GridQuery final : public WalkQuery {
           cellStart_(UploadVector(ctx, grid.cellStart)),
           primIndex_(UploadVector(ctx, grid.primIndex)),
           macroOccupied_(UploadVector(ctx, grid.macroOccupied)),
-          boxLo_{grid.box.lo.x, grid.box.lo.y, grid.box.lo.z, grid.pad * 0.25f},
-          boxHi_{grid.box.hi.x, grid.box.hi.y, grid.box.hi.z, 0.0f},
-          cellSize_{grid.cellSize.x, grid.cellSize.y, grid.cellSize.z, 0.0f},
-          res_{grid.resolution.x, grid.resolution.y, grid.resolution.z, grid.macroSize} {}
+          boxLo_{{grid.box.lo.x, grid.box.lo.y, grid.box.lo.z, grid.pad * 0.25f}},
+          boxHi_{{grid.box.hi.x, grid.box.hi.y, grid.box.hi.z, 0.0f}},
+          cellSize_{{grid.cellSize.x, grid.cellSize.y, grid.cellSize.z, 0.0f}},
+          res_{{grid.resolution.x, grid.resolution.y, grid.resolution.z, grid.macroSize}} {}
 
   private:
     void Bind(cl::Kernel& kernel, const cl::Buffer& rays, uint32_t n, const cl::Buffer& out,

@@ -21,8 +21,8 @@ class KdTreeQuery final : public WalkQuery {
                     kPacketRays),
           nodes_(UploadVector(ctx, tree.nodes)),
           prims_(UploadVector(ctx, tree.primIndex)),
-          boxLo_{tree.box.lo.x, tree.box.lo.y, tree.box.lo.z, tree.pad},
-          boxHi_{tree.box.hi.x, tree.box.hi.y, tree.box.hi.z, 0.0f} {}
+          boxLo_{{tree.box.lo.x, tree.box.lo.y, tree.box.lo.z, tree.pad}},
+          boxHi_{{tree.box.hi.x, tree.box.hi.y, tree.box.hi.z, 0.0f}} {}
 
   private:
     void Bind(cl::Kernel& kernel, const cl::Buffer& rays, uint32_t n, const cl::Buffer& out,
