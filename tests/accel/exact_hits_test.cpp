@@ -23,11 +23,15 @@ struct Case {
 
 // The test scenes, the default scene and the 75k-triangle bunny (fewer rays: brute force pays
 // 75k tests a ray).
-const Case kCases[] = {
-    {"scenes/cornell.json", 48, 36},        {"scenes/tests/glass.json", 48, 36},
-    {"scenes/tests/quadrics.json", 48, 36}, {"scenes/tests/spheres.json", 48, 36},
-    {"scenes/tests/floor.obj", 48, 36},     {"scenes/teapot.json", 48, 36},
-    {"scenes/bench/bunny.obj", 24, 18}};
+const Case kCases[] = {{"scenes/cornell.json", 48, 36},
+                       {"scenes/tests/glass.json", 48, 36},
+                       {"scenes/tests/quadrics.json", 48, 36},
+                       {"scenes/tests/spheres.json", 48, 36},
+                       {"scenes/tests/floor.obj", 48, 36},
+                       {"scenes/teapot.json", 48, 36},
+                       {"scenes/tests/nurbs_sphere.json", 48, 36},
+                       {"scenes/tests/nurbs_torus.json", 48, 36},
+                       {"scenes/bench/bunny.obj", 24, 18}};
 
 // Mismatches of `q` against brute force on `rays` as nearest-hit rays; `hits` counts brute
 // force's hits.

@@ -1,9 +1,10 @@
 // Hit-exact at scale: renders of meshes of 10k to 331k triangles through every query path
-// (--accel classify, bvh, auto, brute), kernel style (vertex, fragment) and eye-ray path (the
-// query, the raster pass), with the classification's defaults and with settings that force deep
-// hierarchies, every generation checked: the primitive id and distance of every eye, reflection
-// and refraction ray and the answer of every shadow ray equal brute force's (hit_oracle.h).
-// Images are small so that the suite stays within its time; every ray of them is checked.
+// (--accel classify, bvh, auto, brute, kdtree, grid, cones), kernel style (vertex, fragment) and
+// eye-ray path (the query, the raster pass), with the classification's defaults and with settings
+// that force deep hierarchies, every generation checked: the primitive id and distance of every
+// eye, reflection and refraction ray and the answer of every shadow ray equal brute force's
+// (hit_oracle.h). Images are small so that the suite stays within its time; every ray of them is
+// checked.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -194,6 +195,8 @@ TEST(HitExact, SibenikEveryGeneration) {
                  {"classify vertex deep", Accel::kClassify, KernelStyle::kVertex, true},
                  {"auto", Accel::kAuto},
                  {"bvh", Accel::kBvh},
+                 {"kdtree", Accel::kKdTree},
+                 {"grid", Accel::kGrid},
                  {"classify raster eye rays", Accel::kClassify, KernelStyle::kAuto, false, true}},
                 6, 151, {"eye", "reflection", "shadow"});
 }
@@ -226,6 +229,9 @@ TEST(HitExact, RandomSoupEveryGeneration) {
                  {"auto deep", Accel::kAuto, KernelStyle::kAuto, true},
                  {"bvh", Accel::kBvh},
                  {"brute", Accel::kBrute},
+                 {"kdtree", Accel::kKdTree},
+                 {"grid", Accel::kGrid},
+                 {"cones", Accel::kCones},
                  {"classify raster eye rays", Accel::kClassify, KernelStyle::kAuto, false, true}},
                 6, 11, {"eye", "reflection", "refraction", "shadow"});
 }
