@@ -1,7 +1,9 @@
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <future>
@@ -73,15 +75,69 @@ class PendingTextFile {
     bool committed_ = false;
 };
 
-// The render on the OpenCL device of `ctx`, its eye rays' first hits from the path that
-// raster::ChooseEyeRays picks.
+// The OpenCL device and the frames' program, started on a worker thread when the command starts:
+// PoCL's start and its load of the program then overlap the scene load and the choice of eye
+// rays, and every frame of --frames shares the one program.
+class DeviceStart {
+  public:
+    explicit DeviceStart(const RenderArgs& r)
+        : started_(std::async(std::launch::async, Start, r.device, r.options, &abandoned_)) {}
+    DeviceStart(const DeviceStart&) = delete;
+    DeviceStart& operator=(const DeviceStart&) = delete;
+    ~DeviceStart() { abandoned_ = true; }  // then started_ waits for the worker
+
+    // Wait for the start the first time; rethrow the device's error, and the program build's.
+    clrt::Context& Context() { return *Get().ctx; }
+    const render::FrameProgram& Program() {
+        Started& started = Get();
+        if (started.buildError) std::rethrow_exception(started.buildError);
+        return started.program;
+    }
+
+  private:
+    struct Started {
+        std::unique_ptr<clrt::Context> ctx;
+        render::FrameProgram program;
+        std::exception_ptr buildError;  // reported when the render asks for the program
+    };
+    static Started Start(const std::string& spec, const render::RenderOptions& options,
+                         const std::atomic<bool>* abandoned) {
+        Started out{std::make_unique<clrt::Context>(spec), {}, {}};
+        // A command that failed meanwhile (a bad scene) need not wait for a build from source.
+        if (*abandoned) return out;
+        try {
+            out.program = render::BuildFrameProgram(*out.ctx, options);
+        } catch (...) {
+            out.buildError = std::current_exception();
+        }
+        return out;
+    }
+    Started& Get() {
+        if (!done_) done_ = started_.get();
+        return *done_;
+    }
+
+    std::atomic<bool> abandoned_{false};
+    std::future<Started> started_;
+    std::optional<Started> done_;
+};
+
+// The render on the started device, its eye rays' first hits from the path that
+// raster::ChooseEyeRays picks (while the device may still be starting).
 image::Image RenderOnDevice(const RenderArgs& r, const scene::Scene& scene,
-                            const render::RenderOptions& options, clrt::Context& ctx,
+                            const render::RenderOptions& options, DeviceStart& device,
                             render::RenderStats& stats, std::ostream& err) {
-    const raster::EyeRays eyeRays =
-        raster::ChooseEyeRays(r.eyeRays, options.rayEncoding, scene, err);
+    raster::EyeRays eyeRays;
+    try {
+        eyeRays = raster::ChooseEyeRays(r.eyeRays, options.rayEncoding, scene, err);
+    } catch (...) {
+        device.Context();  // a bad device is reported first, as when it was awaited first
+        throw;
+    }
     stats.eyeRaysChoice = eyeRays.choice;
-    return render::ClRenderer(ctx, scene, options, eyeRays.hits.get()).Render(stats);
+    render::ClRenderer renderer(device.Context(), scene, options, eyeRays.hits.get());
+    renderer.UseProgram(device.Program());
+    return renderer.Render(stats);
 }
 
 // The pixels to render: --crop's, --tile's, or all of them.
@@ -108,7 +164,7 @@ image::WriteOptions WriteOptionsOf(const RenderArgs& r) {
 // One image of the scene as it stands: rendered, written to `output` and its stats to
 // `statsPath` (none when empty; the temporary is made before the render, see PendingTextFile).
 // `t0` is when this image's work began, `loadSeconds` what loading the scene took of it.
-void RenderImage(const RenderArgs& r, const scene::Scene& scene, clrt::Context* ctx,
+void RenderImage(const RenderArgs& r, const scene::Scene& scene, DeviceStart* device,
                  const std::string& output, const std::string& statsPath, render::RenderPart part,
                  Clock::time_point t0, double loadSeconds, std::ostream& err) {
     std::optional<PendingTextFile> statsFile;
@@ -124,7 +180,7 @@ void RenderImage(const RenderArgs& r, const scene::Scene& scene, clrt::Context* 
         stats.part.crop = {w.x0, w.y0, w.x1, w.y1};
     }
     image::Image img = r.reference ? render::RenderReference(scene, options, stats)
-                                   : RenderOnDevice(r, scene, options, *ctx, stats, err);
+                                   : RenderOnDevice(r, scene, options, *device, stats, err);
     KeepAovs(r.aovs, img);
     img.sceneHash = RenderHash(scene, options, r.reference);
 
@@ -169,11 +225,8 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
     // The OpenCL platform starts (a visible part of a one-frame render with PoCL) while the
     // scene loads on one core. Errors keep their order: a bad scene is reported before a bad
     // device.
-    std::future<std::unique_ptr<clrt::Context>> device;
-    if (!r.reference) {
-        device = std::async(std::launch::async,
-                            [spec = r.device] { return std::make_unique<clrt::Context>(spec); });
-    }
+    std::optional<DeviceStart> device;
+    if (!r.reference) device.emplace(r);
     scene::Scene scene = scene::LoadScene(r.scene);
     if (r.patchBoxes) scene::SplitPatches(scene, {scene.patchFlatness, r.patchBoxes});
     if (r.width) scene.camera.width = r.width;
@@ -181,9 +234,9 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
     const double loadSeconds = SecondsSince(t0);
     const std::vector<scene::Camera> cameras =
         r.frames ? FrameCameras(r, scene) : std::vector<scene::Camera>{};
-    std::unique_ptr<clrt::Context> ctx = r.reference ? nullptr : device.get();
+    DeviceStart* started = device ? &*device : nullptr;
     if (!r.frames) {
-        RenderImage(r, scene, ctx.get(), r.output, r.statsFile, {}, t0, loadSeconds, err);
+        RenderImage(r, scene, started, r.output, r.statsFile, {}, t0, loadSeconds, err);
         return 0;
     }
     for (size_t i = 0; i < cameras.size(); ++i) {
@@ -193,7 +246,7 @@ int RenderCommand(const std::vector<std::string>& args, std::ostream& out, std::
         render::RenderPart part;
         part.frame = k;
         part.frameTime = scene.cameraPath.TimeOf(k);
-        RenderImage(r, scene, ctx.get(), FrameFile(r.output, k),
+        RenderImage(r, scene, started, FrameFile(r.output, k),
                     r.statsFile.empty() ? "" : FrameFile(r.statsFile, k), part, tFrame,
                     i == 0 ? loadSeconds : 0.0, err);
     }

@@ -47,6 +47,19 @@ bool GetU64(const std::string& in, size_t& at, uint64_t& v) {
     return true;
 }
 
+// The file's bytes in one read (an entry is megabytes: a character at a time is measurable in a
+// small scene's start-up); empty when it cannot be read.
+std::string ReadWhole(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) return {};
+    const std::streamoff size = in.tellg();
+    if (size <= 0) return {};
+    std::string data(size_t(size), '\0');
+    in.seekg(0);
+    if (!in.read(data.data(), size)) return {};
+    return data;
+}
+
 }  // namespace
 
 fs::path DefaultProgramCacheDir() {
@@ -73,9 +86,7 @@ fs::path ProgramCache::EntryPath(const std::string& key) const {
 std::vector<unsigned char> ProgramCache::Load(const std::string& key) const {
     if (!Enabled()) return {};
     const fs::path path = EntryPath(key);
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return {};
-    const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string data = ReadWhole(path);
     if (data.size() < sizeof kMagic || std::memcmp(data.data(), kMagic, sizeof kMagic) != 0) {
         return {};
     }

@@ -7,6 +7,7 @@
 #include <future>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -27,18 +28,6 @@ double SecondsSince(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-std::string KernelBuildOptions(const RenderOptions& options) {
-    std::string out;
-    for (const std::string& option :
-         {std::string(options.triangleTest == TriangleTest::kWatertight ? "-DRC_WATERTIGHT=1" : ""),
-          std::string(options.rayEncoding == RayEncoding::kPolar16 ? "-DRC_POLAR16" : ""),
-          options.buildOptions}) {
-        if (option.empty()) continue;
-        out += (out.empty() ? "" : " ") + option;
-    }
-    return out;
-}
-
 RcRenderParams MakeRenderParams(const scene::Scene& scene, const RenderOptions& options) {
     RcRenderParams params{};
     params.nTriangles = uint32_t(scene.triangles.size());
@@ -52,13 +41,15 @@ RcRenderParams MakeRenderParams(const scene::Scene& scene, const RenderOptions& 
     return params;
 }
 
-// The render's program, its build time in stats.
-cl::Program BuildProgram(clrt::Context& ctx, const RenderOptions& options, RenderStats& stats) {
-    const auto t0 = Clock::now();
-    cl::Program program =
-        BuildRenderProgram(ctx, KernelBuildOptions(options), &stats.programFromCache);
-    stats.timeS["program_build"] = SecondsSince(t0);
-    return program;
+// The frame's program: `given` (built before the render, its build time kept apart), else one
+// built here, whose build the render waits for.
+cl::Program FrameProgramOf(clrt::Context& ctx, const RenderOptions& options,
+                           const FrameProgram* given, RenderStats& stats) {
+    const FrameProgram program = given ? *given : BuildFrameProgram(ctx, options);
+    stats.programFromCache = program.fromCache;
+    stats.timeS["program_build"] = given ? 0.0 : program.seconds;
+    if (given) stats.timeS["program_build_thread"] = program.seconds;
+    return program.program;
 }
 
 // Kernel times and the ray-query time they and the query's host work add up to.
@@ -186,7 +177,8 @@ std::unique_ptr<RayQuery> WrapQuery(std::unique_ptr<RayQuery> query, const Query
 class Frame {
   public:
     Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
-          EyeHitSource* eyeHitSource, const QueryWrapper& wrapQuery, RenderStats& stats);
+          const FrameProgram* program, EyeHitSource* eyeHitSource, const QueryWrapper& wrapQuery,
+          RenderStats& stats);
 
     // Every generation, from the eye rays until no ray is spawned.
     void Trace() {
@@ -269,7 +261,8 @@ class Frame {
 };
 
 Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
-             EyeHitSource* eyeHitSource, const QueryWrapper& wrapQuery, RenderStats& stats)
+             const FrameProgram* program, EyeHitSource* eyeHitSource, const QueryWrapper& wrapQuery,
+             RenderStats& stats)
     : ctx_(ctx),
       options_(options),
       eyeHitSource_(eyeHitSource),
@@ -277,7 +270,7 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
       basis_(scene.camera, options.window),
       img_(NewImage(basis_, options.aovs)),
       bvhBuild_(StartBvhBuild(scene, options)),
-      program_(BuildProgram(ctx, options, stats)),
+      program_(FrameProgramOf(ctx, options, program, stats)),
       params_(MakeRenderParams(scene, options)),
       sceneBuffers_(ctx, scene, params_),
       query_(WrapQuery(MakeQuery(ctx, program_, sceneBuffers_, scene, options, stats, bvhBuild_),
@@ -537,9 +530,17 @@ ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const Rend
       eyeHits_(eyeHits),
       wrapQuery_(std::move(wrapQuery)) {}
 
+void ClRenderer::UseProgram(FrameProgram program) {
+    if (!ServesFrame(program, options_)) {
+        throw std::invalid_argument("UseProgram: a program built for other render options");
+    }
+    program_ = std::move(program);
+}
+
 image::Image ClRenderer::Render(RenderStats& stats) {
     const auto tStart = Clock::now();
-    Frame frame(ctx_, scene_, options_, eyeHits_, wrapQuery_, stats);
+    Frame frame(ctx_, scene_, options_, program_ ? &*program_ : nullptr, eyeHits_, wrapQuery_,
+                stats);
     frame.Trace();
     return frame.Finish(tStart);
 }

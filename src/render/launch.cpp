@@ -29,14 +29,20 @@ void CL_CALLBACK FreePages(cl_mem, void* pages) { delete static_cast<LargePages*
 
 }  // namespace
 
-cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions,
-                               bool* fromCache) {
+cl::Program BuildProgramFiles(const clrt::Context& ctx, const std::vector<std::string>& files,
+                              const std::string& extraOptions, bool* fromCache) {
     const std::string options = "-cl-std=CL1.2 -DRC_LOCAL_SIZE=" + std::to_string(kLocalSize) +
                                 (extraOptions.empty() ? "" : " " + extraOptions);
-    return ctx.BuildProgram({"camera.cl", "intersect.cl", "encoding.cl", "shade.cl", "shade16.cl",
-                             "generation.cl", "brute.cl", "classified.cl", "bvh.cl", "kdtree.cl",
-                             "grid.cl", "cones.cl", "patch_stats.cl"},
-                            options, fromCache);
+    return ctx.BuildProgram(files, options, fromCache);
+}
+
+cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions,
+                               bool* fromCache) {
+    return BuildProgramFiles(ctx,
+                             {"camera.cl", "intersect.cl", "encoding.cl", "shade.cl", "shade16.cl",
+                              "generation.cl", "brute.cl", "classified.cl", "bvh.cl", "kdtree.cl",
+                              "grid.cl", "cones.cl", "patch_stats.cl"},
+                             extraOptions, fromCache);
 }
 
 void KernelTimer::Record(const std::string& kernel, const cl::Event& event) {

@@ -9,10 +9,12 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 
 #include "rayclass/clrt/context.h"
 #include "rayclass/image/image.h"
 #include "rayclass/render/eye_hits.h"
+#include "rayclass/render/frame_program.h"
 #include "rayclass/render/options.h"
 #include "rayclass/render/ray_query.h"
 #include "rayclass/render/stats.h"
@@ -30,6 +32,9 @@ class ClRenderer {
     // the kernel either way. `wrapQuery` (empty: none) wraps the query of each Render.
     ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
                EyeHitSource* eyeHits = nullptr, QueryWrapper wrapQuery = {});
+    // Renders with `program` (BuildFrameProgram's for these options, built ahead, e.g. while the
+    // scene loads, or shared by several renders) instead of building the frame's own.
+    void UseProgram(FrameProgram program);
     image::Image Render(RenderStats& stats);
 
   private:
@@ -38,6 +43,7 @@ class ClRenderer {
     RenderOptions options_;
     EyeHitSource* eyeHits_;
     QueryWrapper wrapQuery_;
+    std::optional<FrameProgram> program_;
 };
 
 }  // namespace rayclass::render

@@ -16,6 +16,11 @@ namespace rayclass::render {
 // Work-items per work-group in every kernel launch (the kernels' reqd_work_group_size).
 constexpr size_t kLocalSize = 64;
 
+// A program of the kernel files `files` (clrt::Context::BuildProgram's, *fromCache too) with the
+// options every kernel needs and `extraOptions`.
+cl::Program BuildProgramFiles(const clrt::Context& ctx, const std::vector<std::string>& files,
+                              const std::string& extraOptions, bool* fromCache = nullptr);
+
 // The program holding every kernel the renderer uses, with the options they need
 // (*fromCache: see clrt::Context::BuildProgram).
 cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions = {},

@@ -1,0 +1,66 @@
+#include "rayclass/render/frame_program.h"
+
+#include <chrono>
+#include <vector>
+
+#include "rayclass/render/launch.h"
+
+namespace rayclass::render {
+
+namespace {
+
+// The kernel files of `accel`'s query, in BuildRenderProgram's order.
+std::vector<std::string> QueryFiles(Accel accel) {
+    switch (accel) {
+        case Accel::kClassify:
+            return {"classified.cl"};
+        case Accel::kBvh:
+            return {"bvh.cl"};
+        case Accel::kAuto:
+            return {"classified.cl", "bvh.cl"};
+        case Accel::kBrute:
+            return {"brute.cl"};
+        case Accel::kKdTree:
+            return {"kdtree.cl"};
+        case Accel::kGrid:
+            return {"grid.cl"};
+        case Accel::kCones:
+            return {"cones.cl"};
+    }
+    return {};
+}
+
+}  // namespace
+
+std::string FrameBuildOptions(const RenderOptions& options) {
+    std::string out;
+    for (const std::string& option :
+         {std::string(options.triangleTest == TriangleTest::kWatertight ? "-DRC_WATERTIGHT=1" : ""),
+          std::string(options.rayEncoding == RayEncoding::kPolar16 ? "-DRC_POLAR16" : ""),
+          options.buildOptions}) {
+        if (option.empty()) continue;
+        out += (out.empty() ? "" : " ") + option;
+    }
+    return out;
+}
+
+FrameProgram BuildFrameProgram(const clrt::Context& ctx, const RenderOptions& options) {
+    const auto t0 = std::chrono::steady_clock::now();
+    // Eye rays, shading and compaction come first, the Newton statistics of --stats last.
+    std::vector<std::string> files = {"camera.cl", "intersect.cl", "encoding.cl",
+                                      "shade.cl",  "shade16.cl",   "generation.cl"};
+    for (std::string& file : QueryFiles(options.accel)) files.push_back(std::move(file));
+    files.push_back("patch_stats.cl");
+    FrameProgram out;
+    out.accel = options.accel;
+    out.buildOptions = FrameBuildOptions(options);
+    out.program = BuildProgramFiles(ctx, files, out.buildOptions, &out.fromCache);
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+}
+
+bool ServesFrame(const FrameProgram& program, const RenderOptions& options) {
+    return program.accel == options.accel && program.buildOptions == FrameBuildOptions(options);
+}
+
+}  // namespace rayclass::render

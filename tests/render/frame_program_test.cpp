@@ -1,0 +1,76 @@
+// The frame program holds the kernels of one query only: every query must still find its own.
+#include "rayclass/render/frame_program.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+#include "rayclass/clrt/context.h"
+#include "rayclass/image/compare.h"
+#include "rayclass/render/cl_renderer.h"
+#include "rayclass/scene/loader.h"
+#include "test_device.h"
+
+namespace rayclass::render {
+namespace {
+
+clrt::Context& SharedContext() {
+    static clrt::Context ctx(TestDeviceSpec());
+    return ctx;
+}
+
+scene::Scene SmallCornell() {
+    const char* source = std::getenv("RAYCLASS_SOURCE_DIR");
+    scene::Scene scene =
+        scene::LoadScene(std::filesystem::path(source ? source : ".") / "scenes" / "cornell.json");
+    scene.camera.width = 40;
+    scene.camera.height = 30;
+    return scene;
+}
+
+RenderOptions Quiet(Accel accel) {
+    RenderOptions options;
+    options.aovs = true;
+    options.progress = false;
+    options.accel = accel;
+    return options;
+}
+
+TEST(FrameProgram, EveryQueryRendersBruteForcesImageFromItsOwnProgram) {
+    // Every query's hits are exact (the same triangle test), so each renders brute force's image
+    // to the bit; a kernel missing from its program would fail the render instead.
+    const scene::Scene scene = SmallCornell();
+    RenderStats bruteStats;
+    const image::Image brute =
+        ClRenderer(SharedContext(), scene, Quiet(Accel::kBrute)).Render(bruteStats);
+    for (const auto& [name, accel] : kAccels) {
+        if (accel == Accel::kBrute) continue;
+        RenderStats stats;
+        const image::Image img = ClRenderer(SharedContext(), scene, Quiet(accel)).Render(stats);
+        const image::ImageComparison same = image::Compare(img, brute);
+        EXPECT_EQ(same.idMismatchPixels, 0u) << name;
+        EXPECT_EQ(same.maxAbsError, 0.0) << name;
+    }
+}
+
+TEST(FrameProgram, ARendererRefusesAProgramBuiltForOtherOptions) {
+    const scene::Scene scene = SmallCornell();
+    ClRenderer renderer(SharedContext(), scene, Quiet(Accel::kAuto));
+    FrameProgram other;
+    other.accel = Accel::kBvh;
+    other.buildOptions = FrameBuildOptions(Quiet(Accel::kAuto));
+    EXPECT_THROW(renderer.UseProgram(other), std::invalid_argument);
+    RenderOptions polar = Quiet(Accel::kAuto);
+    polar.rayEncoding = RayEncoding::kPolar16;
+    other.accel = Accel::kAuto;
+    other.buildOptions = FrameBuildOptions(polar);
+    EXPECT_THROW(renderer.UseProgram(other), std::invalid_argument);
+    other.buildOptions = FrameBuildOptions(Quiet(Accel::kAuto));
+    EXPECT_NO_THROW(renderer.UseProgram(other));
+}
+
+}  // namespace
+}  // namespace rayclass::render
