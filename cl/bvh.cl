@@ -1,13 +1,13 @@
 /* Ray queries through the 8-wide bounding volume hierarchy (include/rayclass/bvh/bvh.h): one ray
  * per work-item, a per-ray stack, one float8 slab test for all children of a node, nearest child
- * first, a leaf's triangles eight at a time from its blocks (bvh/leaf_blocks.h) with the
+ * first, a leaf's triangles eight at a time from its run (bvh/leaf_blocks.h) with the
  * operations of the scalar routine, its other primitives through the routines every other query
  * uses (intersect.cl, lower id wins ties), so the hits equal brute force's exactly. Node
  * boxes are padded on the host and the slab test's far distance is widened by 2 gamma(3) (Ize
  * 2013), so rounding never culls a primitive the routines would hit. tests[i] counts primitive
  * tests (in a packet, the tests of every leaf the packet visits while ray i is active). */
-#include "rc_types.h"
 #include "intersect.cl"
+#include "rc_types.h"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -27,22 +27,45 @@ inline float3 rc_bvh_inverse(float3 d) {
     return select(inv, copysign((float3)(1e30f), inv), isinf(inv));
 }
 
-/* Moeller-Trumbore of one ray against the eight lanes of a leaf block, the same operations as
- * rc_intersect_triangle lane by lane. Returns t per lane, +inf where a lane misses or its t is not
- * below `bound`. */
+/* Eight lanes of array `a` of a leaf run of `stride` primitives from `lane0` on, zero in the
+ * lanes beyond the run (live clear): those hold the next array's words, ids among them, which as
+ * floats are denormals, slow to compute with. */
+inline float8 rc_leaf_load8(__global const float* lane0, uint stride, uint a, int8 live) {
+    return select((float8)(0.0f), vload8(0, lane0 + a * stride), live);
+}
+
+/* The ids of a leaf run's eight lanes from `lane0` on, RC_NO_HIT beyond the run. */
+inline uint8 rc_leaf_prims8(__global const float* lane0, uint stride, int8 live) {
+    return select((uint8)(RC_NO_HIT),
+                  as_uint8(vload8(0, lane0 + (RC_BVH_LEAF_ARRAYS - 1) * stride)), live);
+}
+
+/* The id of lane k of a leaf run of `stride` primitives from `lane0` on. */
+inline uint rc_leaf_prim(__global const float* lane0, uint stride, uint k) {
+    return as_uint(lane0[(RC_BVH_LEAF_ARRAYS - 1) * stride + k]);
+}
+
+/* Moeller-Trumbore of one ray against eight lanes of a leaf run (lanes beyond it zero edges,
+ * which the test rejects), the same operations as rc_intersect_triangle lane by lane. Returns t
+ * per lane, +inf where a lane misses or its t is not below `bound`. */
 inline float8 rc_bvh_triangles8(float3 o, float3 d, float tmin, float bound,
-                                __global const RcBvhLeafBlock8* blk, float8* uOut, float8* vOut) {
-    const float8 e1x = vload8(0, blk->e1x), e1y = vload8(0, blk->e1y), e1z = vload8(0, blk->e1z);
-    const float8 e2x = vload8(0, blk->e2x), e2y = vload8(0, blk->e2y), e2z = vload8(0, blk->e2z);
+                                __global const float* lane0, uint stride, int8 live, float8* uOut,
+                                float8* vOut) {
+    const float8 e1x = rc_leaf_load8(lane0, stride, 3, live);
+    const float8 e1y = rc_leaf_load8(lane0, stride, 4, live);
+    const float8 e1z = rc_leaf_load8(lane0, stride, 5, live);
+    const float8 e2x = rc_leaf_load8(lane0, stride, 6, live);
+    const float8 e2y = rc_leaf_load8(lane0, stride, 7, live);
+    const float8 e2z = rc_leaf_load8(lane0, stride, 8, live);
     /* pv = cross(d, e2) */
     const float8 pvx = d.y * e2z - e2y * d.z;
     const float8 pvy = d.z * e2x - e2z * d.x;
     const float8 pvz = d.x * e2y - e2x * d.y;
     const float8 det = e1x * pvx + e1y * pvy + e1z * pvz;
     const float8 invDet = 1.0f / det;
-    const float8 tvx = o.x - vload8(0, blk->v0x);
-    const float8 tvy = o.y - vload8(0, blk->v0y);
-    const float8 tvz = o.z - vload8(0, blk->v0z);
+    const float8 tvx = o.x - rc_leaf_load8(lane0, stride, 0, live);
+    const float8 tvy = o.y - rc_leaf_load8(lane0, stride, 1, live);
+    const float8 tvz = o.z - rc_leaf_load8(lane0, stride, 2, live);
     const float8 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
     /* qv = cross(tv, e1) */
     const float8 qvx = tvy * e1z - e1y * tvz;
@@ -59,41 +82,43 @@ inline float8 rc_bvh_triangles8(float3 o, float3 d, float tmin, float bound,
 
 /* The leaf one primitive at a time, for the watertight triangle test, which has no eight-lane
  * form: the same answer and count as rc_bvh_leaf. */
-inline int rc_bvh_leaf_scalar(uint count, __global const RcBvhLeafBlock8* blk, float3 o, float3 d,
+inline int rc_bvh_leaf_scalar(uint count, __global const float* leaf, float3 o, float3 d,
                               float tmin, float tmax, int anyHit,
                               __global const RcTriangle* triangles,
                               __global const RcSphere* spheres, __global const RcQuadric* quadrics,
                               uint nT, uint nS, RcHit* best, uint* tests) {
     for (uint k = 0; k < count; ++k) {
         ++*tests;
-        if (rc_intersect_primitive(blk[k / 8].prim[k % 8], o, d, tmin, tmax, triangles, spheres,
-                                   quadrics, nT, nS, best) &&
+        if (rc_intersect_primitive(rc_leaf_prim(leaf, count, k), o, d, tmin, tmax, triangles,
+                                   spheres, quadrics, nT, nS, best) &&
             anyHit)
             return 1;
     }
     return 0;
 }
 
-/* The leaf whose `count` primitives fill the blocks from `blk` on, with the lower-id tie-break.
+/* The leaf whose `count` primitives fill the run at `leaf`, with the lower-id tie-break.
  * Returns 1 when anyHit and a primitive was hit; *tests counts the primitives tested, as if one
  * at a time in lane order up to an any-hit (the count rc_intersect_primitive walks would give). */
-inline int rc_bvh_leaf(uint count, __global const RcBvhLeafBlock8* blk, float3 o, float3 d,
-                       float tmin, float tmax, int anyHit, __global const RcTriangle* triangles,
+inline int rc_bvh_leaf(uint count, __global const float* leaf, float3 o, float3 d, float tmin,
+                       float tmax, int anyHit, __global const RcTriangle* triangles,
                        __global const RcSphere* spheres, __global const RcQuadric* quadrics,
                        uint nT, uint nS, RcHit* best, uint* tests) {
-    for (uint first = 0; first < count; first += 8, ++blk) {
+    for (uint first = 0; first < count; first += 8) {
+        __global const float* lane0 = leaf + first;
         const uint lanes = min(8u, count - first);
+        const int8 live = (int8)(0, 1, 2, 3, 4, 5, 6, 7) < (int8)(lanes);
         float8 u8, v8;
         const float8 t8 = rc_bvh_triangles8(o, d, tmin, fmin(tmax, nextafter(best->t, INFINITY)),
-                                            blk, &u8, &v8);
-        const uint8 prim8 = vload8(0, blk->prim);
+                                            lane0, count, live, &u8, &v8);
+        const uint8 prim8 = rc_leaf_prims8(lane0, count, live);
         /* Spheres and quadrics take the scalar routines. */
         const int8 other8 = (prim8 >= (uint8)(nT)) & (prim8 != (uint8)(RC_NO_HIT));
         float ts[8];
         vstore8(t8, 0, ts);
         if (anyHit) {
             for (uint k = 0; k < lanes; ++k) {
-                const uint prim = blk->prim[k];
+                const uint prim = rc_leaf_prim(lane0, count, k);
                 ++*tests;
                 if (prim >= nT ? rc_intersect_primitive(prim, o, d, tmin, tmax, triangles, spheres,
                                                         quadrics, nT, nS, best)
@@ -112,7 +137,7 @@ inline int rc_bvh_leaf(uint count, __global const RcBvhLeafBlock8* blk, float3 o
             vstore8(u8, 0, us);
             vstore8(v8, 0, vs);
             for (uint k = 0; k < lanes; ++k) {
-                const uint prim = blk->prim[k];
+                const uint prim = rc_leaf_prim(lane0, count, k);
                 if (ts[k] < best->t ||
                     (ts[k] == best->t && ts[k] != INFINITY && prim < best->prim)) {
                     best->t = ts[k];
@@ -124,10 +149,10 @@ inline int rc_bvh_leaf(uint count, __global const RcBvhLeafBlock8* blk, float3 o
         }
         if (any(other8)) {
             for (uint k = 0; k < lanes; ++k) {
-                const uint prim = blk->prim[k];
+                const uint prim = rc_leaf_prim(lane0, count, k);
                 if (prim >= nT)
-                    rc_intersect_primitive(prim, o, d, tmin, tmax, triangles, spheres, quadrics,
-                                           nT, nS, best);
+                    rc_intersect_primitive(prim, o, d, tmin, tmax, triangles, spheres, quadrics, nT,
+                                           nS, best);
             }
         }
     }
@@ -142,7 +167,7 @@ inline int rc_bvh_leaf(uint count, __global const RcBvhLeafBlock8* blk, float3 o
 
 /* Walks the tree; with anyHit it returns at the first hit. Returns the primitive tests done. */
 inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
-                         __global const RcBvh8Node* nodes, __global const RcBvhLeafBlock8* blocks,
+                         __global const RcBvh8Node* nodes, __global const float* leaves,
                          __global const RcTriangle* triangles, __global const RcSphere* spheres,
                          __global const RcQuadric* quadrics, uint nT, uint nS, RcHit* best) {
     const float8 ox = (float8)(o.x), oy = (float8)(o.y), oz = (float8)(o.z);
@@ -158,8 +183,8 @@ inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
     for (;;) {
         if (ref & RC_BVH8_LEAF) {
             const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
-            if (RC_BVH_LEAF(count, blocks + (ref & RC_BVH8_FIRST_MASK), o, d, tmin, tmax, anyHit,
-                            triangles, spheres, quadrics, nT, nS, best, &tests))
+            if (RC_BVH_LEAF(count, leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN, o, d,
+                            tmin, tmax, anyHit, triangles, spheres, quadrics, nT, nS, best, &tests))
                 return tests;
         } else {
             __global const RcBvh8Node* nd = nodes + ref;
@@ -351,9 +376,9 @@ inline int rc_bvh_load_packet(__global const RcRay* rays, uint first, uint n, in
 /* Walks the tree once for the packet: nearest hits in (bt, bp, bu, bv), or with anyHit the lanes
  * that found a hit in *blocked (a lane stops at its first). Returns primitive tests per lane. */
 inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
-                                  __global const RcBvh8Node* nodes,
-                                  __global const RcBvhLeafBlock8* blocks, float16* bt, uint16* bp,
-                                  float16* bu, float16* bv, int16* blocked) {
+                                  __global const RcBvh8Node* nodes, __global const float* leaves,
+                                  float16* bt, uint16* bp, float16* bu, float16* bv,
+                                  int16* blocked) {
     uint stackRef[RC_BVH_STACK];
     float stackT[RC_BVH_STACK];
     int sp = 0;
@@ -363,13 +388,13 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
     for (;;) {
         if (ref & RC_BVH8_LEAF) {
             const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
-            __global const RcBvhLeafBlock8* blk = blocks + (ref & RC_BVH8_FIRST_MASK);
+            __global const float* leaf = leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN;
             for (uint k = 0; k < count; ++k) {
-                __global const RcBvhLeafBlock8* b = blk + k / 8;
-                const uint lane = k % 8;
-                const uint prim = b->prim[lane];
-                const float e1x = b->e1x[lane], e1y = b->e1y[lane], e1z = b->e1z[lane];
-                const float e2x = b->e2x[lane], e2y = b->e2y[lane], e2z = b->e2z[lane];
+                /* lane k of the run's arrays */
+                __global const float* w = leaf + k;
+                const uint prim = rc_leaf_prim(leaf, count, k);
+                const float e1x = w[3 * count], e1y = w[4 * count], e1z = w[5 * count];
+                const float e2x = w[6 * count], e2y = w[7 * count], e2z = w[8 * count];
                 tests += as_uint16(active) & (uint16)(1);
                 /* rc_intersect_triangle's operations, lane by lane */
                 const float16 pvx = p->dy * e2z - e2y * p->dz;
@@ -377,9 +402,9 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                 const float16 pvz = p->dx * e2y - e2x * p->dy;
                 const float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
                 const float16 invDet = 1.0f / det;
-                const float16 tvx = p->ox - b->v0x[lane];
-                const float16 tvy = p->oy - b->v0y[lane];
-                const float16 tvz = p->oz - b->v0z[lane];
+                const float16 tvx = p->ox - w[0];
+                const float16 tvy = p->oy - w[count];
+                const float16 tvz = p->oz - w[2 * count];
                 const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
                 const float16 qvx = tvy * e1z - e1y * tvz;
                 const float16 qvy = tvz * e1x - e1z * tvx;
@@ -387,9 +412,8 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                 const float16 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
                 const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
                 const uint16 prim16 = (uint16)(prim);
-                const int16 hit = active & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) &
-                                  (v >= 0.0f) & (u + v <= 1.0f) & (t > p->tmin) &
-                                  (t < p->tmax) &
+                const int16 hit = active & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
+                                  (u + v <= 1.0f) & (t > p->tmin) & (t < p->tmax) &
                                   ((t < *bt) | ((t == *bt) & (prim16 < *bp)));
                 *bt = select(*bt, t, hit);
                 *bp = select(*bp, prim16, as_uint16(hit));
@@ -493,7 +517,7 @@ inline void rc_ray_store_answer(int anyHit, uint i, RcHit best, __global RcHit* 
  * tests[ray] its primitive tests. A coherent packet walks the tree once, other rays one by
  * one. */
 inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
-                          __global const RcBvh8Node* nodes, __global const RcBvhLeafBlock8* blocks,
+                          __global const RcBvh8Node* nodes, __global const float* leaves,
                           __global const RcTriangle* triangles, __global const RcSphere* spheres,
                           __global const RcQuadric* quadrics,
                           __constant const RcRenderParams* params, __global RcHit* hits,
@@ -505,7 +529,7 @@ inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, ui
         uint16 bp = (uint16)(RC_NO_HIT);
         int16 blocked = (int16)(0);
         const uint16 count =
-            rc_bvh_trace_packet(&p, anyHit, nodes, blocks, &bt, &bp, &bu, &bv, &blocked);
+            rc_bvh_trace_packet(&p, anyHit, nodes, leaves, &bt, &bp, &bu, &bv, &blocked);
         rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, 0, hits, blockedOut);
         rc_packet_store_counts(first, n, count, 0, tests);
         return;
@@ -516,7 +540,7 @@ inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, ui
         uint count = 0;
         if (rc_ray_walks(anyHit, r.direction.w, params))
             count = rc_bvh_trace(r.origin.xyz, r.direction.xyz, r.origin.w, r.direction.w, anyHit,
-                                 nodes, blocks, triangles, spheres, quadrics, params->nTriangles,
+                                 nodes, leaves, triangles, spheres, quadrics, params->nTriangles,
                                  params->nSpheres, &best);
         rc_ray_store_answer(anyHit, i, best, hits, blockedOut);
         tests[i] = count;
@@ -526,23 +550,23 @@ inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, ui
 /* One work-item per 16 rays rays[16 i, 16 i + 16). */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_intersect_bvh(
     __global const RcRay* rays, uint n, __global const RcBvh8Node* nodes,
-    __global const RcBvhLeafBlock8* blocks, __global const RcTriangle* triangles,
+    __global const float* leaves, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
     __constant const RcRenderParams* params, __global RcHit* hits, __global uint* tests) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    rc_bvh_answer(0, rays, first, n, nodes, blocks, triangles, spheres, quadrics, params, hits,
-                  0, tests);
+    rc_bvh_answer(0, rays, first, n, nodes, leaves, triangles, spheres, quadrics, params, hits, 0,
+                  tests);
 }
 
 /* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_bvh(
     __global const RcRay* rays, uint n, __global const RcBvh8Node* nodes,
-    __global const RcBvhLeafBlock8* blocks, __global const RcTriangle* triangles,
+    __global const float* leaves, __global const RcTriangle* triangles,
     __global const RcSphere* spheres, __global const RcQuadric* quadrics,
     __constant const RcRenderParams* params, __global uchar* blocked, __global uint* tests) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    rc_bvh_answer(1, rays, first, n, nodes, blocks, triangles, spheres, quadrics, params, 0,
+    rc_bvh_answer(1, rays, first, n, nodes, leaves, triangles, spheres, quadrics, params, 0,
                   blocked, tests);
 }

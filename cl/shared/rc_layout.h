@@ -142,17 +142,6 @@
     STRUCT(RcKdNode)                     \
     FIELD(RcKdNode, word)                \
     FIELD(RcKdNode, data)                \
-    STRUCT(RcBvhLeafBlock8)              \
-    FIELD(RcBvhLeafBlock8, v0x)          \
-    FIELD(RcBvhLeafBlock8, v0y)          \
-    FIELD(RcBvhLeafBlock8, v0z)          \
-    FIELD(RcBvhLeafBlock8, e1x)          \
-    FIELD(RcBvhLeafBlock8, e1y)          \
-    FIELD(RcBvhLeafBlock8, e1z)          \
-    FIELD(RcBvhLeafBlock8, e2x)          \
-    FIELD(RcBvhLeafBlock8, e2y)          \
-    FIELD(RcBvhLeafBlock8, e2z)          \
-    FIELD(RcBvhLeafBlock8, prim)         \
     STRUCT(RcCone)                       \
     FIELD(RcCone, apex)                  \
     FIELD(RcCone, axis)

@@ -243,26 +243,26 @@ typedef struct RcBvh8Node {
  * kdtree.h). word & 3 is the split axis of an inner node, 3 for a leaf; word >> 2 is the index
  * of an inner node's upper child (its lower child is the next node) or a leaf's primitive
  * count. data is an inner node's split position (its float's bits) or where a leaf's primitives
- * begin: on the host their position in the primitive index list, on the device the index of
- * their first leaf block (RcBvhLeafBlock8). 8 bytes. */
+ * begin, their position in the primitive index list. 8 bytes. */
 #define RC_KD_LEAF 3u
 typedef struct RcKdNode {
     rc_uint word;
     rc_uint data;
 } RcKdNode;
 
-/* The primitives of a leaf of the 8-wide hierarchy in blocks of eight lanes, structure of arrays,
- * so that one float8 Moller-Trumbore test covers a block (cl/bvh.cl). Triangle lanes hold v0 and
- * the edges e1 = v1 - v0, e2 = v2 - v0; sphere, quadric and unused lanes hold zero edges, which
- * the triangle test rejects (det = 0). prim: the lanes' global ids, RC_NO_HIT in unused lanes.
- * The kernels' leaf references name the leaf's first block in place of its primIndex position
- * (include/rayclass/bvh/leaf_blocks.h). 320 bytes. */
-typedef struct RcBvhLeafBlock8 {
-    float v0x[8], v0y[8], v0z[8];
-    float e1x[8], e1y[8], e1z[8];
-    float e2x[8], e2y[8], e2z[8];
-    rc_uint prim[8];
-} RcBvhLeafBlock8;
+/* The primitives of the 8-wide hierarchy's leaves as cl/bvh.cl tests them, sized to each leaf:
+ * a leaf of count primitives is a run of RC_BVH_LEAF_ARRAYS * count 32-bit words, structure of
+ * arrays over exactly its primitives, v0x[count], v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z, prim
+ * (floats, then global ids), so that eight-lane loads cover it and a leaf visit reads only the
+ * cache lines its primitives fill. Triangle lanes hold v0 and the edges e1 = v1 - v0, e2 = v2 - v0;
+ * sphere and quadric lanes hold zero edges, which the triangle test rejects (det = 0). Runs
+ * start at multiples of RC_BVH_LEAF_ALIGN words, which the kernels' leaf references count in
+ * place of the primIndex position (include/rayclass/bvh/leaf_blocks.h); RC_BVH_LEAF_TAIL zero
+ * words follow the last run, so that an eight-lane load from any lane of a run stays in the
+ * buffer. */
+#define RC_BVH_LEAF_ARRAYS 10u
+#define RC_BVH_LEAF_ALIGN 4u
+#define RC_BVH_LEAF_TAIL 8u
 
 /* A cone enclosing a tile of rays (--accel cones; include/rayclass/accel/cones.h): every ray's
  * origin inside it and every direction within its half-angle phi of its axis, so the cone holds

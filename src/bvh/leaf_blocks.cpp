@@ -1,5 +1,6 @@
 #include "rayclass/bvh/leaf_blocks.h"
 
+#include <bit>
 #include <stdexcept>
 #include <string>
 
@@ -7,27 +8,19 @@ namespace rayclass::bvh {
 
 namespace {
 
-// Lane `lane` of `block` holds primitive `prim`: its vertex and edges when it is a triangle
-// (the edges rounded as rc_intersect_triangle rounds them), zeros otherwise.
-void SetLane(RcBvhLeafBlock8& block, uint32_t lane, uint32_t prim, const scene::Scene& scene) {
-    block.prim[lane] = prim;
+// Lane `lane` of the run at `run` of a leaf of `count` primitives holds primitive `prim`: its
+// vertex and edges when it is a triangle (the edges rounded as rc_intersect_triangle rounds
+// them), zeros otherwise.
+void SetLane(uint32_t* run, uint32_t count, uint32_t lane, uint32_t prim,
+             const scene::Scene& scene) {
+    run[(RC_BVH_LEAF_ARRAYS - 1) * count + lane] = prim;
     if (prim >= scene.triangles.size()) return;
     const auto& p = scene.triangles[prim].p;
-    block.v0x[lane] = p[0].x;
-    block.v0y[lane] = p[0].y;
-    block.v0z[lane] = p[0].z;
-    block.e1x[lane] = p[1].x - p[0].x;
-    block.e1y[lane] = p[1].y - p[0].y;
-    block.e1z[lane] = p[1].z - p[0].z;
-    block.e2x[lane] = p[2].x - p[0].x;
-    block.e2y[lane] = p[2].y - p[0].y;
-    block.e2z[lane] = p[2].z - p[0].z;
-}
-
-RcBvhLeafBlock8 EmptyBlock() {
-    RcBvhLeafBlock8 block{};
-    for (uint32_t& prim : block.prim) prim = RC_NO_HIT;
-    return block;
+    const float values[RC_BVH_LEAF_ARRAYS - 1] = {
+        p[0].x,          p[0].y,          p[0].z,          p[1].x - p[0].x, p[1].y - p[0].y,
+        p[1].z - p[0].z, p[2].x - p[0].x, p[2].y - p[0].y, p[2].z - p[0].z};
+    for (uint32_t a = 0; a + 1 < RC_BVH_LEAF_ARRAYS; ++a)
+        run[a * count + lane] = std::bit_cast<uint32_t>(values[a]);
 }
 
 }  // namespace
@@ -35,34 +28,30 @@ RcBvhLeafBlock8 EmptyBlock() {
 BlockedBvh BlockLeaves(std::vector<RcBvh8Node> nodes, std::span<const uint32_t> primIndex,
                        const scene::Scene& scene) {
     BlockedBvh out;
-    out.blocks.reserve(primIndex.size() / 4 + 1);
+    out.leaves.reserve(RC_BVH_LEAF_ARRAYS * primIndex.size() + RC_BVH_LEAF_TAIL);
     for (RcBvh8Node& node : nodes) {
         for (uint32_t c = 0; c < node.nChildren; ++c) {
             const uint32_t ref = node.child[c];
             if (!(ref & RC_BVH8_LEAF)) continue;
             const uint32_t first = ref & RC_BVH8_FIRST_MASK;
             const uint32_t count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
-            const size_t block = out.blocks.size();
-            if (block + (count + 7) / 8 > size_t(RC_BVH8_FIRST_MASK) + 1)
-                throw std::runtime_error("bvh: more leaf blocks than the kernels can address (" +
-                                         std::to_string(RC_BVH8_FIRST_MASK + 1) + ")");
-            for (uint32_t k = 0; k < count; ++k) {
-                if (k % 8 == 0) out.blocks.push_back(EmptyBlock());
-                SetLane(out.blocks.back(), k % 8, primIndex[first + k], scene);
-            }
-            node.child[c] = (ref & ~RC_BVH8_FIRST_MASK) | uint32_t(block);
+            const size_t at = out.leaves.size() / RC_BVH_LEAF_ALIGN;
+            if (at > RC_BVH8_FIRST_MASK)
+                throw std::runtime_error(
+                    "bvh: more leaf words than the kernels can address (" +
+                    std::to_string(size_t(RC_BVH8_FIRST_MASK + 1) * RC_BVH_LEAF_ALIGN) + ")");
+            const size_t words = RC_BVH_LEAF_ARRAYS * count;
+            out.leaves.resize(out.leaves.size() + (words + RC_BVH_LEAF_ALIGN - 1) /
+                                                      RC_BVH_LEAF_ALIGN * RC_BVH_LEAF_ALIGN);
+            uint32_t* run = out.leaves.data() + at * RC_BVH_LEAF_ALIGN;
+            for (uint32_t k = 0; k < count; ++k)
+                SetLane(run, count, k, primIndex[first + k], scene);
+            node.child[c] = (ref & ~RC_BVH8_FIRST_MASK) | uint32_t(at);
         }
     }
+    out.leaves.resize(out.leaves.size() + RC_BVH_LEAF_TAIL);
     out.nodes = std::move(nodes);
     return out;
-}
-
-void AppendBlocks(std::span<const uint32_t> prims, const scene::Scene& scene,
-                  std::vector<RcBvhLeafBlock8>& blocks) {
-    for (size_t k = 0; k < prims.size(); ++k) {
-        if (k % 8 == 0) blocks.push_back(EmptyBlock());
-        SetLane(blocks.back(), uint32_t(k % 8), prims[k], scene);
-    }
 }
 
 }  // namespace rayclass::bvh

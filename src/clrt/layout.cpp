@@ -25,7 +25,6 @@ static_assert(sizeof(RcCandidate) == 8);
 static_assert(sizeof(RcTriangleBlock16) == 704);
 static_assert(sizeof(RcBvh8Node) == 256);
 static_assert(sizeof(RcKdNode) == 8);
-static_assert(sizeof(RcBvhLeafBlock8) == 320);
 static_assert(sizeof(RcCone) == 32 && alignof(RcCone) == 16);
 
 static_assert(alignof(RcTriangle) == 16 && alignof(RcTriangleShading) == 16 &&

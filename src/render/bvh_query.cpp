@@ -16,9 +16,9 @@ class BvhQuery final : public RayQuery {
         : ctx_(ctx),
           scene_(scene),
           nodes_(UploadVector(ctx, tree.nodes)),
-          blocks_(UploadVector(ctx, tree.blocks)),
+          leaves_(UploadVector(ctx, tree.leaves)),
           bytes_(double(tree.nodes.size() * sizeof(RcBvh8Node) +
-                        tree.blocks.size() * sizeof(RcBvhLeafBlock8))),
+                        tree.leaves.size() * sizeof(uint32_t))),
           intersect_(program, "rc_intersect_bvh"),
           occluded_(program, "rc_occluded_bvh") {}
 
@@ -48,7 +48,7 @@ class BvhQuery final : public RayQuery {
     void Run(cl::Kernel& kernel, const cl::Buffer& rays, uint32_t n, const cl::Buffer& out,
              KernelTimer& timer) {
         if (n == 0) return;
-        SetArgs(kernel, rays, n, nodes_, blocks_, scene_.triangles, scene_.spheres, scene_.quadrics,
+        SetArgs(kernel, rays, n, nodes_, leaves_, scene_.triangles, scene_.spheres, scene_.quadrics,
                 scene_.params, out, testsBuffer_.Reserve(ctx_, n * sizeof(uint32_t)));
         Launch(ctx_, kernel, PacketItems(n), timer);
     }
@@ -59,7 +59,7 @@ class BvhQuery final : public RayQuery {
 
     clrt::Context& ctx_;
     const SceneBuffers& scene_;
-    cl::Buffer nodes_, blocks_;
+    cl::Buffer nodes_, leaves_;
     double bytes_;
     cl::Kernel intersect_, occluded_;
     GrowingBuffer testsBuffer_;
