@@ -6,9 +6,8 @@
  * boxes are padded on the host and the slab test's far distance is widened by 2 gamma(3) (Ize
  * 2013), so rounding never culls a primitive the routines would hit. tests[i] counts primitive
  * tests (in a packet, the tests of every leaf the packet visits while ray i is active). */
-#include "intersect.cl"
 #include "rc_types.h"
-#include "vec16.cl"
+#include "intersect.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -85,8 +84,8 @@ inline int rc_bvh_leaf(uint count, __global const RcBvhLeafBlock8* blk, float3 o
     for (uint first = 0; first < count; first += 8, ++blk) {
         const uint lanes = min(8u, count - first);
         float8 u8, v8;
-        const float8 t8 =
-            rc_bvh_triangles8(o, d, tmin, fmin(tmax, nextafter(best->t, INFINITY)), blk, &u8, &v8);
+        const float8 t8 = rc_bvh_triangles8(o, d, tmin, fmin(tmax, nextafter(best->t, INFINITY)),
+                                            blk, &u8, &v8);
         const uint8 prim8 = vload8(0, blk->prim);
         /* Spheres and quadrics take the scalar routines. */
         const int8 other8 = (prim8 >= (uint8)(nT)) & (prim8 != (uint8)(RC_NO_HIT));
@@ -127,8 +126,8 @@ inline int rc_bvh_leaf(uint count, __global const RcBvhLeafBlock8* blk, float3 o
             for (uint k = 0; k < lanes; ++k) {
                 const uint prim = blk->prim[k];
                 if (prim >= nT)
-                    rc_intersect_primitive(prim, o, d, tmin, tmax, triangles, spheres, quadrics, nT,
-                                           nS, best);
+                    rc_intersect_primitive(prim, o, d, tmin, tmax, triangles, spheres, quadrics,
+                                           nT, nS, best);
             }
         }
     }
@@ -226,6 +225,20 @@ inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
 
 inline float16 rc_min16(float16 a, float16 b) { return select(b, a, a < b); }
 inline float16 rc_max16(float16 a, float16 b) { return select(b, a, a > b); }
+
+inline float rc_hmin16(float16 a) {
+    const float8 m8 = fmin(a.lo, a.hi);
+    const float4 m4 = fmin(m8.lo, m8.hi);
+    const float2 m2 = fmin(m4.lo, m4.hi);
+    return fmin(m2.x, m2.y);
+}
+
+inline float rc_hmax16(float16 a) {
+    const float8 m8 = fmax(a.lo, a.hi);
+    const float4 m4 = fmax(m8.lo, m8.hi);
+    const float2 m2 = fmax(m4.lo, m4.hi);
+    return fmax(m2.x, m2.y);
+}
 
 /* The rays of a packet, the lanes over the rays; inactive lanes hold a harmless ray. */
 typedef struct RcBvhPacket {
@@ -374,8 +387,9 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                 const float16 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
                 const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
                 const uint16 prim16 = (uint16)(prim);
-                const int16 hit = active & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
-                                  (u + v <= 1.0f) & (t > p->tmin) & (t < p->tmax) &
+                const int16 hit = active & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) &
+                                  (v >= 0.0f) & (u + v <= 1.0f) & (t > p->tmin) &
+                                  (t < p->tmax) &
                                   ((t < *bt) | ((t == *bt) & (prim16 < *bp)));
                 *bt = select(*bt, t, hit);
                 *bp = select(*bp, prim16, as_uint16(hit));
@@ -517,8 +531,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     __constant const RcRenderParams* params, __global RcHit* hits, __global uint* tests) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    rc_bvh_answer(0, rays, first, n, nodes, blocks, triangles, spheres, quadrics, params, hits, 0,
-                  tests);
+    rc_bvh_answer(0, rays, first, n, nodes, blocks, triangles, spheres, quadrics, params, hits,
+                  0, tests);
 }
 
 /* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */

@@ -13,10 +13,9 @@
  *   branches; the packet stops when every lane's hit is nearer than the next candidate.
  * Distance optimisation: a candidate whose box starts (nearX, along the face's main axis) beyond
  * the ray's current hit X cannot be nearer, and neither can any later one. */
-#include "intersect.cl"
 #include "rc_types.h"
+#include "intersect.cl"
 #include "shade.cl"
-#include "vec16.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -146,7 +145,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_gath
 /* Moeller-Trumbore of one ray against the 16 triangle lanes of a block, the same operations as
  * rc_intersect_triangle lane by lane. Returns t per lane, +inf where a lane misses. */
 inline float16 rc_triangles16(float3 o, float3 d, float tmin, float tmax,
-                              __global const RcTriangleBlock16* blk, float16* uOut, float16* vOut) {
+                              __global const RcTriangleBlock16* blk, float16* uOut,
+                              float16* vOut) {
     const float16 e1x = vload16(0, blk->e1x), e1y = vload16(0, blk->e1y),
                   e1z = vload16(0, blk->e1z);
     const float16 e2x = vload16(0, blk->e2x), e2y = vload16(0, blk->e2y),
@@ -167,8 +167,8 @@ inline float16 rc_triangles16(float3 o, float3 d, float tmin, float tmax,
     const float16 qvz = tvx * e1y - e1x * tvy;
     const float16 v = (d.x * qvx + d.y * qvy + d.z * qvz) * invDet;
     const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
-    const int16 ok = (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) & (u + v <= 1.0f) &
-                     (t > tmin) & (t < tmax);
+    const int16 ok = (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
+                     (u + v <= 1.0f) & (t > tmin) & (t < tmax);
     *uOut = u;
     *vOut = v;
     return select((float16)(INFINITY), t, ok);
@@ -176,10 +176,10 @@ inline float16 rc_triangles16(float3 o, float3 d, float tmin, float tmax,
 
 inline void rc_vertex_update(float16 t, float16 u, float16 v, __global const RcTriangleBlock16* blk,
                              RcHit* best) {
-    const float tMin16 =
-        min(min(min(t.s0, t.s1), min(t.s2, t.s3)), min(min(t.s4, t.s5), min(t.s6, t.s7)));
-    const float tMin16b =
-        min(min(min(t.s8, t.s9), min(t.sa, t.sb)), min(min(t.sc, t.sd), min(t.se, t.sf)));
+    const float tMin16 = min(min(min(t.s0, t.s1), min(t.s2, t.s3)),
+                             min(min(t.s4, t.s5), min(t.s6, t.s7)));
+    const float tMin16b = min(min(min(t.s8, t.s9), min(t.sa, t.sb)),
+                              min(min(t.sc, t.sd), min(t.se, t.sf)));
     if (!(min(tMin16, tMin16b) <= best->t)) return;
     float ts[16], us[16], vs[16];
     vstore16(t, 0, ts);
@@ -201,7 +201,8 @@ inline void rc_vertex_update(float16 t, float16 u, float16 v, __global const RcT
 inline RcHit rc_vertex_nearest(const RcRay* ray, RcLeaf leaf, uint firstBlock,
                                __global const RcTriangleBlock16* blocks,
                                __global const RcTriangle* triangles,
-                               __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+                               __global const RcSphere* spheres,
+                               __global const RcQuadric* quadrics,
                                __constant const RcRenderParams* params, uint* tested) {
     const float3 o = ray->origin.xyz, d = ray->direction.xyz;
     const float tmin = ray->origin.w, tmax = ray->direction.w;
@@ -290,7 +291,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
 typedef struct RcLanes16 {
     float16 ox, oy, oz, dx, dy, dz, tmin, tmax;
     float16 x, dX, speed; /* the origins' X, the directions' component and its size along the
-                           * leaf's face */
+                            * leaf's face */
 } RcLanes16;
 
 /* The rays of a packet as lanes: the leaf's rays [first, first + 16), unused lanes repeating the
@@ -299,8 +300,8 @@ typedef struct RcLanes16 {
  * transposed there:
  * lanes written one float at a time to private arrays and read back as float16 cost half the
  * fragment kernel's time on PoCL (the arrays become per-work-item context memory). */
-#define RC_LANES16(a, f)                                                                      \
-    (float16)(a[0].f, a[1].f, a[2].f, a[3].f, a[4].f, a[5].f, a[6].f, a[7].f, a[8].f, a[9].f, \
+#define RC_LANES16(a, f)                                                                         \
+    (float16)(a[0].f, a[1].f, a[2].f, a[3].f, a[4].f, a[5].f, a[6].f, a[7].f, a[8].f, a[9].f,  \
               a[10].f, a[11].f, a[12].f, a[13].f, a[14].f, a[15].f)
 RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const RcRay* rays, __global const uint* rayIndex,
                                          RcLeaf leaf, uint first, uint* ids) {
@@ -350,8 +351,8 @@ RC_SHADE_INLINE void rc_prefetch_packet(__global const RcRay* rays, __global con
 
 /* rc_intersect_triangle for 16 rays against one triangle, the same operations lane by lane:
  * the lanes that hit inside (tmin, tmax), with t, u and v. */
-RC_SHADE_INLINE int16 rc_packet_triangle(const RcLanes16* L, RcTriangle tri, float16* t, float16* u,
-                                         float16* v) {
+RC_SHADE_INLINE int16 rc_packet_triangle(const RcLanes16* L, RcTriangle tri, float16* t,
+                                         float16* u, float16* v) {
     const float16 Ox = L->ox, Oy = L->oy, Oz = L->oz, Dx = L->dx, Dy = L->dy, Dz = L->dz;
     const float3 p0 = tri.v0.xyz;
     const float3 e1 = tri.v1.xyz - p0;
@@ -461,7 +462,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     for (; c < leaf.candCount; ++c) {
         const RcCandidate cand = candidates[leaf.candBegin + c];
         /* Every lane done: its hit is strictly nearer than this candidate's box. */
-        const int16 done = (bestPrim != (uint16)(RC_NO_HIT)) & (L.x + bestT * L.speed < cand.nearX);
+        const int16 done =
+            (bestPrim != (uint16)(RC_NO_HIT)) & (L.x + bestT * L.speed < cand.nearX);
         if (all(done)) break;
         const uint prim = cand.prim;
         float16 t, u = 0.0f, v = 0.0f;
@@ -505,69 +507,6 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     tests[p] = c * count;
 }
 
-/* Four planes that leave every segment of a packet of shadow rays on one side (at or below
- * `limit`), for a test that a triangle lies wholly beyond one of them. The planes run through the
- * end of the first lane (the light, where every lane ends) along the lanes' least and largest
- * slopes across the face's main axis, so for rays from one point they hug the packet's narrow
- * cone; `limit` is the largest value any lane's two ends take, so the test holds for any rays,
- * and a margin far above the rounding of these sums and of rc_intersect_triangle's keeps a
- * triangle the routine would hit. plane k of point p: a[k] p.x + b[k] p.y + c[k] p.z + d[k]. */
-typedef struct RcBeam4 {
-    float4 a, b, c, d, limit;
-} RcBeam4;
-
-inline float rc_lane0(float16 v) { return v.s0; }
-
-/* The plane values of the lanes' points (x, y, z) as a float16 each, largest over the lanes. */
-inline float4 rc_beam_max16(const RcBeam4* B, float16 x, float16 y, float16 z) {
-    float4 m;
-    m.x = rc_hmax16(B->a.x * x + B->b.x * y + B->c.x * z + B->d.x);
-    m.y = rc_hmax16(B->a.y * x + B->b.y * y + B->c.y * z + B->d.y);
-    m.z = rc_hmax16(B->a.z * x + B->b.z * y + B->c.z * z + B->d.z);
-    m.w = rc_hmax16(B->a.w * x + B->b.w * y + B->c.w * z + B->d.w);
-    return m;
-}
-
-RC_SHADE_INLINE RcBeam4 rc_packet_beam(const RcLanes16* L, uint face) {
-    const uint axis = face >> 1;
-    /* the main axis m and the two across it, u and v */
-    const float16 dm = axis == 0 ? L->dx : (axis == 1 ? L->dy : L->dz);
-    const float16 du = axis == 0 ? L->dy : (axis == 1 ? L->dz : L->dx);
-    const float16 dv = axis == 0 ? L->dz : (axis == 1 ? L->dx : L->dy);
-    const float16 su = du / dm, sv = dv / dm;
-    const float suLo = rc_hmin16(su), suHi = rc_hmax16(su);
-    const float svLo = rc_hmin16(sv), svHi = rc_hmax16(sv);
-    /* Points of the segments lie on the side of the light where X along dm falls. */
-    const float side = rc_lane0(dm) > 0.0f ? -1.0f : 1.0f;
-    const float4 cm = side * (float4)(suLo, -suHi, svLo, -svHi);
-    const float4 cu = side * (float4)(-1.0f, 1.0f, 0.0f, 0.0f);
-    const float4 cv = side * (float4)(0.0f, 0.0f, -1.0f, 1.0f);
-    RcBeam4 B;
-    B.a = axis == 0 ? cm : (axis == 1 ? cv : cu);
-    B.b = axis == 0 ? cu : (axis == 1 ? cm : cv);
-    B.c = axis == 0 ? cv : (axis == 1 ? cu : cm);
-    const float3 apex =
-        (float3)(rc_lane0(L->ox + L->tmax * L->dx), rc_lane0(L->oy + L->tmax * L->dy),
-                 rc_lane0(L->oz + L->tmax * L->dz));
-    B.d = -(B.a * apex.x + B.b * apex.y + B.c * apex.z);
-    const float4 near = rc_beam_max16(&B, L->ox + L->tmin * L->dx, L->oy + L->tmin * L->dy,
-                                      L->oz + L->tmin * L->dz);
-    const float4 far = rc_beam_max16(&B, L->ox + L->tmax * L->dx, L->oy + L->tmax * L->dy,
-                                     L->oz + L->tmax * L->dz);
-    const float16 size = fmax(fmax(fabs(L->ox), fabs(L->oy)), fabs(L->oz));
-    const float scale = fmax(rc_hmax16(size), fmax(fmax(fabs(apex.x), fabs(apex.y)), fabs(apex.z)));
-    B.limit = fmax(near, far) + 1e-4f * scale;
-    return B;
-}
-
-/* Whether the triangle lies wholly beyond one of the beam's planes. */
-inline int rc_beam_misses(const RcBeam4* B, RcTriangle tri) {
-    const float4 g0 = B->a * tri.v0.x + B->b * tri.v0.y + B->c * tri.v0.z + B->d;
-    const float4 g1 = B->a * tri.v1.x + B->b * tri.v1.y + B->c * tri.v1.z + B->d;
-    const float4 g2 = B->a * tri.v2.x + B->b * tri.v2.y + B->c * tri.v2.z + B->d;
-    return any(fmin(fmin(g0, g1), g2) > B->limit);
-}
-
 /* Any hit before each lane's tmax (the light), 16 shadow rays of one leaf in lockstep: a lane is
  * done once blocked or once the candidates start beyond its end X; the packet stops when every
  * lane is done. The triangle, sphere and quadric tests are those of intersect.cl, lane by
@@ -586,8 +525,6 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const RcLanes16 L = rc_load_packet(rays, rayIndex, leaf, packetFirst[p], ids);
     rc_prefetch_packet(rays, rayIndex, leaves, packetLeaf, packetFirst, p + 1, nPackets);
     const float16 endX = L.x + select(L.tmin, L.tmax, L.dX > 0.0f) * L.dX;
-    const RcBeam4 B = rc_packet_beam(&L, leaf.face);
-    uint tested = 0;
     int16 hit = (int16)(0);
     const uint nT = params->nTriangles, nS = params->nSpheres;
     uint c = 0;
@@ -598,11 +535,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
         if (all(hit | beyond)) break;
         const uint prim = cand.prim;
         if (prim < nT) {
-            const RcTriangle tri = triangles[prim];
-            if (rc_beam_misses(&B, tri)) continue;
-            ++tested;
             float16 t, u, v;
-            const int16 inside = rc_packet_triangle(&L, tri, &t, &u, &v);
+            const int16 inside = rc_packet_triangle(&L,
+                                                    triangles[prim], &t, &u, &v);
             hit |= ~beyond & inside;
         } else if (prim < nT + nS) {
             float16 t;
@@ -610,15 +545,15 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
         } else {
             __global const RcQuadric* q = quadrics + (prim - nT - nS);
             float16 t, u, v;
-            hit |=
-                ~beyond & (q->kind == RC_ANALYTIC_PATCH_BOX
-                               ? rc_packet_patch(&L, (__global const float4*)quadrics,
-                                                 (__global const RcPatchBox*)q, L.tmax, &t, &u, &v)
-                               : rc_packet_quadric(&L, q, L.tmax, &t));
+            hit |= ~beyond & (q->kind == RC_ANALYTIC_PATCH_BOX
+                                  ? rc_packet_patch(&L, (__global const float4*)quadrics,
+                                                    (__global const RcPatchBox*)q, L.tmax, &t,
+                                                    &u, &v)
+                                  : rc_packet_quadric(&L, q, L.tmax, &t));
         }
     }
     int h[16];
     vstore16(hit, 0, h);
     for (uint k = 0; k < count; ++k) blocked[ids[k]] = h[k] != 0 ? 1 : 0;
-    tests[p] = tested * count;
+    tests[p] = c * count;
 }

@@ -40,18 +40,4 @@ RC_V16_INLINE RcVec16 rc_v16_mul(RcVec16 a, RcVec16 b) {
 RC_V16_INLINE RcVec16 rc_v16_neg(RcVec16 a) { return rc_v16(-a.x, -a.y, -a.z); }
 RC_V16_INLINE float16 rc_v16_max3(RcVec16 a) { return fmax(a.x, fmax(a.y, a.z)); }
 
-/* The least and the largest lane. */
-RC_V16_INLINE float rc_hmin16(float16 a) {
-    const float8 m8 = fmin(a.lo, a.hi);
-    const float4 m4 = fmin(m8.lo, m8.hi);
-    const float2 m2 = fmin(m4.lo, m4.hi);
-    return fmin(m2.x, m2.y);
-}
-RC_V16_INLINE float rc_hmax16(float16 a) {
-    const float8 m8 = fmax(a.lo, a.hi);
-    const float4 m4 = fmax(m8.lo, m8.hi);
-    const float2 m2 = fmax(m4.lo, m4.hi);
-    return fmax(m2.x, m2.y);
-}
-
 #endif
