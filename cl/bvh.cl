@@ -573,7 +573,8 @@ inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* beam,
                 const int c = popcount((mask & -mask) - 1);
                 const uint child = nd->child[c];
                 /* A leaf costs its triangles: only when a lane reaches its box. */
-                r[k++] = child;
+                if (!(child & RC_BVH8_LEAF) || any(rc_packet_enters(p, nd, c, active)))
+                    r[k++] = child;
             }
             if (k > 0) {
                 for (int j = k - 1; j > 0; --j) stack[sp++] = r[j];
