@@ -223,9 +223,6 @@ inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
  * packets, and scenes with spheres, quadrics or the watertight test, take the single-ray walk ray
  * by ray. */
 #define RC_PACKET 16
-#ifndef RC_BEAM_COS2
-#define RC_BEAM_COS2 0.98f
-#endif
 
 inline float16 rc_min16(float16 a, float16 b) { return select(b, a, a < b); }
 inline float16 rc_max16(float16 a, float16 b) { return select(b, a, a > b); }
@@ -590,44 +587,6 @@ inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* beam,
     }
 }
 
-/* The lanes of `todo` whose directions lie in the first one's octant and within the cone about
- * it whose cosine squared is cos2: one beam. */
-inline int16 rc_beam_group(const RcBvhPacket* p, int16 todo, float cos2) {
-    const float16 lane =
-        (float16)(0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f, 8.0f, 9.0f, 10.0f, 11.0f, 12.0f,
-                  13.0f, 14.0f, 15.0f);
-    const int16 lead = lane == rc_active_min16(lane, todo);
-    const float3 d0 = (float3)(rc_active_max16(p->dx, lead), rc_active_max16(p->dy, lead),
-                               rc_active_max16(p->dz, lead));
-    const float16 dd = p->dx * d0.x + p->dy * d0.y + p->dz * d0.z;
-    const float16 len2 = p->dx * p->dx + p->dy * p->dy + p->dz * p->dz;
-    const int16 octant = ((as_int16(p->dx) ^ as_int(d0.x)) | (as_int16(p->dy) ^ as_int(d0.y)) |
-                          (as_int16(p->dz) ^ as_int(d0.z))) >= 0;
-    return todo & (lead | (octant & (dd > 0.0f) & (dd * dd > cos2 * len2 * dot(d0, d0))));
-}
-
-/* The packet's shadow rays as beams, each the lanes of one narrow cone whose ends meet (a point
- * light): the lanes blocked in *blocked; lanes of a cone whose ends lie apart join *single (to
- * be walked one by one), the others leave it. Returns primitive tests per lane. */
-inline uint16 rc_bvh_occlude_beams(const RcBvhPacket* p, int coherent, float maxSpread2,
-                                   __global const RcBvh8Node* nodes,
-                                   __global const RcBvhLeafBlock8* blocks, int16* blocked,
-                                   int16* single) {
-    uint16 tests = (uint16)(0);
-    *single = (int16)(0);
-    for (int16 todo = p->active; any(todo);) {
-        RcBvhPacket g = *p;
-        g.active = coherent ? todo : rc_beam_group(p, todo, RC_BEAM_COS2);
-        todo &= ~g.active;
-        const RcBvhBeam beam = rc_bvh_beam(&g);
-        if (beam.spread2 <= maxSpread2)
-            tests += rc_bvh_occlude_beam(&g, &beam, nodes, blocks, blocked);
-        else
-            *single |= g.active;
-    }
-    return tests;
-}
-
 /* Whether packets may walk the tree: triangles only (at least one), tested as
  * rc_intersect_triangle tests. */
 inline int rc_packets_allowed(__constant const RcRenderParams* params) {
@@ -680,29 +639,23 @@ inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, ui
                           __global uchar* blockedOut, __global uint* tests) {
     RcBvhPacket p;
     const float maxSpread2 = rc_bvh_max_spread2(nodes);
-    int16 single = (int16)(-1);
-    if (anyHit && rc_packets_allowed(params)) {
-        const int coherent = rc_bvh_load_packet(rays, first, n, 1, maxSpread2, &p);
-        int16 blocked = (int16)(0);
-        const uint16 count =
-            rc_bvh_occlude_beams(&p, coherent, maxSpread2, nodes, blocks, &blocked, &single);
-        rc_packet_store_blocked(first, n, blocked, 0, blockedOut);
-        rc_packet_store_counts(first, n, count, 0, tests);
-    } else if (rc_packets_allowed(params) &&
-               rc_bvh_load_packet(rays, first, n, anyHit, maxSpread2, &p)) {
+    /* A shadow packet walks as a beam when its ends meet too (a point light). */
+    if (rc_packets_allowed(params) &&
+        rc_bvh_load_packet(rays, first, n, anyHit, maxSpread2, &p)) {
         float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
         uint16 bp = (uint16)(RC_NO_HIT);
         int16 blocked = (int16)(0);
-        const uint16 count =
-            rc_bvh_trace_packet(&p, anyHit, nodes, blocks, &bt, &bp, &bu, &bv, &blocked);
-        rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, 0, hits, blockedOut);
-        rc_packet_store_counts(first, n, count, 0, tests);
-        return;
+        const RcBvhBeam beam = rc_bvh_beam(&p);
+        if (!anyHit || beam.spread2 <= maxSpread2) {
+            const uint16 count = anyHit ? rc_bvh_occlude_beam(&p, &beam, nodes, blocks, &blocked)
+                                        : rc_bvh_trace_packet(&p, anyHit, nodes, blocks, &bt, &bp,
+                                                              &bu, &bv, &blocked);
+            rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, 0, hits, blockedOut);
+            rc_packet_store_counts(first, n, count, 0, tests);
+            return;
+        }
     }
-    int walks[RC_PACKET];
-    vstore16(single, 0, walks);
     for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
-        if (!walks[i - first]) continue;
         const RcRay r = rays[i];
         RcHit best = rc_no_hit(r.direction.w);
         uint count = 0;
