@@ -223,9 +223,6 @@ inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
  * packets, and scenes with spheres, quadrics or the watertight test, take the single-ray walk ray
  * by ray. */
 #define RC_PACKET 16
-#ifndef RC_BEAM_ORDER
-#define RC_BEAM_ORDER 1.0f
-#endif
 
 inline float16 rc_min16(float16 a, float16 b) { return select(b, a, a < b); }
 inline float16 rc_max16(float16 a, float16 b) { return select(b, a, a > b); }
@@ -570,23 +567,14 @@ inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* beam,
                 (tn <= tf * 1.0000004f) & (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
             const int4 m4 = enters.lo | enters.hi;
             const int2 m2 = m4.lo | m4.hi;
-            float near[8];
-            vstore8(tn * RC_BEAM_ORDER, 0, near);
             uint r[8];
-            float t[8];
             int k = 0;
             for (int mask = m2.x | m2.y; mask != 0; mask &= mask - 1) {
                 const int c = popcount((mask & -mask) - 1);
                 const uint child = nd->child[c];
                 /* A leaf costs its triangles: only when a lane reaches its box. */
-                if ((child & RC_BVH8_LEAF) && !any(rc_packet_enters(p, nd, c, active))) continue;
-                int j = k++;
-                for (; j > 0 && t[j - 1] > near[c]; --j) {
-                    t[j] = t[j - 1];
-                    r[j] = r[j - 1];
-                }
-                t[j] = near[c];
-                r[j] = child;
+                if (!(child & RC_BVH8_LEAF) || any(rc_packet_enters(p, nd, c, active)))
+                    r[k++] = child;
             }
             if (k > 0) {
                 for (int j = k - 1; j > 0; --j) stack[sp++] = r[j];
