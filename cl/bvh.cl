@@ -641,7 +641,7 @@ inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, ui
     const float maxSpread2 = rc_bvh_max_spread2(nodes);
     /* A shadow packet walks as a beam when its ends meet too (a point light). */
     if (rc_packets_allowed(params) &&
-        rc_bvh_load_packet(rays, first, n, anyHit, anyHit ? 4.0f * maxSpread2 : maxSpread2, &p)) {
+        rc_bvh_load_packet(rays, first, n, anyHit, maxSpread2, &p)) {
         float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
         uint16 bp = (uint16)(RC_NO_HIT);
         int16 blocked = (int16)(0);
