@@ -639,21 +639,20 @@ inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, ui
                           __global uchar* blockedOut, __global uint* tests) {
     RcBvhPacket p;
     const float maxSpread2 = rc_bvh_max_spread2(nodes);
-    /* A shadow packet walks as a beam when its ends meet too (a point light). */
-    if (rc_packets_allowed(params) &&
-        rc_bvh_load_packet(rays, first, n, anyHit, maxSpread2, &p)) {
+    if (rc_packets_allowed(params) && rc_bvh_load_packet(rays, first, n, anyHit, maxSpread2, &p)) {
         float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
         uint16 bp = (uint16)(RC_NO_HIT);
         int16 blocked = (int16)(0);
+        uint16 count;
+        /* A shadow packet walks as a beam where its ends meet too (a point light). */
         const RcBvhBeam beam = rc_bvh_beam(&p);
-        if (!anyHit || beam.spread2 <= maxSpread2) {
-            const uint16 count = anyHit ? rc_bvh_occlude_beam(&p, &beam, nodes, blocks, &blocked)
-                                        : rc_bvh_trace_packet(&p, anyHit, nodes, blocks, &bt, &bp,
-                                                              &bu, &bv, &blocked);
-            rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, 0, hits, blockedOut);
-            rc_packet_store_counts(first, n, count, 0, tests);
-            return;
-        }
+        if (anyHit && beam.spread2 <= maxSpread2)
+            count = rc_bvh_occlude_beam(&p, &beam, nodes, blocks, &blocked);
+        else
+            count = rc_bvh_trace_packet(&p, anyHit, nodes, blocks, &bt, &bp, &bu, &bv, &blocked);
+        rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, 0, hits, blockedOut);
+        rc_packet_store_counts(first, n, count, 0, tests);
+        return;
     }
     for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
         const RcRay r = rays[i];
