@@ -8,6 +8,7 @@
  * tests (in a packet, the tests of every leaf the packet visits while ray i is active). */
 #include "intersect.cl"
 #include "rc_types.h"
+#include "vec16.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -251,20 +252,6 @@ inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
 inline float16 rc_min16(float16 a, float16 b) { return select(b, a, a < b); }
 inline float16 rc_max16(float16 a, float16 b) { return select(b, a, a > b); }
 
-inline float rc_hmin16(float16 a) {
-    const float8 m8 = fmin(a.lo, a.hi);
-    const float4 m4 = fmin(m8.lo, m8.hi);
-    const float2 m2 = fmin(m4.lo, m4.hi);
-    return fmin(m2.x, m2.y);
-}
-
-inline float rc_hmax16(float16 a) {
-    const float8 m8 = fmax(a.lo, a.hi);
-    const float4 m4 = fmax(m8.lo, m8.hi);
-    const float2 m2 = fmax(m4.lo, m4.hi);
-    return fmax(m2.x, m2.y);
-}
-
 /* The rays of a packet, the lanes over the rays; inactive lanes hold a harmless ray. */
 typedef struct RcBvhPacket {
     float16 ox, oy, oz, dx, dy, dz, ix, iy, iz, tmin, tmax;
@@ -330,41 +317,46 @@ inline float rc_bvh_max_spread2(__global const RcBvh8Node* root) {
  * maxSpread2. */
 inline int rc_bvh_load_packet(__global const RcRay* rays, uint first, uint n, int skipEmpty,
                               float maxSpread2, RcBvhPacket* p) {
-    float o[3][RC_PACKET], dir[3][RC_PACKET], tn[RC_PACKET], tf[RC_PACKET];
-    int act[RC_PACKET];
-    int lead = -1, coherent = 1;
-    float3 d0 = (float3)(0.0f), lo = (float3)(INFINITY), hi = (float3)(-INFINITY);
-    for (int k = 0; k < RC_PACKET; ++k) {
-        float4 ro = (float4)(0.0f), rd = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
-        act[k] = first + k < n;
-        if (act[k]) {
-            ro = rays[first + k].origin;
-            rd = rays[first + k].direction;
-            act[k] = !skipEmpty || rd.w != 0.0f;
-        }
-        o[0][k] = ro.x, o[1][k] = ro.y, o[2][k] = ro.z;
-        dir[0][k] = rd.x, dir[1][k] = rd.y, dir[2][k] = rd.z;
-        tn[k] = ro.w, tf[k] = rd.w;
-        if (!act[k]) continue;
-        lo = fmin(lo, ro.xyz);
-        hi = fmax(hi, ro.xyz);
-        const float3 d = rd.xyz;
-        if (lead < 0) {
-            lead = k;
-            d0 = d;
-            continue;
-        }
-        const float dd = dot(d, d0);
-        coherent &= signbit(d.x) == signbit(d0.x) && signbit(d.y) == signbit(d0.y) &&
-                    signbit(d.z) == signbit(d0.z) && dd > 0.0f &&
-                    dd * dd > 0.9025f * dot(d, d) * dot(d0, d0);
+    /* Rays read as float4 and transposed in registers: lanes written one float at a time to
+     * private arrays go through memory on PoCL (see rc_load_packet, classified.cl). */
+    float4 o[RC_PACKET], d[RC_PACKET];
+#pragma unroll
+    for (uint k = 0; k < RC_PACKET; ++k) {
+        const uint i = first + k < n ? first + k : first;
+        o[k] = rays[i].origin;
+        d[k] = rays[i].direction;
     }
+    const int16 inRange =
+        (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15) < (int16)(n - first);
+    p->ox = select((float16)(0.0f), RC_LANES16(o, x), inRange);
+    p->oy = select((float16)(0.0f), RC_LANES16(o, y), inRange);
+    p->oz = select((float16)(0.0f), RC_LANES16(o, z), inRange);
+    p->tmin = select((float16)(0.0f), RC_LANES16(o, w), inRange);
+    p->dx = select((float16)(1.0f), RC_LANES16(d, x), inRange);
+    p->dy = select((float16)(1.0f), RC_LANES16(d, y), inRange);
+    p->dz = select((float16)(1.0f), RC_LANES16(d, z), inRange);
+    p->tmax = select((float16)(0.0f), RC_LANES16(d, w), inRange);
+    p->active = inRange & (skipEmpty ? p->tmax != 0.0f : (int16)(-1));
+    /* the first active lane's direction */
+    float3 d0 = (float3)(0.0f);
+    int lead = 0;
+#pragma unroll
+    for (int k = RC_PACKET - 1; k >= 0; --k) {
+        const int act = first + k < n && (!skipEmpty || d[k].w != 0.0f);
+        d0 = act ? d[k].xyz : d0;
+        lead |= act;
+    }
+    const float16 dd = p->dx * d0.x + p->dy * d0.y + p->dz * d0.z;
+    const float16 len2 = p->dx * p->dx + p->dy * p->dy + p->dz * p->dz;
+    const int16 octant = ((as_int16(p->dx) ^ as_int(d0.x)) | (as_int16(p->dy) ^ as_int(d0.y)) |
+                          (as_int16(p->dz) ^ as_int(d0.z))) >= 0;
+    const int16 near = octant & (dd > 0.0f) & (dd * dd > 0.9025f * len2 * dot(d0, d0));
+    const float3 lo = (float3)(rc_active_min16(p->ox, p->active), rc_active_min16(p->oy, p->active),
+                               rc_active_min16(p->oz, p->active));
+    const float3 hi = (float3)(rc_active_max16(p->ox, p->active), rc_active_max16(p->oy, p->active),
+                               rc_active_max16(p->oz, p->active));
     const float3 spread = hi - lo;
-    coherent &= lead < 0 || dot(spread, spread) <= maxSpread2;
-    p->ox = vload16(0, o[0]), p->oy = vload16(0, o[1]), p->oz = vload16(0, o[2]);
-    p->dx = vload16(0, dir[0]), p->dy = vload16(0, dir[1]), p->dz = vload16(0, dir[2]);
-    p->tmin = vload16(0, tn), p->tmax = vload16(0, tf);
-    p->active = vload16(0, act) != 0;
+    const int coherent = !lead || (!any(p->active & ~near) && dot(spread, spread) <= maxSpread2);
     /* rc_bvh_inverse lane by lane */
     const float16 invX = 1.0f / p->dx, invY = 1.0f / p->dy, invZ = 1.0f / p->dz;
     p->ix = select(invX, copysign((float16)(1e30f), invX), isinf(invX));
@@ -472,6 +464,153 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
     }
 }
 
+/* --- shadow packets as one beam ------------------------------------------------------------
+ * Shadow rays toward a point light all end there: walked backwards from their ends they leave
+ * (nearly) one point, and a coherent packet of them is a narrow beam. One interval slab test of
+ * the whole beam against a node's eight boxes then stands for sixteen per-lane tests: s is the
+ * distance along the reversed lanes (D = -d) from their ends S = o + tmax d, and the beam holds
+ * every S within [sLo, sHi] (padded for the rounding of S) and every 1 / D within [iLo, iHi]
+ * (one sign per axis, the packet's octant). Only a leaf is tested lane by lane, with the
+ * single-ray walk's slab test, before its triangles; the triangles take the packet's exact
+ * test, so the blocked flags are those of the per-lane walk. */
+typedef struct RcBvhBeam {
+    float sNear[3], sFar[3]; /* the ends the entry and the exit distances are taken from */
+    float iLo[3], iHi[3];
+    int positive[3]; /* D's sign along the axis: the near side of a box is lo */
+    float reach;     /* the longest reversed segment */
+    float spread2;   /* the squared diagonal of the ends' box */
+} RcBvhBeam;
+
+/* The beam of one axis: the lanes' origins o, directions d and inverse directions inv along it. */
+inline void rc_beam_axis(const RcBvhPacket* p, float16 o, float16 d, float16 inv, int a,
+                         RcBvhBeam* b) {
+    const float16 end = o + p->tmax * d;
+    const float16 size = fabs(o) + 2.0f * fabs(p->tmax * d);
+    const float pad = 1e-5f * rc_active_max16(size, p->active);
+    const float endLo = rc_active_min16(end, p->active), endHi = rc_active_max16(end, p->active);
+    b->spread2 += (endHi - endLo) * (endHi - endLo);
+    const float lo = endLo - pad, hi = endHi + pad;
+    b->iLo[a] = rc_active_min16(-inv, p->active);
+    b->iHi[a] = rc_active_max16(-inv, p->active);
+    b->positive[a] = b->iLo[a] > 0.0f;
+    b->sNear[a] = b->positive[a] ? hi : lo;
+    b->sFar[a] = b->positive[a] ? lo : hi;
+}
+
+inline RcBvhBeam rc_bvh_beam(const RcBvhPacket* p) {
+    RcBvhBeam b;
+    b.spread2 = 0.0f;
+    rc_beam_axis(p, p->ox, p->dx, p->ix, 0, &b);
+    rc_beam_axis(p, p->oy, p->dy, p->iy, 1, &b);
+    rc_beam_axis(p, p->oz, p->dz, p->iz, 2, &b);
+    b.reach = rc_active_max16(p->tmax - p->tmin, p->active) * 1.0000004f;
+    return b;
+}
+
+/* The beam's entry and exit distances through the slabs [lo, hi] of one axis, eight boxes: the
+ * least entry and the largest exit over the ends and inverse directions it holds. */
+inline void rc_beam_slab(const RcBvhBeam* b, int a, float8 lo, float8 hi, float8* tn, float8* tf) {
+    const float8 nearSide = b->positive[a] ? lo : hi, farSide = b->positive[a] ? hi : lo;
+    const float8 n = nearSide - b->sNear[a], f = farSide - b->sFar[a];
+    *tn = rc_max8(*tn, n * select((float8)(b->iHi[a]), (float8)(b->iLo[a]), n >= 0.0f));
+    *tf = rc_min8(*tf, f * select((float8)(b->iLo[a]), (float8)(b->iHi[a]), f >= 0.0f));
+}
+
+/* The lanes of the packet that enter child c of nd (the single-ray walk's slab test). */
+inline int16 rc_packet_enters(const RcBvhPacket* p, __global const RcBvh8Node* nd, uint c,
+                              int16 active) {
+    const float16 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
+    const float16 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
+    const float16 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
+    const float16 tn =
+        rc_max16(rc_max16(rc_min16(ax, bx), rc_min16(ay, by)), rc_max16(rc_min16(az, bz), p->tmin));
+    const float16 tf =
+        rc_min16(rc_min16(rc_max16(ax, bx), rc_max16(ay, by)), rc_max16(az, bz)) * 1.0000004f;
+    return active & (tn <= rc_min16(tf, p->tmax));
+}
+
+/* The packet's triangles of one leaf against its active lanes: the lanes they block join
+ * *blocked and leave active. Returns the tests per lane. */
+inline uint16 rc_packet_leaf_occluded(const RcBvhPacket* p, uint ref,
+                                      __global const float* leaves, int16* active,
+                                      int16* blocked) {
+    const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
+    __global const float* leaf = leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN;
+    uint16 tests = (uint16)(0);
+    for (uint k = 0; k < count && any(*active); ++k) {
+        /* lane k of the run's arrays */
+        __global const float* w = leaf + k;
+        const float e1x = w[3 * count], e1y = w[4 * count], e1z = w[5 * count];
+        const float e2x = w[6 * count], e2y = w[7 * count], e2z = w[8 * count];
+        tests += as_uint16(*active) & (uint16)(1);
+        /* rc_intersect_triangle's operations, lane by lane */
+        const float16 pvx = p->dy * e2z - e2y * p->dz;
+        const float16 pvy = p->dz * e2x - e2z * p->dx;
+        const float16 pvz = p->dx * e2y - e2x * p->dy;
+        const float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
+        const float16 invDet = 1.0f / det;
+        const float16 tvx = p->ox - w[0];
+        const float16 tvy = p->oy - w[count];
+        const float16 tvz = p->oz - w[2 * count];
+        const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
+        const float16 qvx = tvy * e1z - e1y * tvz;
+        const float16 qvy = tvz * e1x - e1z * tvx;
+        const float16 qvz = tvx * e1y - e1x * tvy;
+        const float16 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
+        const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
+        const int16 hit = *active & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
+                          (u + v <= 1.0f) & (t > p->tmin) & (t < p->tmax);
+        *blocked |= hit;
+        *active &= ~hit;
+    }
+    return tests;
+}
+
+/* Walks the tree once for a packet of shadow rays as a beam: the lanes that found a blocker in
+ * *blocked. Returns primitive tests per lane. */
+inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* beam,
+                                  __global const RcBvh8Node* nodes,
+                                  __global const float* leaves, int16* blocked) {
+    const int8 laneBit = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+    uint stack[RC_BVH_STACK];
+    int sp = 0;
+    uint ref = 0;
+    uint16 tests = (uint16)(0);
+    int16 active = p->active;
+    for (;;) {
+        if (ref & RC_BVH8_LEAF) {
+            tests += rc_packet_leaf_occluded(p, ref, leaves, &active, blocked);
+            if (!any(active)) return tests;
+        } else {
+            __global const RcBvh8Node* nd = nodes + ref;
+            float8 tn = (float8)(0.0f), tf = (float8)(beam->reach);
+            rc_beam_slab(beam, 0, vload8(0, nd->loX), vload8(0, nd->hiX), &tn, &tf);
+            rc_beam_slab(beam, 1, vload8(0, nd->loY), vload8(0, nd->hiY), &tn, &tf);
+            rc_beam_slab(beam, 2, vload8(0, nd->loZ), vload8(0, nd->hiZ), &tn, &tf);
+            const int8 enters =
+                (tn <= tf * 1.0000004f) & (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
+            const int4 m4 = enters.lo | enters.hi;
+            const int2 m2 = m4.lo | m4.hi;
+            uint r[8];
+            int k = 0;
+            for (int mask = m2.x | m2.y; mask != 0; mask &= mask - 1) {
+                const int c = popcount((mask & -mask) - 1);
+                const uint child = nd->child[c];
+                /* A leaf costs its triangles: only when a lane reaches its box. */
+                if (!(child & RC_BVH8_LEAF) || any(rc_packet_enters(p, nd, c, active)))
+                    r[k++] = child;
+            }
+            if (k > 0) {
+                for (int j = k - 1; j > 0; --j) stack[sp++] = r[j];
+                ref = r[0];
+                continue;
+            }
+        }
+        if (sp == 0) return tests;
+        ref = stack[--sp];
+    }
+}
+
 /* Whether packets may walk the tree: triangles only (at least one), tested as
  * rc_intersect_triangle tests. */
 inline int rc_packets_allowed(__constant const RcRenderParams* params) {
@@ -523,13 +662,18 @@ inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, ui
                           __constant const RcRenderParams* params, __global RcHit* hits,
                           __global uchar* blockedOut, __global uint* tests) {
     RcBvhPacket p;
-    if (rc_packets_allowed(params) &&
-        rc_bvh_load_packet(rays, first, n, anyHit, rc_bvh_max_spread2(nodes), &p)) {
+    const float maxSpread2 = rc_bvh_max_spread2(nodes);
+    if (rc_packets_allowed(params) && rc_bvh_load_packet(rays, first, n, anyHit, maxSpread2, &p)) {
         float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
         uint16 bp = (uint16)(RC_NO_HIT);
         int16 blocked = (int16)(0);
-        const uint16 count =
-            rc_bvh_trace_packet(&p, anyHit, nodes, leaves, &bt, &bp, &bu, &bv, &blocked);
+        uint16 count;
+        /* A shadow packet walks as a beam where its ends meet too (a point light). */
+        const RcBvhBeam beam = rc_bvh_beam(&p);
+        if (anyHit && beam.spread2 <= maxSpread2)
+            count = rc_bvh_occlude_beam(&p, &beam, nodes, leaves, &blocked);
+        else
+            count = rc_bvh_trace_packet(&p, anyHit, nodes, leaves, &bt, &bp, &bu, &bv, &blocked);
         rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, 0, hits, blockedOut);
         rc_packet_store_counts(first, n, count, 0, tests);
         return;

@@ -16,6 +16,7 @@
 #include "rc_types.h"
 #include "intersect.cl"
 #include "shade.cl"
+#include "vec16.cl"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -297,12 +298,9 @@ typedef struct RcLanes16 {
 /* The rays of a packet as lanes: the leaf's rays [first, first + 16), unused lanes repeating the
  * first ray (their results are not written); ids[k] is lane k's ray (RcRay: origin, w: tmin;
  * direction, w: tmax; shadow rays too). The rays are read as float4 into registers and
- * transposed there:
- * lanes written one float at a time to private arrays and read back as float16 cost half the
- * fragment kernel's time on PoCL (the arrays become per-work-item context memory). */
-#define RC_LANES16(a, f)                                                                         \
-    (float16)(a[0].f, a[1].f, a[2].f, a[3].f, a[4].f, a[5].f, a[6].f, a[7].f, a[8].f, a[9].f,  \
-              a[10].f, a[11].f, a[12].f, a[13].f, a[14].f, a[15].f)
+ * transposed there (RC_LANES16): lanes written one float at a time to private arrays and read
+ * back as float16 cost half the fragment kernel's time on PoCL (the arrays become per-work-item
+ * context memory). */
 RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const RcRay* rays, __global const uint* rayIndex,
                                          RcLeaf leaf, uint first, uint* ids) {
     const uint count = min(16u, leaf.rayCount - first);

@@ -40,4 +40,30 @@ RC_V16_INLINE RcVec16 rc_v16_mul(RcVec16 a, RcVec16 b) {
 RC_V16_INLINE RcVec16 rc_v16_neg(RcVec16 a) { return rc_v16(-a.x, -a.y, -a.z); }
 RC_V16_INLINE float16 rc_v16_max3(RcVec16 a) { return fmax(a.x, fmax(a.y, a.z)); }
 
+/* The least and the largest lane, and those of the lanes where `active`. */
+RC_V16_INLINE float rc_hmin16(float16 a) {
+    const float8 m8 = fmin(a.lo, a.hi);
+    const float4 m4 = fmin(m8.lo, m8.hi);
+    const float2 m2 = fmin(m4.lo, m4.hi);
+    return fmin(m2.x, m2.y);
+}
+RC_V16_INLINE float rc_hmax16(float16 a) {
+    const float8 m8 = fmax(a.lo, a.hi);
+    const float4 m4 = fmax(m8.lo, m8.hi);
+    const float2 m2 = fmax(m4.lo, m4.hi);
+    return fmax(m2.x, m2.y);
+}
+RC_V16_INLINE float rc_active_min16(float16 a, int16 active) {
+    return rc_hmin16(select((float16)(INFINITY), a, active));
+}
+RC_V16_INLINE float rc_active_max16(float16 a, int16 active) {
+    return rc_hmax16(select((float16)(-INFINITY), a, active));
+}
+
+/* Field f of 16 float4s a[0..15] as the lanes of a float16: rays read as float4 and transposed
+ * in registers. */
+#define RC_LANES16(a, f)                                                                      \
+    (float16)(a[0].f, a[1].f, a[2].f, a[3].f, a[4].f, a[5].f, a[6].f, a[7].f, a[8].f, a[9].f, \
+              a[10].f, a[11].f, a[12].f, a[13].f, a[14].f, a[15].f)
+
 #endif

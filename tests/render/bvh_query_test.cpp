@@ -136,6 +136,46 @@ std::vector<RcRay> CoherentRays(float tmax, bool emptySlots) {
     return rays;
 }
 
+// Packets of 16 shadow rays as the shading kernels make them (tmin 0, unit direction toward a
+// point light, tmax the distance to it), their origins within a 0.02 cube and their light 0.3 to
+// 1.2 away, so that the any-hit kernel walks each packet as one beam from its light (cl/bvh.cl).
+// Lights on the half-unit lattice (in the squares' planes) and at random points; origins in a
+// square's plane, on the light's axis line (directions along an axis, zero components) or
+// anywhere; every fifth slot empty.
+std::vector<RcRay> ShadowPackets() {
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<float> pos(-0.5f, 3.5f), unit(-1.0f, 1.0f),
+        jitter(-0.01f, 0.01f), reach(0.3f, 1.2f);
+    std::uniform_int_distribution<int> lattice(-1, 7), axisOf(0, 2), kindOf(0, 2);
+    std::vector<RcRay> rays;
+    for (int packet = 0; packet < 1024; ++packet) {
+        const glm::vec3 light = packet % 2 == 0
+                                    ? 0.5f * glm::vec3(lattice(rng), lattice(rng), lattice(rng))
+                                    : glm::vec3(pos(rng), pos(rng), pos(rng));
+        const glm::vec3 away = glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)));
+        const int kind = kindOf(rng), axis = axisOf(rng);
+        glm::vec3 center = light + reach(rng) * away;
+        if (kind == 0) center[axis] = std::round(center[axis]);  // a square's plane
+        if (kind == 1) {                                         // on the light's axis line
+            center = light;
+            center[axis] += (packet % 3 == 0 ? -1.0f : 1.0f) * reach(rng);
+        }
+        for (int k = 0; k < 16; ++k) {
+            glm::vec3 o = center;
+            for (int c = 0; c < 3; ++c) {
+                if ((kind == 0 && c != axis) || (kind == 1 && c == axis) || kind == 2)
+                    o[c] += jitter(rng);
+            }
+            const glm::vec3 toLight = light - o;
+            const float dist = glm::length(toLight);
+            const glm::vec3 d = toLight / dist;
+            rays.push_back({{o.x, o.y, o.z, 0.0f}, {d.x, d.y, d.z, dist}});
+        }
+    }
+    for (size_t i = 0; i < rays.size(); i += 5) rays[i].direction = {0.0f, 0.0f, 0.0f, 0.0f};
+    return rays;
+}
+
 struct Queries {
     scene::Scene scene = GridOfSquares();
     cl::Program program = BuildRenderProgram(TestContext());
@@ -205,6 +245,11 @@ TEST(BvhQuery, PacketsOfCoherentRaysAreBlockedAsByBruteForce) {
 TEST(BvhQuery, AnyHitAnswersOfFragileRaysAreBruteForces) {
     Queries q;
     ExpectBruteForcesBlocked(q, FragileRays(q.scene, 0.75f));
+}
+
+TEST(BvhQuery, ShadowPacketsTowardPointLightsAreBlockedAsByBruteForce) {
+    Queries q;
+    ExpectBruteForcesBlocked(q, ShadowPackets());
 }
 
 }  // namespace
