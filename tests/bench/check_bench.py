@@ -40,14 +40,18 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
     with open(os.path.join(out, "results.csv"), newline="") as f:
         results = list(csv.DictReader(f))
     methods = {r["method"] for r in results}
-    for m in ("classify/scalar", "classify/vertex", "classify/fragment", "classify/auto", "bvh",
-              "kdtree", "grid", "cones", "brute"):
+    for m in ("auto", "classify/scalar", "classify/vertex", "classify/fragment", "classify/auto",
+              "bvh", "kdtree", "grid", "cones", "brute"):
         if m not in methods:
             failures.append("results.csv has no rows for " + m)
     kinds = {r["kind"] for r in results}
     for k in ("eye", "shadow", "reflection", "refraction", "diffuse"):
         if k not in kinds:
             failures.append("results.csv has no rows for ray kind " + k)
+    # `auto` is what `rayclass render` uses by default: the headline needs it on every ray kind.
+    auto_kinds = {r["kind"] for r in results if r["method"] == "auto" and r["threads"] == "2"}
+    if kinds - auto_kinds:
+        failures.append("results.csv: no auto rows for " + ", ".join(sorted(kinds - auto_kinds)))
     if not {r["method"] for r in results if r["threads"] == "1"} >= {"classify/fragment", "bvh"}:
         failures.append("results.csv has no 1-thread rows for classify/fragment and bvh")
 
