@@ -365,6 +365,36 @@ inline int rc_bvh_load_packet(__global const RcRay* rays, uint first, uint n, in
     return coherent;
 }
 
+/* Triangle k of a leaf run of `count` primitives at `leaf` against the packet's rays,
+ * rc_intersect_triangle's operations lane by lane: t, u and v per ray, and the rays that cross
+ * the triangle between their tmin and tmax. */
+inline int16 rc_bvh_packet_triangle(const RcBvhPacket* p, __global const float* leaf, uint count,
+                                    uint k, float16* tOut, float16* uOut, float16* vOut) {
+    /* lane k of the run's arrays */
+    __global const float* w = leaf + k;
+    const float e1x = w[3 * count], e1y = w[4 * count], e1z = w[5 * count];
+    const float e2x = w[6 * count], e2y = w[7 * count], e2z = w[8 * count];
+    const float16 pvx = p->dy * e2z - e2y * p->dz;
+    const float16 pvy = p->dz * e2x - e2z * p->dx;
+    const float16 pvz = p->dx * e2y - e2x * p->dy;
+    const float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
+    const float16 invDet = 1.0f / det;
+    const float16 tvx = p->ox - w[0];
+    const float16 tvy = p->oy - w[count];
+    const float16 tvz = p->oz - w[2 * count];
+    const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
+    const float16 qvx = tvy * e1z - e1y * tvz;
+    const float16 qvy = tvz * e1x - e1z * tvx;
+    const float16 qvz = tvx * e1y - e1x * tvy;
+    const float16 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
+    const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
+    *tOut = t;
+    *uOut = u;
+    *vOut = v;
+    return (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) & (u + v <= 1.0f) &
+           (t > p->tmin) & (t < p->tmax);
+}
+
 /* Walks the tree once for the packet: nearest hits in (bt, bp, bu, bv), or with anyHit the lanes
  * that found a hit in *blocked (a lane stops at its first). Returns primitive tests per lane. */
 inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
@@ -382,31 +412,11 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
             const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
             __global const float* leaf = leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN;
             for (uint k = 0; k < count; ++k) {
-                /* lane k of the run's arrays */
-                __global const float* w = leaf + k;
-                const uint prim = rc_leaf_prim(leaf, count, k);
-                const float e1x = w[3 * count], e1y = w[4 * count], e1z = w[5 * count];
-                const float e2x = w[6 * count], e2y = w[7 * count], e2z = w[8 * count];
                 tests += as_uint16(active) & (uint16)(1);
-                /* rc_intersect_triangle's operations, lane by lane */
-                const float16 pvx = p->dy * e2z - e2y * p->dz;
-                const float16 pvy = p->dz * e2x - e2z * p->dx;
-                const float16 pvz = p->dx * e2y - e2x * p->dy;
-                const float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
-                const float16 invDet = 1.0f / det;
-                const float16 tvx = p->ox - w[0];
-                const float16 tvy = p->oy - w[count];
-                const float16 tvz = p->oz - w[2 * count];
-                const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
-                const float16 qvx = tvy * e1z - e1y * tvz;
-                const float16 qvy = tvz * e1x - e1z * tvx;
-                const float16 qvz = tvx * e1y - e1x * tvy;
-                const float16 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
-                const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
-                const uint16 prim16 = (uint16)(prim);
-                const int16 hit = active & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
-                                  (u + v <= 1.0f) & (t > p->tmin) & (t < p->tmax) &
-                                  ((t < *bt) | ((t == *bt) & (prim16 < *bp)));
+                float16 t, u, v;
+                const int16 crosses = rc_bvh_packet_triangle(p, leaf, count, k, &t, &u, &v);
+                const uint16 prim16 = (uint16)(rc_leaf_prim(leaf, count, k));
+                const int16 hit = active & crosses & ((t < *bt) | ((t == *bt) & (prim16 < *bp)));
                 *bt = select(*bt, t, hit);
                 *bp = select(*bp, prim16, as_uint16(hit));
                 *bu = select(*bu, u, hit);
@@ -531,35 +541,15 @@ inline int16 rc_packet_enters(const RcBvhPacket* p, __global const RcBvh8Node* n
 
 /* The packet's triangles of one leaf against its active lanes: the lanes they block join
  * *blocked and leave active. Returns the tests per lane. */
-inline uint16 rc_packet_leaf_occluded(const RcBvhPacket* p, uint ref,
-                                      __global const float* leaves, int16* active,
-                                      int16* blocked) {
+inline uint16 rc_packet_leaf_occluded(const RcBvhPacket* p, uint ref, __global const float* leaves,
+                                      int16* active, int16* blocked) {
     const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
     __global const float* leaf = leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN;
     uint16 tests = (uint16)(0);
     for (uint k = 0; k < count && any(*active); ++k) {
-        /* lane k of the run's arrays */
-        __global const float* w = leaf + k;
-        const float e1x = w[3 * count], e1y = w[4 * count], e1z = w[5 * count];
-        const float e2x = w[6 * count], e2y = w[7 * count], e2z = w[8 * count];
         tests += as_uint16(*active) & (uint16)(1);
-        /* rc_intersect_triangle's operations, lane by lane */
-        const float16 pvx = p->dy * e2z - e2y * p->dz;
-        const float16 pvy = p->dz * e2x - e2z * p->dx;
-        const float16 pvz = p->dx * e2y - e2x * p->dy;
-        const float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
-        const float16 invDet = 1.0f / det;
-        const float16 tvx = p->ox - w[0];
-        const float16 tvy = p->oy - w[count];
-        const float16 tvz = p->oz - w[2 * count];
-        const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
-        const float16 qvx = tvy * e1z - e1y * tvz;
-        const float16 qvy = tvz * e1x - e1z * tvx;
-        const float16 qvz = tvx * e1y - e1x * tvy;
-        const float16 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
-        const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
-        const int16 hit = *active & (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) &
-                          (u + v <= 1.0f) & (t > p->tmin) & (t < p->tmax);
+        float16 t, u, v;
+        const int16 hit = *active & rc_bvh_packet_triangle(p, leaf, count, k, &t, &u, &v);
         *blocked |= hit;
         *active &= ~hit;
     }
@@ -569,8 +559,8 @@ inline uint16 rc_packet_leaf_occluded(const RcBvhPacket* p, uint ref,
 /* Walks the tree once for a packet of shadow rays as a beam: the lanes that found a blocker in
  * *blocked. Returns primitive tests per lane. */
 inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* beam,
-                                  __global const RcBvh8Node* nodes,
-                                  __global const float* leaves, int16* blocked) {
+                                  __global const RcBvh8Node* nodes, __global const float* leaves,
+                                  int16* blocked) {
     const int8 laneBit = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
     uint stack[RC_BVH_STACK];
     int sp = 0;
