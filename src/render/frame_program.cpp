@@ -46,15 +46,11 @@ std::string FrameBuildOptions(const RenderOptions& options) {
 
 FrameProgram BuildFrameProgram(const clrt::Context& ctx, const RenderOptions& options) {
     const auto t0 = std::chrono::steady_clock::now();
-    // Eye rays, shading and compaction come first, the Newton statistics of --stats last.
-    std::vector<std::string> files = {"camera.cl", "intersect.cl", "encoding.cl",
-                                      "shade.cl",  "shade16.cl",   "generation.cl"};
-    for (std::string& file : QueryFiles(options.accel)) files.push_back(std::move(file));
-    files.push_back("patch_stats.cl");
     FrameProgram out;
     out.accel = options.accel;
     out.buildOptions = FrameBuildOptions(options);
-    out.program = BuildProgramFiles(ctx, files, out.buildOptions, &out.fromCache);
+    out.program = BuildProgramFiles(ctx, RenderProgramFiles(QueryFiles(options.accel)),
+                                    out.buildOptions, &out.fromCache);
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return out;
 }

@@ -36,12 +36,19 @@ cl::Program BuildProgramFiles(const clrt::Context& ctx, const std::vector<std::s
     return ctx.BuildProgram(files, options, fromCache);
 }
 
+std::vector<std::string> RenderProgramFiles(const std::vector<std::string>& queryFiles) {
+    std::vector<std::string> files = {"camera.cl", "intersect.cl", "encoding.cl",
+                                      "shade.cl",  "shade16.cl",   "generation.cl"};
+    files.insert(files.end(), queryFiles.begin(), queryFiles.end());
+    files.push_back("patch_stats.cl");
+    return files;
+}
+
 cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions,
                                bool* fromCache) {
     return BuildProgramFiles(ctx,
-                             {"camera.cl", "intersect.cl", "encoding.cl", "shade.cl", "shade16.cl",
-                              "generation.cl", "brute.cl", "classified.cl", "bvh.cl", "kdtree.cl",
-                              "grid.cl", "cones.cl", "patch_stats.cl"},
+                             RenderProgramFiles({"brute.cl", "classified.cl", "bvh.cl", "kdtree.cl",
+                                                 "grid.cl", "cones.cl"}),
                              extraOptions, fromCache);
 }
 

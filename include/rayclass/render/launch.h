@@ -21,6 +21,10 @@ constexpr size_t kLocalSize = 64;
 cl::Program BuildProgramFiles(const clrt::Context& ctx, const std::vector<std::string>& files,
                               const std::string& extraOptions, bool* fromCache = nullptr);
 
+// The kernel files of a render program: ray generation, shading and compaction first, then
+// `queryFiles` (the ray queries' kernels), the Newton statistics of --stats last.
+std::vector<std::string> RenderProgramFiles(const std::vector<std::string>& queryFiles);
+
 // The program holding every kernel the renderer uses, with the options they need
 // (*fromCache: see clrt::Context::BuildProgram).
 cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions = {},
