@@ -32,7 +32,9 @@
 // cost, so with --warm 1 its median is its steady state over like generations (with --warm 0
 // every run is its first generation, classified). Its eye rays are classified, as a render's
 // first generation always is, and so are its shadow rays, as a render's are until a nearest-hit
-// generation has built the BVH.
+// generation has built the BVH. Its tests_per_ray are the last run's, whichever method answered
+// it, while host_s is a median over runs: where auto changes method between runs (a noisy
+// sample) the two can come from different methods.
 //
 // --micro: peak intersection tests per second for spheres, quadrics and triangles, N random rays
 // against P primitives each (P a multiple of 16): the renderer's brute-force kernel (method
