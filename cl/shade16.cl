@@ -11,13 +11,14 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-#define RC_FOR_LANES(M)                                                                            \
-    M(0, s0)                                                                                       \
-    M(1, s1)                                                                                       \
-    M(2, s2)                                                                                       \
-    M(3, s3)                                                                                       \
-    M(4, s4)                                                                                       \
-    M(5, s5) M(6, s6) M(7, s7) M(8, s8) M(9, s9) M(10, sa) M(11, sb) M(12, sc) M(13, sd) M(14, se) \
+#define RC_FOR_LANES(M)                                                                   \
+    M(0, s0)                                                                              \
+    M(1, s1)                                                                              \
+    M(2, s2)                                                                              \
+    M(3, s3)                                                                              \
+    M(4, s4)                                                                              \
+    M(5, s5)                                                                              \
+    M(6, s6) M(7, s7) M(8, s8) M(9, s9) M(10, sa) M(11, sb) M(12, sc) M(13, sd) M(14, se) \
         M(15, sf)
 
 /* The components of 16 float4s as lanes: the float4s concatenated four to a float16 and their
@@ -409,9 +410,10 @@ RC_SHADE_INLINE void rc_shade16_rays(__global const RcRay* rays, __global const 
 #undef RC_STORE_SHADOW
     }
 
+    /* Each spawned ray is written in the branch that computes it: a float16 value that left the
+     * branch would join its unset path and be kept in PoCL's per-work-item context arrays. */
     const int16 bounces = L.hit & !(fmax(rc_v16_max3(kr), rc_v16_max3(kt)) <= 0.0f);
     int16 reflect = 0, refract = 0;
-    RcVec16 rOrigin, rDir, wr, tOrigin, tDir, wt;
     const uint16 depth1 = L.depth + 1u;
     if (any(bounces)) {
         const float16 cosi = fmin(fmax(-rc_v16_dot(L.d, L.ns), 0.0f), 1.0f);
@@ -425,7 +427,7 @@ RC_SHADE_INLINE void rc_shade16_rays(__global const RcRay* rays, __global const 
         RcVec16 ktEff = rc_v16_select(kt, rc_v16(0.0f, 0.0f, 0.0f), tir);
         krEff = rc_v16_select(krEff, rc_v16_add(kr, rc_v16_scale(kt, f)), fresnelL);
         ktEff = rc_v16_select(ktEff, rc_v16_scale(kt, 1.0f - f), fresnelL);
-        wr = rc_v16_mul(L.weight, krEff);
+        const RcVec16 wr = rc_v16_mul(L.weight, krEff);
         reflect = bounces & rc_worth_spawning16(wr, depth1, params);
         if (any(reflect)) {
             const float16 c2 = 2.0f * cosi;
@@ -433,26 +435,36 @@ RC_SHADE_INLINE void rc_shade16_rays(__global const RcRay* rays, __global const 
             const float16 dn2 = 2.0f * rc_v16_dot(L.d, L.ng);
             dir = rc_v16_select(dir, rc_v16_sub(L.d, rc_v16_scale(L.ng, dn2)),
                                 rc_v16_dot(dir, L.ng) <= 0.0f);
-            rDir = rc_normalize16(dir);
-            rOrigin = rc_offset_ray_origin16(L.p, L.ng);
+            const RcVec16 rDir = rc_normalize16(dir);
+            const RcVec16 rOrigin = rc_offset_ray_origin16(L.p, L.ng);
+#define RC_STORE_REFLECTED(k, s)                                                    \
+    if (first + k < nIds && reflect.s) {                                            \
+        RC_SPAWN_LANE(2 * ray[k], rOrigin, rDir, wr, depth1, RC_RAY_REFLECTION, s); \
+    }
+            RC_FOR_LANES(RC_STORE_REFLECTED)
+#undef RC_STORE_REFLECTED
         }
-        wt = rc_v16_mul(L.weight, ktEff);
+        const RcVec16 wt = rc_v16_mul(L.weight, ktEff);
         const RcVec16 dir =
             rc_v16_add(rc_v16_scale(L.d, eta), rc_v16_scale(L.ns, eta * cosi - sqrt(1.0f - sin2t)));
         refract =
             bounces & ~tir & rc_worth_spawning16(wt, depth1, params) & rc_v16_dot(dir, L.ng) < 0.0f;
         if (any(refract)) {
-            tDir = rc_normalize16(dir);
-            tOrigin = rc_offset_ray_origin16(L.p, rc_v16_neg(L.ng));
+            const RcVec16 tDir = rc_normalize16(dir);
+            const RcVec16 tOrigin = rc_offset_ray_origin16(L.p, rc_v16_neg(L.ng));
+#define RC_STORE_REFRACTED(k, s)                                                        \
+    if (first + k < nIds && refract.s) {                                                \
+        RC_SPAWN_LANE(2 * ray[k] + 1, tOrigin, tDir, wt, depth1, RC_RAY_REFRACTION, s); \
+    }
+            RC_FOR_LANES(RC_STORE_REFRACTED)
+#undef RC_STORE_REFRACTED
         }
     }
-#define RC_STORE_SPAWNED(k, s)                                                                    \
-    if (first + k < nIds) {                                                                       \
-        const uint i = ray[k];                                                                    \
-        spawned[2 * i] = reflect.s ? 1 : 0;                                                       \
-        spawned[2 * i + 1] = refract.s ? 1 : 0;                                                   \
-        if (reflect.s) RC_SPAWN_LANE(2 * i, rOrigin, rDir, wr, depth1, RC_RAY_REFLECTION, s);     \
-        if (refract.s) RC_SPAWN_LANE(2 * i + 1, tOrigin, tDir, wt, depth1, RC_RAY_REFRACTION, s); \
+#define RC_STORE_SPAWNED(k, s)                  \
+    if (first + k < nIds) {                     \
+        const uint i = ray[k];                  \
+        spawned[2 * i] = reflect.s ? 1 : 0;     \
+        spawned[2 * i + 1] = refract.s ? 1 : 0; \
     }
     RC_FOR_LANES(RC_STORE_SPAWNED)
 #undef RC_STORE_SPAWNED
