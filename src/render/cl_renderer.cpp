@@ -41,11 +41,11 @@ RcRenderParams MakeRenderParams(const scene::Scene& scene, const RenderOptions& 
     return params;
 }
 
-// The frame's program: `given` (built before the render, its build time kept apart), else one
-// built here, whose build the render waits for.
+// The frame's program: `given` (built before the render, its build time kept apart), else the
+// shared one built here, whose build the render waits for.
 cl::Program FrameProgramOf(clrt::Context& ctx, const RenderOptions& options,
                            const FrameProgram* given, RenderStats& stats) {
-    const FrameProgram program = given ? *given : BuildFrameProgram(ctx, options);
+    const FrameProgram program = given ? *given : BuildSharedFrameProgram(ctx, options);
     stats.programFromCache = program.fromCache;
     stats.timeS["program_build"] = given ? 0.0 : program.seconds;
     if (given) stats.timeS["program_build_thread"] = program.seconds;

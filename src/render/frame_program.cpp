@@ -30,6 +30,10 @@ std::vector<std::string> QueryFiles(Accel accel) {
     return {};
 }
 
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
 }  // namespace
 
 std::string FrameBuildOptions(const RenderOptions& options) {
@@ -51,12 +55,22 @@ FrameProgram BuildFrameProgram(const clrt::Context& ctx, const RenderOptions& op
     out.buildOptions = FrameBuildOptions(options);
     out.program = BuildProgramFiles(ctx, RenderProgramFiles(QueryFiles(options.accel)),
                                     out.buildOptions, &out.fromCache);
-    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    out.seconds = SecondsSince(t0);
+    return out;
+}
+
+FrameProgram BuildSharedFrameProgram(const clrt::Context& ctx, const RenderOptions& options) {
+    const auto t0 = std::chrono::steady_clock::now();
+    FrameProgram out;
+    out.buildOptions = FrameBuildOptions(options);
+    out.program = BuildRenderProgram(ctx, out.buildOptions, &out.fromCache);
+    out.seconds = SecondsSince(t0);
     return out;
 }
 
 bool ServesFrame(const FrameProgram& program, const RenderOptions& options) {
-    return program.accel == options.accel && program.buildOptions == FrameBuildOptions(options);
+    return (!program.accel || *program.accel == options.accel) &&
+           program.buildOptions == FrameBuildOptions(options);
 }
 
 }  // namespace rayclass::render

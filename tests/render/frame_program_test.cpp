@@ -1,4 +1,5 @@
-// The frame program holds the kernels of one query only: every query must still find its own.
+// A frame's own program holds the kernels of one query only: every query must still find its own.
+// The shared one holds every query's, for any --accel with the same build options.
 #include "rayclass/render/frame_program.h"
 
 #include <gtest/gtest.h>
@@ -49,6 +50,25 @@ TEST(FrameProgram, EveryQueryRendersBruteForcesImageFromItsOwnProgram) {
     for (const auto& [name, accel] : kAccels) {
         if (accel == Accel::kBrute) continue;
         RenderStats stats;
+        ClRenderer renderer(SharedContext(), scene, Quiet(accel));
+        renderer.UseProgram(BuildFrameProgram(SharedContext(), Quiet(accel)));
+        const image::Image img = renderer.Render(stats);
+        const image::ImageComparison same = image::Compare(img, brute);
+        EXPECT_EQ(same.idMismatchPixels, 0u) << name;
+        EXPECT_EQ(same.maxAbsError, 0.0) << name;
+    }
+}
+
+TEST(FrameProgram, EveryQueryRendersBruteForcesImageFromTheSharedProgram) {
+    // A renderer given no program builds the shared one: every query's kernels in one program.
+    const scene::Scene scene = SmallCornell();
+    RenderStats bruteStats;
+    ClRenderer bruteRenderer(SharedContext(), scene, Quiet(Accel::kBrute));
+    bruteRenderer.UseProgram(BuildFrameProgram(SharedContext(), Quiet(Accel::kBrute)));
+    const image::Image brute = bruteRenderer.Render(bruteStats);
+    for (const auto& [name, accel] : kAccels) {
+        if (accel == Accel::kBrute) continue;
+        RenderStats stats;
         const image::Image img = ClRenderer(SharedContext(), scene, Quiet(accel)).Render(stats);
         const image::ImageComparison same = image::Compare(img, brute);
         EXPECT_EQ(same.idMismatchPixels, 0u) << name;
@@ -70,6 +90,21 @@ TEST(FrameProgram, ARendererRefusesAProgramBuiltForOtherOptions) {
     EXPECT_THROW(renderer.UseProgram(other), std::invalid_argument);
     other.buildOptions = FrameBuildOptions(Quiet(Accel::kAuto));
     EXPECT_NO_THROW(renderer.UseProgram(other));
+}
+
+TEST(FrameProgram, ARendererTakesTheSharedProgramOfItsBuildOptionsWhateverItsQuery) {
+    const scene::Scene scene = SmallCornell();
+    FrameProgram shared;  // every query's kernels: no accel
+    shared.buildOptions = FrameBuildOptions(Quiet(Accel::kAuto));
+    FrameProgram polar = shared;
+    RenderOptions polarOptions = Quiet(Accel::kAuto);
+    polarOptions.rayEncoding = RayEncoding::kPolar16;
+    polar.buildOptions = FrameBuildOptions(polarOptions);
+    for (const auto& [name, accel] : kAccels) {
+        ClRenderer renderer(SharedContext(), scene, Quiet(accel));
+        EXPECT_NO_THROW(renderer.UseProgram(shared)) << name;
+        EXPECT_THROW(renderer.UseProgram(polar), std::invalid_argument) << name;
+    }
 }
 
 }  // namespace

@@ -32,8 +32,11 @@ class ClRenderer {
     // the kernel either way. `wrapQuery` (empty: none) wraps the query of each Render.
     ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
                EyeHitSource* eyeHits = nullptr, QueryWrapper wrapQuery = {});
-    // Renders with `program` (BuildFrameProgram's for these options, built ahead, e.g. while the
-    // scene loads, or shared by several renders) instead of building the frame's own.
+    // Without UseProgram, Render builds (or loads from the program cache) the shared program of
+    // these options' build options (BuildSharedFrameProgram), which renders of every --accel
+    // share. UseProgram renders with `program` instead: one that ServesFrame these options, built
+    // ahead (e.g. while the scene loads) or shared by several renders; BuildFrameProgram's loads
+    // quicker, for a command's one render. Throws std::invalid_argument for any other program.
     void UseProgram(FrameProgram program);
     image::Image Render(RenderStats& stats);
 

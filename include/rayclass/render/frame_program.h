@@ -1,9 +1,17 @@
-// The program a frame's kernels come from. PoCL reads a program's whole bitcode whenever it loads
-// one, from its binary too, so a render's start-up pays for every kernel in it: a frame's program
-// holds ray generation, shading and compaction, and the kernels of the options' ray query only
-// (BuildRenderProgram, launch.h, builds every kernel, for the tests and benchmarks).
+// The program a frame's kernels come from: ray generation, shading and compaction, and ray query
+// kernels. Two kinds, with a cost each:
+// - BuildFrameProgram's holds the options' query's kernels only. PoCL reads a program's whole
+//   bitcode whenever it loads one, from its binary too, so a render's start-up pays for every
+//   kernel in it; but each --accel is a program cache entry of its own, compiled from source once
+//   per accel and build options, and PoCL compiles every kernel it launches once per program
+//   (POCL_CACHE_DIR), shading's too. For a command that renders with one --accel: rayclass render.
+// - BuildSharedFrameProgram's holds every query's kernels (BuildRenderProgram's, launch.h): one
+//   cache entry that frames of every --accel with the same build options share, so empty caches
+//   compile it and its kernels once. What a ClRenderer given no program builds: the tests and
+//   benchmarks.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "rayclass/clrt/context.h"
@@ -13,7 +21,7 @@ namespace rayclass::render {
 
 struct FrameProgram {
     cl::Program program;
-    Accel accel = Accel::kAuto;  // the query whose kernels it holds
+    std::optional<Accel> accel;  // the query whose kernels it holds; none: every query's
     std::string buildOptions;    // the OpenCL build options it was built with
     bool fromCache = false;      // its binary came from the program cache
     double seconds = 0;          // what building or loading it took
@@ -22,8 +30,12 @@ struct FrameProgram {
 // The OpenCL build options of a frame with `options` (triangle test, ray encoding, extra ones).
 std::string FrameBuildOptions(const RenderOptions& options);
 
-// The program a frame with `options` launches its kernels from.
+// The program a frame with `options` launches its kernels from, with its query's kernels only.
 FrameProgram BuildFrameProgram(const clrt::Context& ctx, const RenderOptions& options);
+
+// The program frames with `options`' build options launch their kernels from, whatever their
+// --accel: every query's kernels.
+FrameProgram BuildSharedFrameProgram(const clrt::Context& ctx, const RenderOptions& options);
 
 // True when `program` holds the kernels a frame with `options` launches, built as it needs them.
 bool ServesFrame(const FrameProgram& program, const RenderOptions& options);
