@@ -59,15 +59,13 @@ void KernelTimer::Record(const std::string& kernel, const cl::Event& event) {
     seconds_[kernel] += double(end - start) * 1e-9;
 }
 
-cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags, Writes writes) {
+cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags) {
     bytes = std::max<size_t>(1, bytes);
-    if (ctx.info().type != "cpu" || bytes < kLargeAllocationBytes || writes == Writes::kSome) {
+    if (ctx.info().type != "cpu" || bytes < kLargeAllocationBytes) {
         return clrt::Check("clCreateBuffer",
                            [&] { return cl::Buffer(ctx.context(), flags, bytes); });
     }
-    // PoCL's own allocations are malloc's, on small pages: the kernels' first writes to a
-    // render's ray and shading buffers took nearly half of a render's page faults. Over memory
-    // of our own the device works in place, and the buffer frees it when it goes.
+    // Over memory of our own the device works in place, and the buffer frees it when it goes.
     // (Declared before the buffer: should the callback fail, the buffer goes first.)
     auto pages = std::make_unique<LargePages>(bytes);
     cl::Buffer buffer = clrt::Check("clCreateBuffer", [&] {

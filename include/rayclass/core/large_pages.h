@@ -1,21 +1,19 @@
-// Large host arrays in pages of their own, advised for transparent huge pages (Linux's
-// MADV_HUGEPAGE; Debian's default THP mode honours only advised memory). A one-frame render
-// first-touches most of its memory, so on 4 KiB pages its page faults are a large part of its
-// time; with its device buffers and leaf arrays on huge pages about half of them go.
+// Large host arrays in pages of their own: mapped for one allocation, faulted in only where
+// written, and returned to the system when freed. They stay on ordinary 4 KiB pages: on a
+// virtual machine that hands its guests' free memory back to the host (free page reporting),
+// each fresh transparent huge page first costs the host's faults for all of its 2 MiB, many
+// times the small pages' faults for the same bytes.
 #pragma once
 
 #include <cstddef>
 
 namespace rayclass {
 
-constexpr size_t kHugePageBytes = size_t(2) << 20;
-
 // Allocations of this many bytes or more take the large path (below it, malloc's reuse of
-// freed memory saves more than huge pages would).
-constexpr size_t kLargeAllocationBytes = kHugePageBytes;
+// freed memory saves more).
+constexpr size_t kLargeAllocationBytes = size_t(2) << 20;
 
-// `bytes` (> 0) of zeroed memory aligned to kHugePageBytes, mapped for this allocation alone
-// and advised for huge pages (where the kernel refuses the advice, ordinary pages). Throws
+// `bytes` (> 0) of zeroed, page-aligned memory, mapped for this allocation alone. Throws
 // std::bad_alloc.
 void* AllocateLarge(size_t bytes);
 

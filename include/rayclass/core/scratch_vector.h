@@ -2,11 +2,8 @@
 // large buffer whose elements are written before they are read then costs no zeroing pass, and
 // pages never written (the unused tail of a worst-case reservation) are never faulted in.
 //
-// DenseScratchVector, for arrays that are written from the front without gaps, takes huge pages
-// from kLargeAllocationBytes on (large_pages.h): a reservation's unused tail then stays untouched
-// but for the rest of the last 2 MiB page written. Arrays written in several places at once
-// (Hierarchy's face slabs) stay on small pages: with huge pages each place's last page comes
-// whole, and even a small scene's peak memory grows by tens of megabytes.
+// DenseScratchVector, for arrays that are written from the front without gaps, takes pages of
+// its own from kLargeAllocationBytes on (large_pages.h), returned to the system when freed.
 #pragma once
 
 #include <cstddef>

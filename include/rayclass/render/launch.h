@@ -51,16 +51,10 @@ cl::Buffer UploadVector(clrt::Context& ctx, const std::vector<T>& v) {
     });
 }
 
-// How the kernels first write a buffer: every element, or a scattered few (the secondary ray
-// slots, of which only spawning rays write theirs).
-enum class Writes { kEvery, kSome };
-
 // A buffer of at least one byte (read-write unless `flags` say otherwise). On a CPU device a
-// large one that is written everywhere lies in host memory on huge pages (core/large_pages.h),
-// which the device uses in place. One written in a few places stays on the device's small
-// pages: a huge page comes whole on the first write to it.
-cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE,
-                        Writes writes = Writes::kEvery);
+// large one lies in host memory of its own (core/large_pages.h), which the device uses in place
+// and which goes with the buffer.
+cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE);
 
 // Rays per batch: `requested`, at most the image's rays, and few enough that the largest buffer
 // a batch needs per ray (its shadow rays, one per light, or its two secondary rays and their
