@@ -21,32 +21,6 @@ double SecondsSince(Clock::time_point t0) {
 // sample of single rays spread as evenly came out dearer per ray than whole generations.
 constexpr size_t kSampleRuns = 16, kSampleRunRays = 1024;
 
-// One kind of query (nearest hit or shadow) and what its choice is based on.
-struct Choice {
-    bool onBvh = false;    // the BVH answers the current generation
-    bool sampled = false;  // a sample of this kind has run (see TimeSample)
-    QueryCosts costs;      // what the current generation's choice compared
-    // The current generation's cost to whichever answers it: seconds of the render thread's
-    // time, and rays.
-    double seconds = 0;
-    uint64_t rays = 0;
-
-    // The current generation's measurements become the cost of whichever answered it (its rays
-    // classified from their camera or not); a new sample is to be taken.
-    void NextGeneration(bool fromCamera) {
-        if (rays > 0 && onBvh) {
-            costs.bvhMeasured = seconds / double(rays);
-        } else if (rays > 0) {
-            costs.classifiedBefore = costs.classified;
-            costs.classified = seconds / double(rays);
-            costs.classifiedFromCamera = fromCamera;
-        }
-        costs.bvhSample = 0;
-        seconds = 0;
-        rays = 0;
-    }
-};
-
 // Seconds the classified query's shading kernel has run on `timer`. The BVH leaves shading to
 // the renderer, after its query returns, so this is not the classification's cost.
 double ShadingSeconds(const KernelTimer& timer) {
@@ -71,23 +45,16 @@ class AutoQuery final : public RayQuery {
     void BeginGeneration(uint32_t generation, const cl::Buffer& rays, uint32_t n,
                          KernelTimer& timer) override {
         classified_->BeginGeneration(generation, rays, n, timer);
-        // Every Prepare of the last generation has returned: the count is final.
-        const uint64_t fromCamera = classified_->Stats().eyeRaysFromCamera;
-        nearest_.NextGeneration(fromCamera > eyeRaysFromCamera_);
-        shadow_.NextGeneration(false);
-        eyeRaysFromCamera_ = fromCamera;
-        shadowSampled_ = false;
-        Sample(rays, n, timer);
+        NextGeneration();
+        if (!onBvh_) Sample(rays, n, timer);
         lastReturn_ = Clock::now();
     }
 
     void DescribeGeneration(GenerationStats& gen) const override {
-        gen.query = (nearest_.onBvh ? bvh_ : classified_)->Name();
-        gen.shadowQuery = (shadow_.onBvh ? bvh_ : classified_)->Name();  // onBvh: bvh_ is made
-        gen.classifiedNs = nearest_.costs.PredictedClassified() * 1e9;
-        gen.bvhSampleNs = nearest_.costs.bvhSample * 1e9;
-        gen.shadowClassifiedNs = shadow_.costs.PredictedClassified() * 1e9;
-        gen.shadowBvhSampleNs = shadow_.costs.bvhSample * 1e9;
+        gen.query = (onBvh_ ? bvh_ : classified_)->Name();
+        gen.shadowQuery = classified_->Name();
+        gen.classifiedNs = costs_.PredictedClassified() * 1e9;
+        gen.bvhSampleNs = costs_.bvhSample * 1e9;
     }
 
     // Runs on the worker thread, while the render thread may be in Intersect or Occluded; its
@@ -95,7 +62,7 @@ class AutoQuery final : public RayQuery {
     std::unique_ptr<PreparedBatch> Prepare(const cl::Buffer& rays, uint32_t n,
                                            const cl::CommandQueue& queue,
                                            const RaySource& source) override {
-        if (nearest_.onBvh) return nullptr;  // set before this generation's first Prepare
+        if (onBvh_) return nullptr;  // set before this generation's first Prepare
         return classified_->Prepare(rays, n, queue, source);
     }
 
@@ -110,57 +77,39 @@ class AutoQuery final : public RayQuery {
     QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
                           const cl::Buffer& hits, const ShadeBuffers& shade,
                           KernelTimer& timer) override {
+        if (onBvh_) return bvh_->Intersect(rays, n, nullptr, hits, shade, timer);
         const double shading = ShadingSeconds(timer);
-        const QueryResult result =
-            nearest_.onBvh ? bvh_->Intersect(rays, n, nullptr, hits, shade, timer)
-                           : classified_->Intersect(rays, n, prepared, hits, shade, timer);
-        nearest_.seconds += SecondsSince(lastReturn_) - (ShadingSeconds(timer) - shading);
-        nearest_.rays += n;
+        const QueryResult result = classified_->Intersect(rays, n, prepared, hits, shade, timer);
+        seconds_ += SecondsSince(lastReturn_) - (ShadingSeconds(timer) - shading);
+        rays_ += n;
         lastReturn_ = Clock::now();
         return result;
     }
 
     uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
                       const cl::Buffer& blocked, KernelTimer& timer) override {
-        const uint32_t n = uint32_t(hostRays.size());
-        // Shadow rays appear batch by batch: the generation's first batch is sampled, once the
-        // nearest-hit sample has built the BVH. Classified from their light, shadow rays stay
-        // cheap, and building the tree for them alone cost more than it saved (a render whose
-        // shadow rays all stayed classified paid for the build).
-        if (shadow_.onBvh && !shadowSampled_ && n > 0) {
-            shadowSampled_ = true;
-            shadow_.onBvh = shadow_.costs.KeepBvh();
-        }
-        if (bvh_ && !shadow_.onBvh && !shadowSampled_ && shadow_.costs.classified > 0 && n > 0) {
-            shadowSampled_ = true;
-            Pick(hostRays);
-            const cl::Buffer& sample = sampleRays_.Upload(ctx_, sample_);
-            const cl::Buffer& sampleBlocked = sampleHits_.Reserve(ctx_, sample_.size());
-            shadow_.costs.bvhSample = TimeSample(shadow_, [&] {
-                bvh_->Occluded(sample, sample_, sampleBlocked, timer);  // waits for its kernel
-            });
-            shadow_.onBvh = shadow_.costs.PreferBvh();
-        }
-        const auto t0 = Clock::now();
-        const uint64_t tests = shadow_.onBvh
-                                   ? bvh_->Occluded(shadowRays, hostRays, blocked, timer)
-                                   : classified_->Occluded(shadowRays, hostRays, blocked, timer);
-        shadow_.seconds += SecondsSince(t0);
-        shadow_.rays += n;
+        const uint64_t tests = classified_->Occluded(shadowRays, hostRays, blocked, timer);
         lastReturn_ = Clock::now();
         return tests;
     }
 
   private:
-    // Times the BVH on a sample of the generation's first batch rays[0, n), once the
-    // classification has been measured and unless the BVH answered the last generation, whose
-    // cost decides whether it keeps this one.
-    void Sample(const cl::Buffer& rays, uint32_t n, KernelTimer& timer) {
-        if (nearest_.onBvh) {
-            nearest_.onBvh = nearest_.costs.KeepBvh();
-            return;
+    // The last generation's measurements, if the classification answered it, become its cost; a
+    // new sample is to be taken.
+    void NextGeneration() {
+        if (rays_ > 0 && !onBvh_) {
+            costs_.classifiedBefore = costs_.classified;
+            costs_.classified = seconds_ / double(rays_);
         }
-        if (nearest_.costs.classified == 0 || n == 0) return;
+        costs_.bvhSample = 0;
+        seconds_ = 0;
+        rays_ = 0;
+    }
+
+    // Times the BVH on a sample of the generation's first batch rays[0, n), once the
+    // classification has been measured.
+    void Sample(const cl::Buffer& rays, uint32_t n, KernelTimer& timer) {
+        if (costs_.classified == 0 || n == 0) return;
         Bvh();
         {
             clrt::MappedRead<RcRay> mapped(ctx_.queue(), rays, n);
@@ -170,23 +119,22 @@ class AutoQuery final : public RayQuery {
         const cl::Buffer& sample = sampleRays_.Upload(ctx_, sample_);
         const uint32_t m = uint32_t(sample_.size());
         const cl::Buffer& hits = sampleHits_.Reserve(ctx_, m * sizeof(RcHit));
-        nearest_.costs.bvhSample = TimeSample(nearest_, [&] {
+        costs_.bvhSample = TimeSample([&] {
             bvh_->Intersect(sample, m, nullptr, hits, ShadeBuffers{}, timer);
             clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
         });
-        nearest_.onBvh = nearest_.costs.PreferBvh();
+        onBvh_ = costs_.PreferBvh();
     }
 
     // Seconds per sample_ ray that run() (the BVH on the uploaded sample, to completion)
     // takes on the otherwise idle device, timed on a run after one that brings the tree back
-    // into the caches the classification used, and the first sample of a kind after two: its
-    // first run also compiles the kernel and faults in the tree. The runs after those cost per
-    // ray about what whole generations cost.
+    // into the caches the classification used, and the first sample after two: its first run
+    // also compiles the kernel and faults in the tree.
     template <typename Run>
-    double TimeSample(Choice& choice, const Run& run) {
+    double TimeSample(const Run& run) {
         clrt::Check("clFinish", [&] { ctx_.queue().finish(); });  // the upload, and nothing else
-        for (int warmUp = choice.sampled ? 1 : 2; warmUp > 0; --warmUp) run();
-        choice.sampled = true;
+        for (int warmUp = sampled_ ? 1 : 2; warmUp > 0; --warmUp) run();
+        sampled_ = true;
         const auto t0 = Clock::now();
         run();
         return SecondsSince(t0) / double(sample_.size());
@@ -216,9 +164,12 @@ class AutoQuery final : public RayQuery {
     std::unique_ptr<RayQuery> classified_, bvh_;
     std::function<std::unique_ptr<RayQuery>()> makeBvh_;
     Clock::time_point lastReturn_;  // when the render thread last returned from this query
-    Choice nearest_, shadow_;
-    bool shadowSampled_ = false;
-    uint64_t eyeRaysFromCamera_ = 0;  // the classification's count at the generation's start
+    bool onBvh_ = false;            // the BVH answers this generation's nearest hits, and the rest
+    bool sampled_ = false;          // a sample has run (see TimeSample)
+    QueryCosts costs_;              // what this generation's choice compared
+    // The classification's cost on this generation to the render thread: seconds and rays.
+    double seconds_ = 0;
+    uint64_t rays_ = 0;
     std::vector<RcRay> sample_;
     GrowingBuffer sampleRays_, sampleHits_;
 };

@@ -37,11 +37,8 @@ nlohmann::json RenderStats::ToJson() const {
                               {"intersection_tests", g.intersectionTests},
                               {"query", g.query},
                               {"shadow_query", g.shadowQuery}};
-        const std::pair<const char*, double> costs[] = {
-            {"classified_predicted", g.classifiedNs},
-            {"bvh_sample", g.bvhSampleNs},
-            {"shadow_classified_predicted", g.shadowClassifiedNs},
-            {"shadow_bvh_sample", g.shadowBvhSampleNs}};
+        const std::pair<const char*, double> costs[] = {{"classified_predicted", g.classifiedNs},
+                                                        {"bvh_sample", g.bvhSampleNs}};
         for (const auto& [name, ns] : costs) {
             if (ns > 0) gen["auto_ns_per_ray"][name] = ns;
         }
