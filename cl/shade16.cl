@@ -11,15 +11,17 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-#define RC_FOR_LANES(M)                                                                   \
-    M(0, s0)                                                                              \
-    M(1, s1)                                                                              \
-    M(2, s2)                                                                              \
-    M(3, s3)                                                                              \
-    M(4, s4)                                                                              \
-    M(5, s5)                                                                              \
-    M(6, s6) M(7, s7) M(8, s8) M(9, s9) M(10, sa) M(11, sb) M(12, sc) M(13, sd) M(14, se) \
+/* clang-format reflows this macro differently on every run. */
+/* clang-format off */
+#define RC_FOR_LANES(M)                                                                            \
+    M(0, s0)                                                                                       \
+    M(1, s1)                                                                                       \
+    M(2, s2)                                                                                       \
+    M(3, s3)                                                                                       \
+    M(4, s4)                                                                                       \
+    M(5, s5) M(6, s6) M(7, s7) M(8, s8) M(9, s9) M(10, sa) M(11, sb) M(12, sc) M(13, sd) M(14, se) \
         M(15, sf)
+/* clang-format on */
 
 /* The components of 16 float4s as lanes: the float4s concatenated four to a float16 and their
  * components sorted by swizzles, shuffles of whole registers (a lane at a time took an insert
@@ -294,6 +296,25 @@ RC_SHADE_INLINE int16 rc_worth_spawning16(RcVec16 w, uint16 depth,
         secondaryInfo[slot_] = info_;                                                      \
     } while (0)
 
+/* Asks the cache for the triangles that the rays [first, first + 16) of the list hit: the work-item
+ * after this one shades them, and their records are scattered through memory. */
+RC_SHADE_INLINE void rc_prefetch_triangles16(__global const RcHit* hits, __global const uint* ids,
+                                             uint first, uint nIds,
+                                             __global const RcTriangle* triangles,
+                                             __global const RcTriangleShading* triShading,
+                                             uint nTriangles) {
+    if (first >= nIds) return;
+#pragma unroll
+    for (uint k = 0; k < 16; ++k) {
+        const uint j = min(first + k, nIds - 1);
+        const uint prim = hits[ids ? ids[j] : j].prim;
+        const uint t = prim < nTriangles ? prim : 0;
+        __builtin_prefetch(&triangles[t].v0, 0, 3);
+        __builtin_prefetch(&triangles[t].v2, 0, 3);
+        __builtin_prefetch(&triShading[t], 0, 3);
+    }
+}
+
 /* Rays ids[16 g, 16 g + 16) (below nIds) of the batch, or its rays [16 g, 16 g + 16) when ids is
  * null, g the work-item: rc_shade_ray's outputs, lights included. */
 RC_SHADE_INLINE void rc_shade16_rays(__global const RcRay* rays, __global const RcRayInfo* infos,
@@ -305,6 +326,7 @@ RC_SHADE_INLINE void rc_shade16_rays(__global const RcRay* rays, __global const 
     float4 o[16], d[16], h[16], wgt[16], inf[16], v0[16], v1[16], v2[16], sh[16];
     float4 n0[16], n1[16], n2[16];
     uint ray[16];
+    rc_prefetch_triangles16(hits, ids, first + 16, nIds, triangles, triShading, nTriangles);
 #pragma unroll
     for (uint k = 0; k < 16; ++k) {
         const uint j = min(first + k, nIds - 1);
