@@ -11,15 +11,17 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-#define RC_FOR_LANES(M)                                                                   \
-    M(0, s0)                                                                              \
-    M(1, s1)                                                                              \
-    M(2, s2)                                                                              \
-    M(3, s3)                                                                              \
-    M(4, s4)                                                                              \
-    M(5, s5)                                                                              \
-    M(6, s6) M(7, s7) M(8, s8) M(9, s9) M(10, sa) M(11, sb) M(12, sc) M(13, sd) M(14, se) \
+/* clang-format reflows this macro differently on every run. */
+/* clang-format off */
+#define RC_FOR_LANES(M)                                                                            \
+    M(0, s0)                                                                                       \
+    M(1, s1)                                                                                       \
+    M(2, s2)                                                                                       \
+    M(3, s3)                                                                                       \
+    M(4, s4)                                                                                       \
+    M(5, s5) M(6, s6) M(7, s7) M(8, s8) M(9, s9) M(10, sa) M(11, sb) M(12, sc) M(13, sd) M(14, se) \
         M(15, sf)
+/* clang-format on */
 
 /* The components of 16 float4s as lanes: the float4s concatenated four to a float16 and their
  * components sorted by swizzles, shuffles of whole registers (a lane at a time took an insert
@@ -49,24 +51,50 @@ RC_SHADE_INLINE RcVec16 rc_lanes_xyz(const float4* a) {
  * without rescaling. */
 RC_SHADE_INLINE int16 rc_rescaled16(float16 dd) { return !(dd >= FLT_MIN && dd <= FLT_MAX); }
 
+/* The scalar fallbacks below are not inlined: PoCL keeps a kernel's private arrays in
+ * per-work-item context arrays, a called function's on its own stack. Vectors go in and out by
+ * value; a struct goes through the caller's memory, which becomes a context array. */
+#define RC_SCALAR_FALLBACK __attribute__((noinline))
+
+/* len with the lanes `odd` replaced by the scalar length of (x, y, z). */
+RC_SCALAR_FALLBACK float16 rc_length16_scalar(float16 vx, float16 vy, float16 vz, float16 len,
+                                              int16 odd) {
+    float x[16], y[16], z[16], r[16];
+    int m[16];
+    vstore16(vx, 0, x);
+    vstore16(vy, 0, y);
+    vstore16(vz, 0, z);
+    vstore16(len, 0, r);
+    vstore16(odd, 0, m);
+    for (int k = 0; k < 16; ++k) {
+        if (m[k]) r[k] = length((float3)(x[k], y[k], z[k]));
+    }
+    return vload16(0, r);
+}
+
 RC_SHADE_INLINE float16 rc_length16(RcVec16 v) {
     const float16 dd = rc_v16_dot(v, v);
-    float16 len = sqrt(dd);
+    const float16 len = sqrt(dd);
     const int16 odd = rc_rescaled16(dd);
-    if (any(odd)) {
-        float x[16], y[16], z[16], r[16];
-        int m[16];
-        vstore16(v.x, 0, x);
-        vstore16(v.y, 0, y);
-        vstore16(v.z, 0, z);
-        vstore16(len, 0, r);
-        vstore16(odd, 0, m);
-        for (int k = 0; k < 16; ++k) {
-            if (m[k]) r[k] = length((float3)(x[k], y[k], z[k]));
-        }
-        len = vload16(0, r);
+    return any(odd) ? rc_length16_scalar(v.x, v.y, v.z, len, odd) : len;
+}
+
+/* n with the lanes `odd` replaced by component `axis` of the scalar normalize of (x, y, z). */
+RC_SCALAR_FALLBACK float16 rc_normalize16_scalar(float16 vx, float16 vy, float16 vz, float16 n,
+                                                 int16 odd, int axis) {
+    float x[16], y[16], z[16], r[16];
+    int m[16];
+    vstore16(vx, 0, x);
+    vstore16(vy, 0, y);
+    vstore16(vz, 0, z);
+    vstore16(n, 0, r);
+    vstore16(odd, 0, m);
+    for (int k = 0; k < 16; ++k) {
+        if (!m[k]) continue;
+        const float3 u = normalize((float3)(x[k], y[k], z[k]));
+        r[k] = axis == 0 ? u.x : axis == 1 ? u.y : u.z;
     }
-    return len;
+    return vload16(0, r);
 }
 
 RC_SHADE_INLINE RcVec16 rc_normalize16(RcVec16 v) {
@@ -75,45 +103,33 @@ RC_SHADE_INLINE RcVec16 rc_normalize16(RcVec16 v) {
     RcVec16 n = rc_v16_scale(v, inv);
     const int16 odd = rc_rescaled16(dd);
     if (any(odd)) {
-        float x[16], y[16], z[16], nx[16], ny[16], nz[16];
-        int m[16];
-        vstore16(v.x, 0, x);
-        vstore16(v.y, 0, y);
-        vstore16(v.z, 0, z);
-        vstore16(n.x, 0, nx);
-        vstore16(n.y, 0, ny);
-        vstore16(n.z, 0, nz);
-        vstore16(odd, 0, m);
-        for (int k = 0; k < 16; ++k) {
-            if (!m[k]) continue;
-            const float3 u = normalize((float3)(x[k], y[k], z[k]));
-            nx[k] = u.x;
-            ny[k] = u.y;
-            nz[k] = u.z;
-        }
-        n = rc_v16(vload16(0, nx), vload16(0, ny), vload16(0, nz));
+        n = rc_v16(rc_normalize16_scalar(v.x, v.y, v.z, n.x, odd, 0),
+                   rc_normalize16_scalar(v.x, v.y, v.z, n.y, odd, 1),
+                   rc_normalize16_scalar(v.x, v.y, v.z, n.z, odd, 2));
     }
     return n;
+}
+
+/* r with the lanes `odd` replaced by the scalar pow(x, y). */
+RC_SCALAR_FALLBACK float16 rc_pow16_scalar(float16 x, float16 y, float16 r, int16 odd) {
+    float a[16], b[16], c[16];
+    int m[16];
+    vstore16(x, 0, a);
+    vstore16(y, 0, b);
+    vstore16(r, 0, c);
+    vstore16(odd, 0, m);
+    for (int k = 0; k < 16; ++k) {
+        if (m[k]) c[k] = pow(a[k], b[k]);
+    }
+    return vload16(0, c);
 }
 
 /* pow of the lanes; the vector pow differs from the scalar one on subnormal results, which
  * those lanes take from the scalar pow. */
 RC_SHADE_INLINE float16 rc_pow16(float16 x, float16 y) {
-    float16 r = pow(x, y);
+    const float16 r = pow(x, y);
     const int16 odd = r != 0.0f && fabs(r) < FLT_MIN;
-    if (any(odd)) {
-        float a[16], b[16], c[16];
-        int m[16];
-        vstore16(x, 0, a);
-        vstore16(y, 0, b);
-        vstore16(r, 0, c);
-        vstore16(odd, 0, m);
-        for (int k = 0; k < 16; ++k) {
-            if (m[k]) c[k] = pow(a[k], b[k]);
-        }
-        r = vload16(0, c);
-    }
-    return r;
+    return any(odd) ? rc_pow16_scalar(x, y, r, odd) : r;
 }
 
 RC_SHADE_INLINE float16 rc_offset_component16(float16 p, float16 n) {
@@ -134,6 +150,62 @@ typedef struct RcShadeLanes {
     int16 entering, hit;
     uint16 depth, material;
 } RcShadeLanes;
+
+/* rc_surface of the lanes `scalar` (entering and material of the others as given; their p, ng
+ * and ns undefined). */
+typedef struct RcSurface16 {
+    RcVec16 p, ng, ns;
+    int16 entering;
+    uint16 material;
+} RcSurface16;
+
+RC_SCALAR_FALLBACK RcSurface16
+rc_surface16_scalar(float16 ox16, float16 oy16, float16 oz16, float16 dx16, float16 dy16,
+                    float16 dz16, float16 t, uint16 prim, float16 u, float16 v, int16 scalar,
+                    int16 entering16, uint16 material16, __global const RcTriangle* triangles,
+                    __global const RcTriangleShading* triShading, __global const RcSphere* spheres,
+                    __global const RcQuadric* quadrics, uint nTriangles, uint nSpheres) {
+    float4 sp[16], sng[16], sns[16];
+    int m[16], entering[16];
+    uint material[16], ids[16];
+    float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], ht[16], hu[16], hv[16];
+    vstore16(scalar, 0, m);
+    vstore16(ox16, 0, ox);
+    vstore16(oy16, 0, oy);
+    vstore16(oz16, 0, oz);
+    vstore16(dx16, 0, dx);
+    vstore16(dy16, 0, dy);
+    vstore16(dz16, 0, dz);
+    vstore16(t, 0, ht);
+    vstore16(prim, 0, ids);
+    vstore16(u, 0, hu);
+    vstore16(v, 0, hv);
+    vstore16(entering16, 0, entering);
+    vstore16(material16, 0, material);
+    for (int k = 0; k < 16; ++k) {
+        if (!m[k]) continue;
+        RcHit h;
+        h.t = ht[k];
+        h.prim = ids[k];
+        h.u = hu[k];
+        h.v = hv[k];
+        const RcSurface s =
+            rc_surface((float3)(ox[k], oy[k], oz[k]), (float3)(dx[k], dy[k], dz[k]), h, triangles,
+                       triShading, spheres, quadrics, nTriangles, nSpheres);
+        sp[k] = (float4)(s.p, 0.0f);
+        sng[k] = (float4)(s.ng, 0.0f);
+        sns[k] = (float4)(s.ns, 0.0f);
+        entering[k] = s.entering ? -1 : 0;
+        material[k] = s.material;
+    }
+    RcSurface16 S;
+    S.p = rc_lanes_xyz(sp);
+    S.ng = rc_lanes_xyz(sng);
+    S.ns = rc_lanes_xyz(sns);
+    S.entering = vload16(0, entering);
+    S.material = vload16(0, material);
+    return S;
+}
 
 /* The surfaces of the lanes' hits: triangles (vertices p0, p1, p2, vertex normals n0, n1, n2
  * where hasNormals) in the lanes, other primitives by rc_surface. */
@@ -174,44 +246,14 @@ RC_SHADE_INLINE void rc_surface16(RcShadeLanes* L, RcVec16 o, float16 t, uint16 
         L->ns = rc_v16_select(L->ns, rc_v16_neg(L->ns), rc_v16_dot(L->ns, L->ng) < 0.0f);
     }
     if (!any(scalar)) return;
-    float4 sp[16], sng[16], sns[16];
-    int m[16], entering[16];
-    uint material[16], ids[16];
-    float ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], ht[16], hu[16], hv[16];
-    vstore16(scalar, 0, m);
-    vstore16(o.x, 0, ox);
-    vstore16(o.y, 0, oy);
-    vstore16(o.z, 0, oz);
-    vstore16(L->d.x, 0, dx);
-    vstore16(L->d.y, 0, dy);
-    vstore16(L->d.z, 0, dz);
-    vstore16(t, 0, ht);
-    vstore16(prim, 0, ids);
-    vstore16(u, 0, hu);
-    vstore16(v, 0, hv);
-    vstore16(L->entering, 0, entering);
-    vstore16(L->material, 0, material);
-    for (int k = 0; k < 16; ++k) {
-        if (!m[k]) continue;
-        RcHit h;
-        h.t = ht[k];
-        h.prim = ids[k];
-        h.u = hu[k];
-        h.v = hv[k];
-        const RcSurface s =
-            rc_surface((float3)(ox[k], oy[k], oz[k]), (float3)(dx[k], dy[k], dz[k]), h, triangles,
-                       triShading, spheres, quadrics, params->nTriangles, params->nSpheres);
-        sp[k] = (float4)(s.p, 0.0f);
-        sng[k] = (float4)(s.ng, 0.0f);
-        sns[k] = (float4)(s.ns, 0.0f);
-        entering[k] = s.entering ? -1 : 0;
-        material[k] = s.material;
-    }
-    L->p = rc_v16_select(L->p, rc_lanes_xyz(sp), scalar);
-    L->ng = rc_v16_select(L->ng, rc_lanes_xyz(sng), scalar);
-    L->ns = rc_v16_select(L->ns, rc_lanes_xyz(sns), scalar);
-    L->entering = vload16(0, entering);
-    L->material = vload16(0, material);
+    const RcSurface16 S = rc_surface16_scalar(
+        o.x, o.y, o.z, L->d.x, L->d.y, L->d.z, t, prim, u, v, scalar, L->entering, L->material,
+        triangles, triShading, spheres, quadrics, params->nTriangles, params->nSpheres);
+    L->p = rc_v16_select(L->p, S.p, scalar);
+    L->ng = rc_v16_select(L->ng, S.ng, scalar);
+    L->ns = rc_v16_select(L->ns, S.ns, scalar);
+    L->entering = S.entering;
+    L->material = S.material;
 }
 
 /* The lanes' materials. */
@@ -294,6 +336,25 @@ RC_SHADE_INLINE int16 rc_worth_spawning16(RcVec16 w, uint16 depth,
         secondaryInfo[slot_] = info_;                                                      \
     } while (0)
 
+/* Asks the cache for the triangles that the rays [first, first + 16) of the list hit: the work-item
+ * after this one shades them, and their records are scattered through memory. */
+RC_SHADE_INLINE void rc_prefetch_triangles16(__global const RcHit* hits, __global const uint* ids,
+                                             uint first, uint nIds,
+                                             __global const RcTriangle* triangles,
+                                             __global const RcTriangleShading* triShading,
+                                             uint nTriangles) {
+    if (first >= nIds) return;
+#pragma unroll
+    for (uint k = 0; k < 16; ++k) {
+        const uint j = min(first + k, nIds - 1);
+        const uint prim = hits[ids ? ids[j] : j].prim;
+        const uint t = prim < nTriangles ? prim : 0;
+        __builtin_prefetch(&triangles[t].v0, 0, 3);
+        __builtin_prefetch(&triangles[t].v2, 0, 3);
+        __builtin_prefetch(&triShading[t], 0, 3);
+    }
+}
+
 /* Rays ids[16 g, 16 g + 16) (below nIds) of the batch, or its rays [16 g, 16 g + 16) when ids is
  * null, g the work-item: rc_shade_ray's outputs, lights included. */
 RC_SHADE_INLINE void rc_shade16_rays(__global const RcRay* rays, __global const RcRayInfo* infos,
@@ -305,6 +366,7 @@ RC_SHADE_INLINE void rc_shade16_rays(__global const RcRay* rays, __global const 
     float4 o[16], d[16], h[16], wgt[16], inf[16], v0[16], v1[16], v2[16], sh[16];
     float4 n0[16], n1[16], n2[16];
     uint ray[16];
+    rc_prefetch_triangles16(hits, ids, first + 16, nIds, triangles, triShading, nTriangles);
 #pragma unroll
     for (uint k = 0; k < 16; ++k) {
         const uint j = min(first + k, nIds - 1);
