@@ -56,45 +56,35 @@ RC_SHADE_INLINE int16 rc_rescaled16(float16 dd) { return !(dd >= FLT_MIN && dd <
  * value; a struct goes through the caller's memory, which becomes a context array. */
 #define RC_SCALAR_FALLBACK __attribute__((noinline))
 
-/* len with the lanes `odd` replaced by the scalar length of (x, y, z). */
-RC_SCALAR_FALLBACK float16 rc_length16_scalar(float16 vx, float16 vy, float16 vz, float16 len,
-                                              int16 odd) {
-    float x[16], y[16], z[16], r[16];
+/* r with the lanes `odd` replaced by the scalar length of (x, y, z) (axis < 0) or by component
+ * `axis` of its scalar normalize. */
+RC_SCALAR_FALLBACK float16 rc_vec16_scalar(float16 vx, float16 vy, float16 vz, float16 r, int16 odd,
+                                           int axis) {
+    float x[16], y[16], z[16], out[16];
     int m[16];
     vstore16(vx, 0, x);
     vstore16(vy, 0, y);
     vstore16(vz, 0, z);
-    vstore16(len, 0, r);
+    vstore16(r, 0, out);
     vstore16(odd, 0, m);
     for (int k = 0; k < 16; ++k) {
-        if (m[k]) r[k] = length((float3)(x[k], y[k], z[k]));
+        if (!m[k]) continue;
+        const float3 v = (float3)(x[k], y[k], z[k]);
+        if (axis < 0) {
+            out[k] = length(v);
+        } else {
+            const float3 u = normalize(v);
+            out[k] = axis == 0 ? u.x : axis == 1 ? u.y : u.z;
+        }
     }
-    return vload16(0, r);
+    return vload16(0, out);
 }
 
 RC_SHADE_INLINE float16 rc_length16(RcVec16 v) {
     const float16 dd = rc_v16_dot(v, v);
     const float16 len = sqrt(dd);
     const int16 odd = rc_rescaled16(dd);
-    return any(odd) ? rc_length16_scalar(v.x, v.y, v.z, len, odd) : len;
-}
-
-/* n with the lanes `odd` replaced by component `axis` of the scalar normalize of (x, y, z). */
-RC_SCALAR_FALLBACK float16 rc_normalize16_scalar(float16 vx, float16 vy, float16 vz, float16 n,
-                                                 int16 odd, int axis) {
-    float x[16], y[16], z[16], r[16];
-    int m[16];
-    vstore16(vx, 0, x);
-    vstore16(vy, 0, y);
-    vstore16(vz, 0, z);
-    vstore16(n, 0, r);
-    vstore16(odd, 0, m);
-    for (int k = 0; k < 16; ++k) {
-        if (!m[k]) continue;
-        const float3 u = normalize((float3)(x[k], y[k], z[k]));
-        r[k] = axis == 0 ? u.x : axis == 1 ? u.y : u.z;
-    }
-    return vload16(0, r);
+    return any(odd) ? rc_vec16_scalar(v.x, v.y, v.z, len, odd, -1) : len;
 }
 
 RC_SHADE_INLINE RcVec16 rc_normalize16(RcVec16 v) {
@@ -103,9 +93,9 @@ RC_SHADE_INLINE RcVec16 rc_normalize16(RcVec16 v) {
     RcVec16 n = rc_v16_scale(v, inv);
     const int16 odd = rc_rescaled16(dd);
     if (any(odd)) {
-        n = rc_v16(rc_normalize16_scalar(v.x, v.y, v.z, n.x, odd, 0),
-                   rc_normalize16_scalar(v.x, v.y, v.z, n.y, odd, 1),
-                   rc_normalize16_scalar(v.x, v.y, v.z, n.z, odd, 2));
+        n = rc_v16(rc_vec16_scalar(v.x, v.y, v.z, n.x, odd, 0),
+                   rc_vec16_scalar(v.x, v.y, v.z, n.y, odd, 1),
+                   rc_vec16_scalar(v.x, v.y, v.z, n.z, odd, 2));
     }
     return n;
 }
