@@ -6,8 +6,11 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <ostream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "rayclass/clrt/context.h"
 #include "rayclass/image/compare.h"
@@ -40,24 +43,45 @@ RenderOptions Quiet(Accel accel) {
     return options;
 }
 
-TEST(FrameProgram, EveryQueryRendersBruteForcesImageFromItsOwnProgram) {
+// One test per query, so that a cold program cache compiles their programs in parallel runs.
+struct QueryCase {
+    std::string_view name;
+    Accel accel;
+};
+void PrintTo(const QueryCase& c, std::ostream* os) { *os << c.name; }
+
+class FrameProgramOfQuery : public ::testing::TestWithParam<QueryCase> {};
+
+TEST_P(FrameProgramOfQuery, RendersBruteForcesImageFromItsOwnProgram) {
     // Every query's hits are exact (the same triangle test), so each renders brute force's image
     // to the bit; a kernel missing from its program would fail the render instead.
     const scene::Scene scene = SmallCornell();
     RenderStats bruteStats;
     const image::Image brute =
         ClRenderer(SharedContext(), scene, Quiet(Accel::kBrute)).Render(bruteStats);
-    for (const auto& [name, accel] : kAccels) {
-        if (accel == Accel::kBrute) continue;
-        RenderStats stats;
-        ClRenderer renderer(SharedContext(), scene, Quiet(accel));
-        renderer.UseProgram(BuildFrameProgram(SharedContext(), Quiet(accel)));
-        const image::Image img = renderer.Render(stats);
-        const image::ImageComparison same = image::Compare(img, brute);
-        EXPECT_EQ(same.idMismatchPixels, 0u) << name;
-        EXPECT_EQ(same.maxAbsError, 0.0) << name;
-    }
+    const Accel accel = GetParam().accel;
+    RenderStats stats;
+    ClRenderer renderer(SharedContext(), scene, Quiet(accel));
+    renderer.UseProgram(BuildFrameProgram(SharedContext(), Quiet(accel)));
+    const image::Image img = renderer.Render(stats);
+    const image::ImageComparison same = image::Compare(img, brute);
+    EXPECT_EQ(same.idMismatchPixels, 0u);
+    EXPECT_EQ(same.maxAbsError, 0.0);
 }
+
+// Every query but brute force, the oracle (whose own program the next test uses).
+std::vector<QueryCase> QueriesButBrute() {
+    std::vector<QueryCase> out;
+    for (const auto& [name, accel] : kAccels) {
+        if (accel != Accel::kBrute) out.push_back({name, accel});
+    }
+    return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(Queries, FrameProgramOfQuery, ::testing::ValuesIn(QueriesButBrute()),
+                         [](const ::testing::TestParamInfo<QueryCase>& info) {
+                             return std::string(info.param.name);
+                         });
 
 TEST(FrameProgram, EveryQueryRendersBruteForcesImageFromTheSharedProgram) {
     // A renderer given no program builds the shared one: every query's kernels in one program.
