@@ -310,6 +310,13 @@ inline float rc_bvh_max_spread2(__global const RcBvh8Node* root) {
     return dot(e, e);
 }
 
+/* The active lanes whose directions lie within the cone about d of squared cosine cos2, their
+ * squared lengths len2. */
+inline int16 rc_packet_within(const RcBvhPacket* p, float16 len2, float3 d, float cos2) {
+    const float16 dd = p->dx * d.x + p->dy * d.y + p->dz * d.z;
+    return p->active & (dd > 0.0f) & (dd * dd > cos2 * len2 * dot(d, d));
+}
+
 /* The packet's rays from rays[first, first + 16), lanes beyond n inactive, and lanes with
  * tmax == 0 (empty shadow slots) inactive when skipEmpty. Returns whether the packet is
  * coherent enough to walk as one: every active direction in the first active one's octant and
@@ -346,11 +353,10 @@ inline int rc_bvh_load_packet(__global const RcRay* rays, uint first, uint n, in
         d0 = act ? d[k].xyz : d0;
         lead |= act;
     }
-    const float16 dd = p->dx * d0.x + p->dy * d0.y + p->dz * d0.z;
     const float16 len2 = p->dx * p->dx + p->dy * p->dy + p->dz * p->dz;
     const int16 octant = ((as_int16(p->dx) ^ as_int(d0.x)) | (as_int16(p->dy) ^ as_int(d0.y)) |
                           (as_int16(p->dz) ^ as_int(d0.z))) >= 0;
-    const int16 near = octant & (dd > 0.0f) & (dd * dd > 0.9025f * len2 * dot(d0, d0));
+    const int16 near = octant & rc_packet_within(p, len2, d0, 0.9025f);
     const float3 lo = (float3)(rc_active_min16(p->ox, p->active), rc_active_min16(p->oy, p->active),
                                rc_active_min16(p->oz, p->active));
     const float3 hi = (float3)(rc_active_max16(p->ox, p->active), rc_active_max16(p->oy, p->active),
@@ -642,12 +648,6 @@ inline void rc_ray_store_answer(int anyHit, uint i, RcHit best, __global RcHit* 
     }
 }
 
-/* The active lanes within 30 degrees of direction d (cos^2 > 3/4). */
-inline int16 rc_packet_within30(const RcBvhPacket* p, float16 len2, float3 d) {
-    const float16 dd = p->dx * d.x + p->dy * d.y + p->dz * d.z;
-    return p->active & (dd > 0.0f) & (dd * dd > 0.75f * len2 * dot(d, d));
-}
-
 /* Whether the nearest-hit packet of rays [first, first + 16) below n walks the tree as one: at
  * least 14 of its lanes head within 30 degrees of its first or its last ray. A row of mirror
  * rays across an edge, or refracted rays through a curved surface, leave in one or two such
@@ -657,14 +657,11 @@ inline int16 rc_packet_within30(const RcBvhPacket* p, float16 len2, float3 d) {
 inline int rc_bvh_packet_bundled(const RcBvhPacket* p, __global const RcRay* rays, uint first,
                                  uint n) {
     const float16 len2 = p->dx * p->dx + p->dy * p->dy + p->dz * p->dz;
+    /* within 30 degrees: cos^2 > 3/4 */
     const int16 near =
-        rc_packet_within30(p, len2, rays[first].direction.xyz) |
-        rc_packet_within30(p, len2, rays[min(first + RC_PACKET, n) - 1].direction.xyz);
-    const int16 ones = near & 1;
-    const int8 s8 = ones.lo + ones.hi;
-    const int4 s4 = s8.lo + s8.hi;
-    const int2 s2 = s4.lo + s4.hi;
-    return s2.x + s2.y >= min(14u, n - first);
+        rc_packet_within(p, len2, rays[first].direction.xyz, 0.75f) |
+        rc_packet_within(p, len2, rays[min(first + RC_PACKET, n) - 1].direction.xyz, 0.75f);
+    return rc_count16(near) >= min(14u, n - first);
 }
 
 /* The answers of rays [first, first + 16): nearest hits, or with anyHit blocked flags;

@@ -60,6 +60,15 @@ RC_V16_INLINE float rc_active_max16(float16 a, int16 active) {
     return rc_hmax16(select((float16)(-INFINITY), a, active));
 }
 
+/* How many lanes of the mask are set. */
+RC_V16_INLINE int rc_count16(int16 mask) {
+    const int16 ones = mask & 1;
+    const int8 s8 = ones.lo + ones.hi;
+    const int4 s4 = s8.lo + s8.hi;
+    const int2 s2 = s4.lo + s4.hi;
+    return s2.x + s2.y;
+}
+
 /* Field f of 16 float4s a[0..15] as the lanes of a float16: rays read as float4 and transposed
  * in registers. */
 #define RC_LANES16(a, f)                                                                      \

@@ -48,24 +48,30 @@ std::string FrameBuildOptions(const RenderOptions& options) {
     return out;
 }
 
-FrameProgram BuildFrameProgram(const clrt::Context& ctx, const RenderOptions& options) {
+namespace {
+
+// The program of `accel`'s query kernels, or of every query's (none), and what it took.
+FrameProgram Build(const clrt::Context& ctx, const RenderOptions& options,
+                   std::optional<Accel> accel) {
     const auto t0 = std::chrono::steady_clock::now();
     FrameProgram out;
-    out.accel = options.accel;
+    out.accel = accel;
     out.buildOptions = FrameBuildOptions(options);
-    out.program = BuildProgramFiles(ctx, RenderProgramFiles(QueryFiles(options.accel)),
-                                    out.buildOptions, &out.fromCache);
+    out.program = accel ? BuildProgramFiles(ctx, RenderProgramFiles(QueryFiles(*accel)),
+                                            out.buildOptions, &out.fromCache)
+                        : BuildRenderProgram(ctx, out.buildOptions, &out.fromCache);
     out.seconds = SecondsSince(t0);
     return out;
 }
 
+}  // namespace
+
+FrameProgram BuildFrameProgram(const clrt::Context& ctx, const RenderOptions& options) {
+    return Build(ctx, options, options.accel);
+}
+
 FrameProgram BuildSharedFrameProgram(const clrt::Context& ctx, const RenderOptions& options) {
-    const auto t0 = std::chrono::steady_clock::now();
-    FrameProgram out;
-    out.buildOptions = FrameBuildOptions(options);
-    out.program = BuildRenderProgram(ctx, out.buildOptions, &out.fromCache);
-    out.seconds = SecondsSince(t0);
-    return out;
+    return Build(ctx, options, std::nullopt);
 }
 
 bool ServesFrame(const FrameProgram& program, const RenderOptions& options) {
