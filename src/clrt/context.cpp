@@ -129,9 +129,8 @@ Context::Context(const std::string& spec) {
     info_ = chosen->info;
     programCache_ = ProgramCache(DefaultProgramCacheDir());
     Check("clCreateContext", [&] { context_ = cl::Context(device_); });
-    Check("clCreateCommandQueue", [&] {
-        queue_ = cl::CommandQueue(context_, device_, cl::QueueProperties::Profiling);
-    });
+    Check("clCreateCommandQueue",
+          [&] { queue_ = cl::CommandQueue(context_, device_, cl::QueueProperties::Profiling); });
 }
 
 std::string AssembleProgramSource(const std::vector<std::string>& files) {
@@ -173,16 +172,16 @@ cl::Program Context::BuildProgram(const std::vector<std::string>& files, const s
     if (!programCache_.Enabled()) return BuildFromSource(source, files, options);
     const std::string key =
         Check("clGetDeviceInfo", [&] { return KeyOf(device_, options, source); });
-    const std::vector<unsigned char> binary = programCache_.Load(key);
-    if (!binary.empty()) {
-        try {
-            cl::Program program(context_, std::vector<cl::Device>{device_},
-                                cl::Program::Binaries{binary});
-            program.build(std::vector<cl::Device>{device_}, options.c_str());
+    if (auto program = BuildFromCache(key, options)) {
+        if (fromCache) *fromCache = true;
+        return *program;
+    }
+    // Another process may be building the same entry: wait for it, then look again.
+    const ProgramCache::BuildLock lock = programCache_.LockBuild(key);
+    if (lock.Held()) {
+        if (auto program = BuildFromCache(key, options)) {
             if (fromCache) *fromCache = true;
-            return program;
-        } catch (const cl::Error&) {
-            // A binary the driver no longer takes: built from source below, and replaced.
+            return *program;
         }
     }
     cl::Program program = BuildFromSource(source, files, options);
@@ -195,11 +194,25 @@ cl::Program Context::BuildProgram(const std::vector<std::string>& files, const s
     return program;
 }
 
+std::optional<cl::Program> Context::BuildFromCache(const std::string& key,
+                                                   const std::string& options) const {
+    const std::vector<unsigned char> binary = programCache_.Load(key);
+    if (binary.empty()) return std::nullopt;
+    try {
+        cl::Program program(context_, std::vector<cl::Device>{device_},
+                            cl::Program::Binaries{binary});
+        program.build(std::vector<cl::Device>{device_}, options.c_str());
+        return program;
+    } catch (const cl::Error&) {
+        return std::nullopt;  // a binary the driver no longer takes: rebuilt from source
+    }
+}
+
 cl::Program Context::BuildFromSource(const std::string& source,
                                      const std::vector<std::string>& files,
                                      const std::string& options) const {
-    cl::Program program = Check("clCreateProgramWithSource",
-                                [&] { return cl::Program(context_, source); });
+    cl::Program program =
+        Check("clCreateProgramWithSource", [&] { return cl::Program(context_, source); });
     try {
         program.build(std::vector<cl::Device>{device_}, options.c_str());
     } catch (const cl::BuildError& e) {

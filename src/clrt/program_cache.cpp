@@ -1,9 +1,12 @@
 #include "rayclass/clrt/program_cache.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -20,6 +23,7 @@ namespace {
 // Entry layout: kMagic, key size (u64), key, binary size (u64), binary, FNV-1a of the binary (u64).
 constexpr char kMagic[8] = {'R', 'C', 'P', 'R', 'O', 'G', '1', '\n'};
 constexpr const char* kSuffix = ".bin";
+constexpr const char* kLockSuffix = ".lock";
 
 uint64_t Fnv1a(const unsigned char* p, size_t n) {
     uint64_t h = 14695981039346656037ull;
@@ -81,6 +85,42 @@ fs::path ProgramCache::EntryPath(const std::string& key) const {
     std::snprintf(name, sizeof name, "%016llx%s", static_cast<unsigned long long>(Fnv1a(key)),
                   kSuffix);
     return dir_ / name;
+}
+
+fs::path ProgramCache::LockPath(const std::string& key) const {
+    fs::path path = EntryPath(key);
+    path += kLockSuffix;
+    return path;
+}
+
+ProgramCache::BuildLock& ProgramCache::BuildLock::operator=(BuildLock&& other) noexcept {
+    if (this != &other) {
+        if (fd_ >= 0) ::close(fd_);
+        fd_ = std::exchange(other.fd_, -1);
+    }
+    return *this;
+}
+
+ProgramCache::BuildLock::~BuildLock() {
+    if (fd_ >= 0) ::close(fd_);  // closing the file releases its lock
+}
+
+ProgramCache::BuildLock ProgramCache::LockBuild(const std::string& key) const {
+    if (!Enabled()) return {};
+    std::error_code ec;
+    fs::create_directories(dir_, ec);
+    if (ec) return {};
+    const int fd = ::open(LockPath(key).c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) return {};
+    int rc;
+    do {
+        rc = ::flock(fd, LOCK_EX);
+    } while (rc != 0 && errno == EINTR);
+    if (rc != 0) {
+        ::close(fd);
+        return {};
+    }
+    return BuildLock(fd);
 }
 
 std::vector<unsigned char> ProgramCache::Load(const std::string& key) const {
@@ -152,8 +192,10 @@ void ProgramCache::Prune() const {
         if (timeEc) continue;
         if (it->path().extension() == kSuffix) {
             entries.emplace_back(t, it->path());
-        } else if (it->path().extension() == ".tmp" && now - t > std::chrono::hours(1)) {
-            // Left by a process that died while storing.
+        } else if ((it->path().extension() == ".tmp" || it->path().extension() == kLockSuffix) &&
+                   now - t > std::chrono::hours(1)) {
+            // Left by a process that died while storing, or by an old build: a lock file is
+            // only needed while its entry is being built.
             std::error_code removeEc;
             fs::remove(it->path(), removeEc);
         }

@@ -3,13 +3,18 @@
 // from source, the cache stays bounded, and where it lives follows the environment.
 #include "rayclass/clrt/program_cache.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <unistd.h>
 
+#include <array>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "clrt/device.h"
@@ -179,6 +184,32 @@ TEST(ProgramCache, DefaultDirectoryFollowsTheEnvironment) {
     EXPECT_EQ(DefaultProgramCacheDir(), fs::path());
 }
 
+// Whether another open file description can take `path`'s lock now (the kernel's answer, not
+// the cache's).
+bool LockIsFree(const fs::path& path) {
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) return false;
+    const bool free = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
+    ::close(fd);
+    return free;
+}
+
+TEST(ProgramCache, BuildLockIsExclusiveUntilReleased) {
+    TempDir dir;
+    const ProgramCache cache(dir.path() / "programs");
+    {
+        ProgramCache::BuildLock lock = cache.LockBuild("key a");
+        ASSERT_TRUE(lock.Held());
+        EXPECT_FALSE(LockIsFree(cache.LockPath("key a")));
+        EXPECT_TRUE(LockIsFree(cache.LockPath("key b")));  // another entry builds meanwhile
+        ProgramCache::BuildLock moved = std::move(lock);
+        EXPECT_TRUE(moved.Held());
+        EXPECT_FALSE(LockIsFree(cache.LockPath("key a")));
+    }
+    EXPECT_TRUE(LockIsFree(cache.LockPath("key a")));
+    EXPECT_FALSE(ProgramCache().LockBuild("key a").Held());  // cache off: nothing to wait for
+}
+
 // The layout probe's output, which depends on nothing but the compiled program.
 std::vector<uint32_t> RunProbe(Context& ctx, const cl::Program& program) {
     cl::Kernel kernel(program, "rc_layout_probe");
@@ -234,6 +265,30 @@ TEST(ProgramCache, BinaryTheDriverRefusesIsRebuiltFromSource) {
     EXPECT_EQ(RunProbe(ctx, ctx.BuildProgram({"layout_probe.cl"}, kProbeOptions, &fromCache)),
               probe);
     EXPECT_TRUE(fromCache);
+}
+
+// Builds of one program that start together compile it once: the others wait for the entry.
+TEST(ProgramCache, ConcurrentBuildsOfOneProgramCompileItOnce) {
+    TempDir dir;
+    std::array<bool, 2> fromCache{true, true};
+    std::array<std::vector<uint32_t>, 2> probe;
+    // The contexts are made first: the ICD loader's first platform query is not thread-safe.
+    std::array<std::optional<Context>, 2> ctx;
+    for (auto& c : ctx) {
+        c.emplace(TestDeviceSpec());
+        c->SetProgramCache(ProgramCache(dir.path()));
+    }
+    std::vector<std::thread> builders;
+    for (size_t i = 0; i < 2; ++i) {
+        builders.emplace_back([&, i] {
+            probe[i] = RunProbe(
+                *ctx[i], ctx[i]->BuildProgram({"layout_probe.cl"}, kProbeOptions, &fromCache[i]));
+        });
+    }
+    for (auto& t : builders) t.join();
+    EXPECT_NE(fromCache[0], fromCache[1]);
+    EXPECT_EQ(probe[0], probe[1]);
+    EXPECT_EQ(CountEntries(dir.path()), 1u);
 }
 
 TEST(ProgramCache, OffBuildsFromSourceEveryTime) {

@@ -4,6 +4,7 @@
 // name and, for builds, the build log.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,7 +31,7 @@ struct DeviceInfo {
 std::vector<DeviceInfo> ListDevices();
 
 class Context {
-public:
+  public:
     // spec: "" or "auto" (the first GPU, else the first CPU), "gpu", "cpu", or an index into
     // ListDevices(). Throws rayclass::Error when nothing matches.
     explicit Context(const std::string& spec = "auto");
@@ -44,7 +45,8 @@ public:
     // order. `#include "x.h"` lines are resolved against cl/shared/ and each file keeps its name
     // in #line directives, so the build log points at the real file. The binary comes from the
     // program cache when it holds this source, options and device (then *fromCache is set),
-    // else the build goes there.
+    // else the build goes there; a build that finds another process building the same entry
+    // waits for it and loads its binary.
     cl::Program BuildProgram(const std::vector<std::string>& files, const std::string& options = {},
                              bool* fromCache = nullptr) const;
 
@@ -57,6 +59,8 @@ public:
     void SetProgramCache(ProgramCache cache) { programCache_ = std::move(cache); }
 
   private:
+    std::optional<cl::Program> BuildFromCache(const std::string& key,
+                                              const std::string& options) const;
     cl::Program BuildFromSource(const std::string& source, const std::vector<std::string>& files,
                                 const std::string& options) const;
 

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rayclass::clrt {
@@ -39,6 +40,30 @@ class ProgramCache {
 
     // The entry file for `key` (whether it exists or not).
     std::filesystem::path EntryPath(const std::string& key) const;
+
+    // An exclusive lock on building `key`'s entry, held until it is destroyed: processes (or
+    // threads) that miss the same entry at once take turns, so that the later ones find the
+    // first one's binary instead of compiling it again. Not held (and no wait) when the cache is
+    // off or the lock file cannot be made.
+    class BuildLock {
+      public:
+        BuildLock() = default;
+        explicit BuildLock(int fd) : fd_(fd) {}
+        BuildLock(BuildLock&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
+        BuildLock& operator=(BuildLock&& other) noexcept;
+        BuildLock(const BuildLock&) = delete;
+        BuildLock& operator=(const BuildLock&) = delete;
+        ~BuildLock();
+
+        bool Held() const { return fd_ >= 0; }
+
+      private:
+        int fd_ = -1;
+    };
+    [[nodiscard]] BuildLock LockBuild(const std::string& key) const;
+
+    // The lock file of `key`'s entry.
+    std::filesystem::path LockPath(const std::string& key) const;
 
   private:
     void Prune() const;
