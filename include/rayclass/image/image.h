@@ -45,7 +45,8 @@ struct Image {
 };
 
 // Lossless OpenEXR compressions. Float radiance compresses poorly: ZIP and PIZ save a little
-// space for a write that can take longer than a small render, and kNone writes at memory speed.
+// space for a write that can take longer than a small render (ZIP at zlib's fastest level), and
+// kNone writes at memory speed.
 enum class ExrCompression { kZip, kPiz, kNone };
 
 // PNG's zlib settings. kSmall is libpng's defaults (level 6, each row's filter chosen among all
