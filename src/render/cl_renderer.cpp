@@ -137,6 +137,9 @@ struct BatchOutputs {
     clrt::MappedRead<rc_float4> normals;
 };
 
+// How many rays ahead the accumulation fetches its pixels.
+constexpr uint32_t kPixelsAhead = 16;
+
 // What a generation counts as its batches go by.
 struct GenerationTally {
     GenerationStats stats;
@@ -415,6 +418,11 @@ void Frame::Accumulate(const Batch& b, const ShadowSlots& shadow, const BatchOut
     for (uint32_t i = 0; i < b.n; ++i) {
         const uint32_t pixel =
             b.generation == 0 ? uint32_t(b.first + i) : rays_.pixels[b.first + i];
+        // Once ordered, a generation's rays visit their pixels at random: the pixel a few rays
+        // ahead is fetched while this one is added.
+        if (b.generation > 0 && i + kPixelsAhead < b.n) {
+            __builtin_prefetch(&img_.rgb[rays_.pixels[b.first + i + kPixelsAhead]], 1);
+        }
         glm::vec3& px = img_.rgb[pixel];
         px += glm::vec3(radiance[i].x, radiance[i].y, radiance[i].z);
         for (uint32_t l = 0; l < nLights; ++l) {
