@@ -401,11 +401,35 @@ inline int16 rc_bvh_packet_triangle(const RcBvhPacket* p, __global const float* 
            (t > p->tmin) & (t < p->tmax);
 }
 
+/* Whether any lane of the mask is set, as one OR reduction: PoCL's any() tests lane by lane,
+ * a branch each. */
+inline int rc_any16(int16 m) {
+    const int8 m8 = m.lo | m.hi;
+    const int4 m4 = m8.lo | m8.hi;
+    const int2 m2 = m4.lo | m4.hi;
+    return (m2.x | m2.y) < 0;
+}
+
+/* The least and the largest lane by selects, for values that are never NaN (fmin's reductions
+ * check every step for one). */
+inline float rc_lanes_min16(float16 a) {
+    const float8 m8 = rc_min8(a.lo, a.hi);
+    const float4 m4 = select(m8.hi, m8.lo, m8.lo < m8.hi);
+    const float2 m2 = select(m4.hi, m4.lo, m4.lo < m4.hi);
+    return m2.x < m2.y ? m2.x : m2.y;
+}
+inline float rc_lanes_max16(float16 a) {
+    const float8 m8 = rc_max8(a.lo, a.hi);
+    const float4 m4 = select(m8.hi, m8.lo, m8.lo > m8.hi);
+    const float2 m2 = select(m4.hi, m4.lo, m4.lo > m4.hi);
+    return m2.x > m2.y ? m2.x : m2.y;
+}
+
 /* Walks the tree once for the packet: nearest hits in (bt, bp, bu, bv), or with anyHit the lanes
  * that found a hit in *blocked (a lane stops at its first). Returns primitive tests per lane. */
 inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                                   __global const RcBvh8Node* nodes, __global const float* leaves,
-                                  float16* bt, uint16* bp, float16* bu, float16* bv,
+                                  float16* btOut, uint16* bpOut, float16* buOut, float16* bvOut,
                                   int16* blocked) {
     uint stackRef[RC_BVH_STACK];
     float stackT[RC_BVH_STACK];
@@ -413,6 +437,11 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
     uint ref = 0;
     uint16 tests = (uint16)(0);
     int16 active = p->active;
+    /* The answers stay in registers during the walk. */
+    float16 bt = *btOut, bu = *buOut, bv = *bvOut;
+    uint16 bp = *bpOut;
+    /* The farthest distance an active lane can still improve on. */
+    float far = rc_lanes_max16(select((float16)(-INFINITY), bt, active));
     for (;;) {
         if (ref & RC_BVH8_LEAF) {
             const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
@@ -422,20 +451,24 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                 float16 t, u, v;
                 const int16 crosses = rc_bvh_packet_triangle(p, leaf, count, k, &t, &u, &v);
                 const uint16 prim16 = (uint16)(rc_leaf_prim(leaf, count, k));
-                const int16 hit = active & crosses & ((t < *bt) | ((t == *bt) & (prim16 < *bp)));
-                *bt = select(*bt, t, hit);
-                *bp = select(*bp, prim16, as_uint16(hit));
-                *bu = select(*bu, u, hit);
-                *bv = select(*bv, v, hit);
+                const int16 hit = active & crosses & ((t < bt) | ((t == bt) & (prim16 < bp)));
+                bt = select(bt, t, hit);
+                bp = select(bp, prim16, as_uint16(hit));
+                bu = select(bu, u, hit);
+                bv = select(bv, v, hit);
                 if (anyHit) {
                     *blocked |= hit;
                     active &= ~hit;
-                    if (!any(active)) return tests;
+                    if (!rc_any16(active)) {
+                        *btOut = bt, *bpOut = bp, *buOut = bu, *bvOut = bv;
+                        return tests;
+                    }
                 }
             }
+            far = rc_lanes_max16(select((float16)(-INFINITY), bt, active));
         } else {
             __global const RcBvh8Node* nd = nodes + ref;
-            const float16 reach = rc_min16(p->tmax, *bt);
+            const float16 reach = rc_min16(p->tmax, bt);
             uint r[8];
             float t[8];
             int k = 0;
@@ -449,9 +482,9 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                     rc_min16(rc_min16(rc_max16(ax, bx), rc_max16(ay, by)), rc_max16(az, bz)) *
                     1.0000004f;
                 const int16 enters = active & (tn <= rc_min16(tf, reach));
-                if (!any(enters)) continue;
+                if (!rc_any16(enters)) continue;
                 /* The nearest entry over the lanes that enter orders and culls the child. */
-                const float near = rc_hmin16(select((float16)(INFINITY), tn, enters));
+                const float near = rc_lanes_min16(select((float16)(INFINITY), tn, enters));
                 int j = k++;
                 for (; !anyHit && j > 0 && t[j - 1] > near; --j) {
                     t[j] = t[j - 1];
@@ -470,9 +503,11 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
             }
         }
         /* An entry no active lane can still improve on is dropped. */
-        const float far = rc_hmax16(select((float16)(-INFINITY), *bt, active));
         for (;;) {
-            if (sp == 0) return tests;
+            if (sp == 0) {
+                *btOut = bt, *bpOut = bp, *buOut = bu, *bvOut = bv;
+                return tests;
+            }
             --sp;
             if (stackT[sp] <= far) break;
         }
