@@ -425,6 +425,47 @@ inline float rc_lanes_max16(float16 a) {
     return m2.x > m2.y ? m2.x : m2.y;
 }
 
+/* The packet's rays as intervals, for one test of a node's eight boxes that culls a box only
+ * when no lane can enter it: along each axis the origins within [oLo, oHi] and the inverse
+ * directions within [iLo, iHi]. Rounding to nearest is monotonic, so the slab test's own
+ * operations on the interval's ends bound every lane's distances; an axis whose inverse
+ * directions differ in sign bounds nothing. */
+typedef struct RcBvhSpan {
+    float nearO[3], farO[3]; /* the origins the entry and the exit distances are taken from */
+    float iLo[3], iHi[3];
+    int positive[3], bounded[3];
+    float tmin; /* the least tmin */
+} RcBvhSpan;
+
+inline void rc_span_axis(float16 o, float16 inv, int16 active, int a, RcBvhSpan* s) {
+    const float oLo = rc_active_min16(o, active), oHi = rc_active_max16(o, active);
+    s->iLo[a] = rc_active_min16(inv, active);
+    s->iHi[a] = rc_active_max16(inv, active);
+    s->positive[a] = s->iLo[a] > 0.0f;
+    s->bounded[a] = s->positive[a] || s->iHi[a] < 0.0f;
+    s->nearO[a] = s->positive[a] ? oHi : oLo;
+    s->farO[a] = s->positive[a] ? oLo : oHi;
+}
+
+inline RcBvhSpan rc_bvh_span(const RcBvhPacket* p) {
+    RcBvhSpan s;
+    rc_span_axis(p->ox, p->ix, p->active, 0, &s);
+    rc_span_axis(p->oy, p->iy, p->active, 1, &s);
+    rc_span_axis(p->oz, p->iz, p->active, 2, &s);
+    s.tmin = rc_active_min16(p->tmin, p->active);
+    return s;
+}
+
+/* The least entry and the largest exit distance over the span's rays through the slabs
+ * [lo, hi] of one axis, eight boxes, folded into *tn and *tf. */
+inline void rc_span_slab(const RcBvhSpan* s, int a, float8 lo, float8 hi, float8* tn, float8* tf) {
+    if (!s->bounded[a]) return;
+    const float8 nearSide = s->positive[a] ? lo : hi, farSide = s->positive[a] ? hi : lo;
+    const float8 n = nearSide - s->nearO[a], f = farSide - s->farO[a];
+    *tn = rc_max8(*tn, n * select((float8)(s->iHi[a]), (float8)(s->iLo[a]), n >= 0.0f));
+    *tf = rc_min8(*tf, f * select((float8)(s->iLo[a]), (float8)(s->iHi[a]), f >= 0.0f));
+}
+
 /* Walks the tree once for the packet: nearest hits in (bt, bp, bu, bv), or with anyHit the lanes
  * that found a hit in *blocked (a lane stops at its first). Returns primitive tests per lane. */
 inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
@@ -440,6 +481,8 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
     /* The answers stay in registers during the walk. */
     float16 bt = *btOut, bu = *buOut, bv = *bvOut;
     uint16 bp = *bpOut;
+    const RcBvhSpan span = rc_bvh_span(p);
+    const int8 laneBit = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
     /* The farthest distance an active lane can still improve on. */
     float far = rc_lanes_max16(select((float16)(-INFINITY), bt, active));
     for (;;) {
@@ -469,10 +512,20 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
         } else {
             __global const RcBvh8Node* nd = nodes + ref;
             const float16 reach = rc_min16(p->tmax, bt);
+            /* Only the children some lane may enter take the per-lane test. */
+            float8 sn = (float8)(span.tmin), sf = (float8)(INFINITY);
+            rc_span_slab(&span, 0, vload8(0, nd->loX), vload8(0, nd->hiX), &sn, &sf);
+            rc_span_slab(&span, 1, vload8(0, nd->loY), vload8(0, nd->hiY), &sn, &sf);
+            rc_span_slab(&span, 2, vload8(0, nd->loZ), vload8(0, nd->hiZ), &sn, &sf);
+            const int8 may = (sn <= rc_min8(sf * 1.0000004f, (float8)(far))) &
+                             (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
+            const int4 m4 = may.lo | may.hi;
+            const int2 m2 = m4.lo | m4.hi;
             uint r[8];
             float t[8];
             int k = 0;
-            for (uint c = 0; c < nd->nChildren; ++c) {
+            for (int mask = m2.x | m2.y; mask != 0; mask &= mask - 1) {
+                const int c = popcount((mask & -mask) - 1);
                 const float16 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
                 const float16 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
                 const float16 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
