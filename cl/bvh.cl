@@ -737,7 +737,7 @@ inline void rc_ray_store_answer(int anyHit, uint i, RcHit best, __global RcHit* 
 }
 
 /* Whether the nearest-hit packet of rays [first, first + 16) below n walks the tree as one: at
- * least 14 of its lanes head within 30 degrees of its first or its last ray. A row of mirror
+ * least 12 of its lanes head within 30 degrees of its first or its last ray. A row of mirror
  * rays across an edge, or refracted rays through a curved surface, leave in one or two such
  * bundles, which still share most of their nodes; diffuse bounces scatter too widely, and their
  * lanes would add up the nodes of 16 walks. Their origins' spread is not limited: a walk of 16
@@ -749,7 +749,7 @@ inline int rc_bvh_packet_bundled(const RcBvhPacket* p, __global const RcRay* ray
     const int16 near =
         rc_packet_within(p, len2, rays[first].direction.xyz, 0.75f) |
         rc_packet_within(p, len2, rays[min(first + RC_PACKET, n) - 1].direction.xyz, 0.75f);
-    return rc_count16(near) >= min(14u, n - first);
+    return rc_count16(near) >= min(12u, n - first);
 }
 
 /* The answers of rays [first, first + 16): nearest hits, or with anyHit blocked flags;
