@@ -401,11 +401,76 @@ inline int16 rc_bvh_packet_triangle(const RcBvhPacket* p, __global const float* 
            (t > p->tmin) & (t < p->tmax);
 }
 
+/* Whether any lane of the mask is set, as one OR reduction: PoCL's any() tests lane by lane,
+ * a branch each. */
+inline int rc_any16(int16 m) {
+    const int8 m8 = m.lo | m.hi;
+    const int4 m4 = m8.lo | m8.hi;
+    const int2 m2 = m4.lo | m4.hi;
+    return (m2.x | m2.y) < 0;
+}
+
+/* The least and the largest lane by selects, for values that are never NaN (fmin's reductions
+ * check every step for one). */
+inline float rc_lanes_min16(float16 a) {
+    const float8 m8 = rc_min8(a.lo, a.hi);
+    const float4 m4 = select(m8.hi, m8.lo, m8.lo < m8.hi);
+    const float2 m2 = select(m4.hi, m4.lo, m4.lo < m4.hi);
+    return m2.x < m2.y ? m2.x : m2.y;
+}
+inline float rc_lanes_max16(float16 a) {
+    const float8 m8 = rc_max8(a.lo, a.hi);
+    const float4 m4 = select(m8.hi, m8.lo, m8.lo > m8.hi);
+    const float2 m2 = select(m4.hi, m4.lo, m4.lo > m4.hi);
+    return m2.x > m2.y ? m2.x : m2.y;
+}
+
+/* The packet's rays as intervals, for one test of a node's eight boxes that culls a box only
+ * when no lane can enter it: along each axis the origins within [oLo, oHi] and the inverse
+ * directions within [iLo, iHi]. Rounding to nearest is monotonic, so the slab test's own
+ * operations on the interval's ends bound every lane's distances; an axis whose inverse
+ * directions differ in sign bounds nothing. */
+typedef struct RcBvhSpan {
+    float nearO[3], farO[3]; /* the origins the entry and the exit distances are taken from */
+    float iLo[3], iHi[3];
+    int positive[3], bounded[3];
+    float tmin; /* the least tmin */
+} RcBvhSpan;
+
+inline void rc_span_axis(float16 o, float16 inv, int16 active, int a, RcBvhSpan* s) {
+    const float oLo = rc_active_min16(o, active), oHi = rc_active_max16(o, active);
+    s->iLo[a] = rc_active_min16(inv, active);
+    s->iHi[a] = rc_active_max16(inv, active);
+    s->positive[a] = s->iLo[a] > 0.0f;
+    s->bounded[a] = s->positive[a] || s->iHi[a] < 0.0f;
+    s->nearO[a] = s->positive[a] ? oHi : oLo;
+    s->farO[a] = s->positive[a] ? oLo : oHi;
+}
+
+inline RcBvhSpan rc_bvh_span(const RcBvhPacket* p) {
+    RcBvhSpan s;
+    rc_span_axis(p->ox, p->ix, p->active, 0, &s);
+    rc_span_axis(p->oy, p->iy, p->active, 1, &s);
+    rc_span_axis(p->oz, p->iz, p->active, 2, &s);
+    s.tmin = rc_active_min16(p->tmin, p->active);
+    return s;
+}
+
+/* The least entry and the largest exit distance over the span's rays through the slabs
+ * [lo, hi] of one axis, eight boxes, folded into *tn and *tf. */
+inline void rc_span_slab(const RcBvhSpan* s, int a, float8 lo, float8 hi, float8* tn, float8* tf) {
+    if (!s->bounded[a]) return;
+    const float8 nearSide = s->positive[a] ? lo : hi, farSide = s->positive[a] ? hi : lo;
+    const float8 n = nearSide - s->nearO[a], f = farSide - s->farO[a];
+    *tn = rc_max8(*tn, n * select((float8)(s->iHi[a]), (float8)(s->iLo[a]), n >= 0.0f));
+    *tf = rc_min8(*tf, f * select((float8)(s->iLo[a]), (float8)(s->iHi[a]), f >= 0.0f));
+}
+
 /* Walks the tree once for the packet: nearest hits in (bt, bp, bu, bv), or with anyHit the lanes
  * that found a hit in *blocked (a lane stops at its first). Returns primitive tests per lane. */
 inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                                   __global const RcBvh8Node* nodes, __global const float* leaves,
-                                  float16* bt, uint16* bp, float16* bu, float16* bv,
+                                  float16* btOut, uint16* bpOut, float16* buOut, float16* bvOut,
                                   int16* blocked) {
     uint stackRef[RC_BVH_STACK];
     float stackT[RC_BVH_STACK];
@@ -413,6 +478,13 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
     uint ref = 0;
     uint16 tests = (uint16)(0);
     int16 active = p->active;
+    /* The answers stay in registers during the walk. */
+    float16 bt = *btOut, bu = *buOut, bv = *bvOut;
+    uint16 bp = *bpOut;
+    const RcBvhSpan span = rc_bvh_span(p);
+    const int8 laneBit = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+    /* The farthest distance an active lane can still improve on. */
+    float far = rc_lanes_max16(select((float16)(-INFINITY), bt, active));
     for (;;) {
         if (ref & RC_BVH8_LEAF) {
             const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
@@ -422,24 +494,38 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                 float16 t, u, v;
                 const int16 crosses = rc_bvh_packet_triangle(p, leaf, count, k, &t, &u, &v);
                 const uint16 prim16 = (uint16)(rc_leaf_prim(leaf, count, k));
-                const int16 hit = active & crosses & ((t < *bt) | ((t == *bt) & (prim16 < *bp)));
-                *bt = select(*bt, t, hit);
-                *bp = select(*bp, prim16, as_uint16(hit));
-                *bu = select(*bu, u, hit);
-                *bv = select(*bv, v, hit);
+                const int16 hit = active & crosses & ((t < bt) | ((t == bt) & (prim16 < bp)));
+                bt = select(bt, t, hit);
+                bp = select(bp, prim16, as_uint16(hit));
+                bu = select(bu, u, hit);
+                bv = select(bv, v, hit);
                 if (anyHit) {
                     *blocked |= hit;
                     active &= ~hit;
-                    if (!any(active)) return tests;
+                    if (!rc_any16(active)) {
+                        *btOut = bt, *bpOut = bp, *buOut = bu, *bvOut = bv;
+                        return tests;
+                    }
                 }
             }
+            far = rc_lanes_max16(select((float16)(-INFINITY), bt, active));
         } else {
             __global const RcBvh8Node* nd = nodes + ref;
-            const float16 reach = rc_min16(p->tmax, *bt);
+            const float16 reach = rc_min16(p->tmax, bt);
+            /* Only the children some lane may enter take the per-lane test. */
+            float8 sn = (float8)(span.tmin), sf = (float8)(INFINITY);
+            rc_span_slab(&span, 0, vload8(0, nd->loX), vload8(0, nd->hiX), &sn, &sf);
+            rc_span_slab(&span, 1, vload8(0, nd->loY), vload8(0, nd->hiY), &sn, &sf);
+            rc_span_slab(&span, 2, vload8(0, nd->loZ), vload8(0, nd->hiZ), &sn, &sf);
+            const int8 may = (sn <= rc_min8(sf * 1.0000004f, (float8)(far))) &
+                             (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
+            const int4 m4 = may.lo | may.hi;
+            const int2 m2 = m4.lo | m4.hi;
             uint r[8];
             float t[8];
             int k = 0;
-            for (uint c = 0; c < nd->nChildren; ++c) {
+            for (int mask = m2.x | m2.y; mask != 0; mask &= mask - 1) {
+                const int c = popcount((mask & -mask) - 1);
                 const float16 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
                 const float16 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
                 const float16 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
@@ -449,9 +535,9 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                     rc_min16(rc_min16(rc_max16(ax, bx), rc_max16(ay, by)), rc_max16(az, bz)) *
                     1.0000004f;
                 const int16 enters = active & (tn <= rc_min16(tf, reach));
-                if (!any(enters)) continue;
+                if (!rc_any16(enters)) continue;
                 /* The nearest entry over the lanes that enter orders and culls the child. */
-                const float near = rc_hmin16(select((float16)(INFINITY), tn, enters));
+                const float near = rc_lanes_min16(select((float16)(INFINITY), tn, enters));
                 int j = k++;
                 for (; !anyHit && j > 0 && t[j - 1] > near; --j) {
                     t[j] = t[j - 1];
@@ -470,9 +556,11 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
             }
         }
         /* An entry no active lane can still improve on is dropped. */
-        const float far = rc_hmax16(select((float16)(-INFINITY), *bt, active));
         for (;;) {
-            if (sp == 0) return tests;
+            if (sp == 0) {
+                *btOut = bt, *bpOut = bp, *buOut = bu, *bvOut = bv;
+                return tests;
+            }
             --sp;
             if (stackT[sp] <= far) break;
         }
@@ -649,7 +737,7 @@ inline void rc_ray_store_answer(int anyHit, uint i, RcHit best, __global RcHit* 
 }
 
 /* Whether the nearest-hit packet of rays [first, first + 16) below n walks the tree as one: at
- * least 14 of its lanes head within 30 degrees of its first or its last ray. A row of mirror
+ * least 12 of its lanes head within 30 degrees of its first or its last ray. A row of mirror
  * rays across an edge, or refracted rays through a curved surface, leave in one or two such
  * bundles, which still share most of their nodes; diffuse bounces scatter too widely, and their
  * lanes would add up the nodes of 16 walks. Their origins' spread is not limited: a walk of 16
@@ -661,7 +749,7 @@ inline int rc_bvh_packet_bundled(const RcBvhPacket* p, __global const RcRay* ray
     const int16 near =
         rc_packet_within(p, len2, rays[first].direction.xyz, 0.75f) |
         rc_packet_within(p, len2, rays[min(first + RC_PACKET, n) - 1].direction.xyz, 0.75f);
-    return rc_count16(near) >= min(14u, n - first);
+    return rc_count16(near) >= min(12u, n - first);
 }
 
 /* The answers of rays [first, first + 16): nearest hits, or with anyHit blocked flags;
