@@ -330,20 +330,46 @@ RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const RcRay* rays, __global co
     return l;
 }
 
-/* On a CPU device (PoCL compiles the kernels for the host's x86-64) the next work-item a thread
- * runs is the next packet: fetching that packet's rays while this one tests its candidates hides
+/* Packet p's ray ids, *count of them; none past the last packet. */
+RC_SHADE_INLINE __global const uint* rc_packet_ids(__global const uint* rayIndex,
+                                                   __global const RcLeaf* leaves,
+                                                   __global const uint* packetLeaf,
+                                                   __global const uint* packetFirst, uint p,
+                                                   uint nPackets, uint* count) {
+    *count = 0;
+    if (p >= nPackets) return rayIndex;
+    const RcLeaf leaf = leaves[packetLeaf[p]];
+    const uint first = packetFirst[p];
+    *count = min(16u, leaf.rayCount - first);
+    return rayIndex + leaf.rayBegin + first;
+}
+
+/* On a CPU device (PoCL compiles the kernels for the host's x86-64) the next work-items a thread
+ * runs are the next packets: fetching packet p's rays while this one tests its candidates hides
  * the cache misses of its scattered ray loads. */
 RC_SHADE_INLINE void rc_prefetch_packet(__global const RcRay* rays, __global const uint* rayIndex,
                                         __global const RcLeaf* leaves,
                                         __global const uint* packetLeaf,
                                         __global const uint* packetFirst, uint p, uint nPackets) {
 #if defined(__x86_64__)
-    if (p >= nPackets) return;
-    const RcLeaf leaf = leaves[packetLeaf[p]];
-    const uint first = packetFirst[p];
-    const uint count = min(16u, leaf.rayCount - first);
-    __global const uint* index = rayIndex + leaf.rayBegin + first;
-    for (uint k = 0; k < count; ++k) __builtin_prefetch(rays + index[k]);
+    uint count;
+    __global const uint* ids =
+        rc_packet_ids(rayIndex, leaves, packetLeaf, packetFirst, p, nPackets, &count);
+    for (uint k = 0; k < count; ++k) __builtin_prefetch(rays + ids[k]);
+#endif
+}
+
+/* Packet p's hit slots, fetched for writing: its answers go to scattered lines that would
+ * otherwise be read in only when the packet writes them. */
+RC_SHADE_INLINE void rc_prefetch_hits(__global RcHit* hits, __global const uint* rayIndex,
+                                      __global const RcLeaf* leaves,
+                                      __global const uint* packetLeaf,
+                                      __global const uint* packetFirst, uint p, uint nPackets) {
+#if defined(__x86_64__)
+    uint count;
+    __global const uint* ids =
+        rc_packet_ids(rayIndex, leaves, packetLeaf, packetFirst, p, nPackets, &count);
+    for (uint k = 0; k < count; ++k) __builtin_prefetch(hits + ids[k], 1);
 #endif
 }
 
@@ -452,7 +478,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     const uint count = min(16u, leaf.rayCount - packetFirst[p]);
     uint ids[16];
     const RcLanes16 L = rc_load_packet(rays, rayIndex, leaf, packetFirst[p], ids);
-    rc_prefetch_packet(rays, rayIndex, leaves, packetLeaf, packetFirst, p + 1, nPackets);
+    /* Rays two packets ahead: one packet's tests did not hide the whole fetch. */
+    rc_prefetch_packet(rays, rayIndex, leaves, packetLeaf, packetFirst, p + 2, nPackets);
+    rc_prefetch_hits(hits, rayIndex, leaves, packetLeaf, packetFirst, p + 1, nPackets);
     float16 bestT = L.tmax, bestU = 0.0f, bestV = 0.0f;
     uint16 bestPrim = (uint16)(RC_NO_HIT);
     const uint nT = params->nTriangles, nS = params->nSpheres;
