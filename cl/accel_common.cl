@@ -129,5 +129,5 @@ inline int rc_accel_load_packet(__global const RcRay* rays, uint first, uint n, 
                                 float4 boxLo, float4 boxHi, __constant const RcRenderParams* params,
                                 RcBvhPacket* p) {
     return rc_packets_allowed(params) &&
-           rc_bvh_load_packet(rays, first, n, skipEmpty, rc_accel_max_spread2(boxLo, boxHi), p);
+           rc_bvh_load_packet(rays, 0, first, n, skipEmpty, rc_accel_max_spread2(boxLo, boxHi), p);
 }

@@ -317,19 +317,20 @@ inline int16 rc_packet_within(const RcBvhPacket* p, float16 len2, float3 d, floa
     return p->active & (dd > 0.0f) & (dd * dd > cos2 * len2 * dot(d, d));
 }
 
-/* The packet's rays from rays[first, first + 16), lanes beyond n inactive, and lanes with
- * tmax == 0 (empty shadow slots) inactive when skipEmpty. Returns whether the packet is
- * coherent enough to walk as one: every active direction in the first active one's octant and
- * within about 18 degrees of it (cos > 0.95), the origins' box's diagonal squared at most
- * maxSpread2. */
-inline int rc_bvh_load_packet(__global const RcRay* rays, uint first, uint n, int skipEmpty,
-                              float maxSpread2, RcBvhPacket* p) {
+/* The packet's rays from rays[first, first + 16) (rays[order[first + k]] where order is given),
+ * lanes beyond n inactive, and lanes with tmax == 0 (empty shadow slots) inactive when
+ * skipEmpty. Returns whether the packet is coherent enough to walk as one: every active
+ * direction in the first active one's octant and within about 18 degrees of it (cos > 0.95),
+ * the origins' box's diagonal squared at most maxSpread2. */
+inline int rc_bvh_load_packet(__global const RcRay* rays, __global const uint* order, uint first,
+                              uint n, int skipEmpty, float maxSpread2, RcBvhPacket* p) {
     /* Rays read as float4 and transposed in registers: lanes written one float at a time to
      * private arrays go through memory on PoCL (see rc_load_packet, classified.cl). */
     float4 o[RC_PACKET], d[RC_PACKET];
 #pragma unroll
     for (uint k = 0; k < RC_PACKET; ++k) {
-        const uint i = first + k < n ? first + k : first;
+        const uint j = first + k < n ? first + k : first;
+        const uint i = order ? order[j] : j;
         o[k] = rays[i].origin;
         d[k] = rays[i].direction;
     }
@@ -752,35 +753,52 @@ inline int rc_bvh_packet_bundled(const RcBvhPacket* p, __global const RcRay* ray
     return rc_count16(near) >= min(12u, n - first);
 }
 
-/* The answers of rays [first, first + 16): nearest hits, or with anyHit blocked flags;
- * tests[ray] its primitive tests. A coherent packet, or a bundled packet of nearest-hit rays,
- * walks the tree once, other rays one by one. */
-inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
-                          __global const RcBvh8Node* nodes, __global const float* leaves,
-                          __global const RcTriangle* triangles, __global const RcSphere* spheres,
-                          __global const RcQuadric* quadrics,
+/* Whether the beam of a shadow packet whose ends meet is one-signed along every axis (one
+ * octant of reversed directions), as rc_beam_slab needs. */
+inline int rc_beam_one_octant(const RcBvhBeam* b) {
+    return (b->iLo[0] > 0.0f || b->iHi[0] < 0.0f) && (b->iLo[1] > 0.0f || b->iHi[1] < 0.0f) &&
+           (b->iLo[2] > 0.0f || b->iHi[2] < 0.0f);
+}
+
+/* The answers of rays [first, first + 16) (rays order[first + k] where order is given): nearest
+ * hits, or with anyHit blocked flags; tests[ray] its primitive tests. A coherent packet, or a
+ * bundled packet of nearest-hit rays, walks the tree once, other rays one by one. Shadow
+ * packets whose ends meet (a point light) walk as a beam, whatever their origins' spread, when
+ * sorted by their directions from the light (ShadowOrder): their directions then lie close. */
+inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, __global const uint* order,
+                          uint first, uint n, __global const RcBvh8Node* nodes,
+                          __global const float* leaves, __global const RcTriangle* triangles,
+                          __global const RcSphere* spheres, __global const RcQuadric* quadrics,
                           __constant const RcRenderParams* params, __global RcHit* hits,
                           __global uchar* blockedOut, __global uint* tests) {
     RcBvhPacket p;
     const float maxSpread2 = rc_bvh_max_spread2(nodes);
     const int allowed = rc_packets_allowed(params);
-    const int coherent = allowed && rc_bvh_load_packet(rays, first, n, anyHit, maxSpread2, &p);
+    const int coherent =
+        allowed && rc_bvh_load_packet(rays, order, first, n, anyHit, maxSpread2, &p);
+    if (allowed && anyHit) {
+        const RcBvhBeam beam = rc_bvh_beam(&p);
+        if (beam.spread2 <= maxSpread2 && (coherent || (order && rc_beam_one_octant(&beam)))) {
+            int16 blocked = (int16)(0);
+            const uint16 count = rc_bvh_occlude_beam(&p, &beam, nodes, leaves, &blocked);
+            rc_packet_store_blocked(first, n, blocked, order, blockedOut);
+            rc_packet_store_counts(first, n, count, order, tests);
+            return;
+        }
+    }
     if (coherent || (allowed && !anyHit && rc_bvh_packet_bundled(&p, rays, first, n))) {
         float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
         uint16 bp = (uint16)(RC_NO_HIT);
         int16 blocked = (int16)(0);
-        uint16 count;
-        /* A shadow packet walks as a beam where its ends meet too (a point light). */
-        const RcBvhBeam beam = rc_bvh_beam(&p);
-        if (anyHit && beam.spread2 <= maxSpread2)
-            count = rc_bvh_occlude_beam(&p, &beam, nodes, leaves, &blocked);
-        else
-            count = rc_bvh_trace_packet(&p, anyHit, nodes, leaves, &bt, &bp, &bu, &bv, &blocked);
-        rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, 0, hits, blockedOut);
-        rc_packet_store_counts(first, n, count, 0, tests);
+        const uint16 count =
+            rc_bvh_trace_packet(&p, anyHit, nodes, leaves, &bt, &bp, &bu, &bv, &blocked);
+        rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, order, hits,
+                                blockedOut);
+        rc_packet_store_counts(first, n, count, order, tests);
         return;
     }
-    for (uint i = first; i < min(first + RC_PACKET, n); ++i) {
+    for (uint k = first; k < min(first + RC_PACKET, n); ++k) {
+        const uint i = order ? order[k] : k;
         const RcRay r = rays[i];
         RcHit best = rc_no_hit(r.direction.w);
         uint count = 0;
@@ -801,18 +819,20 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_inte
     __constant const RcRenderParams* params, __global RcHit* hits, __global uint* tests) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    rc_bvh_answer(0, rays, first, n, nodes, leaves, triangles, spheres, quadrics, params, hits, 0,
-                  tests);
+    rc_bvh_answer(0, rays, 0, first, n, nodes, leaves, triangles, spheres, quadrics, params, hits,
+                  0, tests);
 }
 
-/* Any hit before the light ends a ray's search; one work-item per 16 rays, as above. */
+/* Any hit before the light ends a ray's search; one work-item per 16 rays, rays order[16 i,
+ * 16 i + 16) (ShadowOrder's). */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_bvh(
-    __global const RcRay* rays, uint n, __global const RcBvh8Node* nodes,
-    __global const float* leaves, __global const RcTriangle* triangles,
-    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-    __constant const RcRenderParams* params, __global uchar* blocked, __global uint* tests) {
+    __global const RcRay* rays, __global const uint* order, uint n,
+    __global const RcBvh8Node* nodes, __global const float* leaves,
+    __global const RcTriangle* triangles, __global const RcSphere* spheres,
+    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
+    __global uchar* blocked, __global uint* tests) {
     const uint first = get_global_id(0) * RC_PACKET;
     if (first >= n) return;
-    rc_bvh_answer(1, rays, first, n, nodes, leaves, triangles, spheres, quadrics, params, 0,
+    rc_bvh_answer(1, rays, order, first, n, nodes, leaves, triangles, spheres, quadrics, params, 0,
                   blocked, tests);
 }

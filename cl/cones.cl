@@ -401,7 +401,7 @@ inline void rc_cones_answer(int anyHit, __global const RcRay* sorted, uint first
         rc_cones_tile_candidates(first, tileOffsets, tileCounts, tileList, nPrims, &ids);
     /* A tile's rays always test its candidates together: the BVH's coherence verdict is moot. */
     RcBvhPacket p;
-    rc_bvh_load_packet(sorted, first, n, anyHit, INFINITY, &p);
+    rc_bvh_load_packet(sorted, 0, first, n, anyHit, INFINITY, &p);
     float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
     uint16 bp = (uint16)(RC_NO_HIT);
     int16 blocked = (int16)(0);

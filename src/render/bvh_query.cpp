@@ -4,10 +4,27 @@
 
 #include "rayclass/bvh/leaf_blocks.h"
 #include "rayclass/render/launch.h"
+#include "shadow_order.h"
 
 namespace rayclass::render {
 
 namespace {
+
+// Shadow rays are sorted by direction from their light (ShadowOrder) when more than this share
+// of their packets would not walk as one in their own order.
+constexpr double kSortShare = 0.2;
+
+// The box of the tree's root.
+Bounds3f RootBox(const bvh::BlockedBvh& tree) {
+    Bounds3f box;
+    if (tree.nodes.empty()) return box;
+    const RcBvh8Node& root = tree.nodes[0];
+    for (uint32_t c = 0; c < root.nChildren; ++c) {
+        box.Grow(glm::vec3(root.loX[c], root.loY[c], root.loZ[c]));
+        box.Grow(glm::vec3(root.hiX[c], root.hiY[c], root.hiZ[c]));
+    }
+    return box;
+}
 
 class BvhQuery final : public RayQuery {
   public:
@@ -20,7 +37,8 @@ class BvhQuery final : public RayQuery {
           bytes_(double(tree.nodes.size() * sizeof(RcBvh8Node) +
                         tree.leaves.size() * sizeof(uint32_t))),
           intersect_(program, "rc_intersect_bvh"),
-          occluded_(program, "rc_occluded_bvh") {}
+          occluded_(program, "rc_occluded_bvh"),
+          shadowOrder_(RootBox(tree)) {}
 
     std::string Name() const override { return "bvh"; }
 
@@ -40,7 +58,16 @@ class BvhQuery final : public RayQuery {
     uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
                       const cl::Buffer& blocked, KernelTimer& timer) override {
         const uint32_t n = uint32_t(hostRays.size());
-        Run(occluded_, shadowRays, n, blocked, timer);
+        if (n == 0) return 0;
+        // Rays in an order of their own that keeps most packets coherent (eye hits in pixel
+        // tiles) walk in it: their packets are narrower than those of direction cells.
+        const bool sort = shadowOrder_.IncoherentShare(hostRays) > kSortShare;
+        const cl::Buffer order =
+            sort ? orderBuffer_.Share(ctx_, shadowOrder_.Sort(hostRays)) : cl::Buffer();
+        SetArgs(occluded_, shadowRays, order, n, nodes_, leaves_, scene_.triangles, scene_.spheres,
+                scene_.quadrics, scene_.params, blocked,
+                testsBuffer_.Reserve(ctx_, n * sizeof(uint32_t)));
+        Launch(ctx_, occluded_, PacketItems(n), timer);
         return SumTests(n);
     }
 
@@ -62,8 +89,9 @@ class BvhQuery final : public RayQuery {
     cl::Buffer nodes_, leaves_;
     double bytes_;
     cl::Kernel intersect_, occluded_;
-    GrowingBuffer testsBuffer_;
+    GrowingBuffer testsBuffer_, orderBuffer_;
     std::vector<uint32_t> tests_;
+    ShadowOrder shadowOrder_;
 };
 
 bvh::BlockedBvh BuildBlocked(const scene::Scene& scene, const bvh::BuildParams& params) {

@@ -176,6 +176,28 @@ std::vector<RcRay> ShadowPackets() {
     return rays;
 }
 
+// Shadow rays from origins scattered over the grid toward three point lights, a slot per light
+// side by side (as the renderer lays them out), every fifth slot empty: in their own order no
+// packet is coherent, so the BVH sorts them by direction from their light and walks the
+// packets of that order as beams (ShadowOrder, cl/bvh.cl).
+std::vector<RcRay> ScatteredShadowRays() {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> pos(-0.5f, 3.5f);
+    const glm::vec3 lights[3] = {{1.5f, 1.5f, 1.5f}, {0.25f, 3.0f, 2.75f}, {2.0f, 0.5f, 0.0f}};
+    std::vector<RcRay> rays;
+    for (int i = 0; i < 6000; ++i) {
+        const glm::vec3 o(pos(rng), pos(rng), pos(rng));
+        for (const glm::vec3& light : lights) {
+            const glm::vec3 toLight = light - o;
+            const float dist = glm::length(toLight);
+            const glm::vec3 d = toLight / dist;
+            rays.push_back({{o.x, o.y, o.z, 0.0f}, {d.x, d.y, d.z, dist}});
+        }
+    }
+    for (size_t i = 0; i < rays.size(); i += 5) rays[i].direction = {0.0f, 0.0f, 0.0f, 0.0f};
+    return rays;
+}
+
 struct Queries {
     scene::Scene scene = GridOfSquares();
     cl::Program program = BuildRenderProgram(TestContext());
@@ -250,6 +272,11 @@ TEST(BvhQuery, AnyHitAnswersOfFragileRaysAreBruteForces) {
 TEST(BvhQuery, ShadowPacketsTowardPointLightsAreBlockedAsByBruteForce) {
     Queries q;
     ExpectBruteForcesBlocked(q, ShadowPackets());
+}
+
+TEST(BvhQuery, ScatteredShadowRaysTowardPointLightsAreBlockedAsByBruteForce) {
+    Queries q;
+    ExpectBruteForcesBlocked(q, ScatteredShadowRays());
 }
 
 }  // namespace
