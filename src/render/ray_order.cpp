@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <future>
+
+#include "rayclass/core/two_halves.h"
 
 namespace rayclass::render {
 
@@ -60,13 +61,7 @@ void RayOrder::Sort(std::span<const RcRay> rays, std::span<uint32_t> slots,
             order_[i] = uint32_t(i);
         }
     };
-    if (n < kParallelKeys) {
-        keysOf(0, n);
-    } else {
-        auto half = std::async(std::launch::async, keysOf, n / 2, n);
-        keysOf(0, n / 2);
-        half.get();
-    }
+    InTwoHalves(n, kParallelKeys, keysOf);
     // Stable: equal keys keep their order.
     RadixSortByBits<12>(keys, order_, kKeyBits, radix_);
     scratch_.assign(slots.begin(), slots.end());

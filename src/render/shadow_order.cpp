@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <future>
+
+#include "rayclass/core/two_halves.h"
 
 namespace rayclass::render {
 
@@ -128,13 +129,7 @@ const std::vector<uint32_t>& ShadowOrder::Sort(std::span<const RcRay> rays) {
     auto keysOf = [&](size_t begin, size_t end) {
         for (size_t i = begin; i < end; ++i) keys_[i] = uint16_t(Key(rays[i]));
     };
-    if (n < kParallelKeys) {
-        keysOf(0, n);
-    } else {
-        auto half = std::async(std::launch::async, keysOf, n / 2, n);
-        keysOf(0, n / 2);
-        half.get();
-    }
+    InTwoHalves(n, kParallelKeys, keysOf);
     // A stable counting sort: equal keys keep their order.
     start_.assign(kEmptyKey + 2, 0);
     for (size_t i = 0; i < n; ++i) ++start_[keys_[i] + 1u];

@@ -136,6 +136,19 @@ std::vector<RcRay> CoherentRays(float tmax, bool emptySlots) {
     return rays;
 }
 
+// The shadow ray from `o` toward `light`, its tmax the distance to it.
+RcRay ShadowRay(const glm::vec3& o, const glm::vec3& light) {
+    const glm::vec3 toLight = light - o;
+    const float dist = glm::length(toLight);
+    const glm::vec3 d = toLight / dist;
+    return {{o.x, o.y, o.z, 0.0f}, {d.x, d.y, d.z, dist}};
+}
+
+// Every fifth slot emptied (a zero direction), as the renderer leaves slots of rays not spawned.
+void EmptyEveryFifthSlot(std::vector<RcRay>& rays) {
+    for (size_t i = 0; i < rays.size(); i += 5) rays[i].direction = {0.0f, 0.0f, 0.0f, 0.0f};
+}
+
 // Packets of 16 shadow rays as the shading kernels make them (tmin 0, unit direction toward a
 // point light, tmax the distance to it), their origins within a 0.02 cube and their light 0.3 to
 // 1.2 away, so that the any-hit kernel walks each packet as one beam from its light (cl/bvh.cl).
@@ -166,13 +179,10 @@ std::vector<RcRay> ShadowPackets() {
                 if ((kind == 0 && c != axis) || (kind == 1 && c == axis) || kind == 2)
                     o[c] += jitter(rng);
             }
-            const glm::vec3 toLight = light - o;
-            const float dist = glm::length(toLight);
-            const glm::vec3 d = toLight / dist;
-            rays.push_back({{o.x, o.y, o.z, 0.0f}, {d.x, d.y, d.z, dist}});
+            rays.push_back(ShadowRay(o, light));
         }
     }
-    for (size_t i = 0; i < rays.size(); i += 5) rays[i].direction = {0.0f, 0.0f, 0.0f, 0.0f};
+    EmptyEveryFifthSlot(rays);
     return rays;
 }
 
@@ -187,14 +197,9 @@ std::vector<RcRay> ScatteredShadowRays() {
     std::vector<RcRay> rays;
     for (int i = 0; i < 6000; ++i) {
         const glm::vec3 o(pos(rng), pos(rng), pos(rng));
-        for (const glm::vec3& light : lights) {
-            const glm::vec3 toLight = light - o;
-            const float dist = glm::length(toLight);
-            const glm::vec3 d = toLight / dist;
-            rays.push_back({{o.x, o.y, o.z, 0.0f}, {d.x, d.y, d.z, dist}});
-        }
+        for (const glm::vec3& light : lights) rays.push_back(ShadowRay(o, light));
     }
-    for (size_t i = 0; i < rays.size(); i += 5) rays[i].direction = {0.0f, 0.0f, 0.0f, 0.0f};
+    EmptyEveryFifthSlot(rays);
     return rays;
 }
 
