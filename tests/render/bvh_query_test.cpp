@@ -20,6 +20,7 @@
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/brute_query.h"
 #include "rayclass/render/device_scene.h"
+#include "shadow_ray.h"
 
 namespace rayclass::render {
 namespace {
@@ -134,14 +135,6 @@ std::vector<RcRay> CoherentRays(float tmax, bool emptySlots) {
         for (size_t i = 0; i < rays.size(); i += 5) rays[i].direction.w = 0.0f;
     }
     return rays;
-}
-
-// The shadow ray from `o` toward `light`, its tmax the distance to it.
-RcRay ShadowRay(const glm::vec3& o, const glm::vec3& light) {
-    const glm::vec3 toLight = light - o;
-    const float dist = glm::length(toLight);
-    const glm::vec3 d = toLight / dist;
-    return {{o.x, o.y, o.z, 0.0f}, {d.x, d.y, d.z, dist}};
 }
 
 // Every fifth slot emptied (a zero direction), as the renderer leaves slots of rays not spawned.

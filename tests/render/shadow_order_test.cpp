@@ -12,6 +12,8 @@
 #include <random>
 #include <vector>
 
+#include "shadow_ray.h"
+
 namespace rayclass::render {
 namespace {
 
@@ -22,20 +24,13 @@ Bounds3f Box() {
     return box;
 }
 
-RcRay ToLight(const glm::vec3& origin, const glm::vec3& light) {
-    const glm::vec3 to = light - origin;
-    const float dist = glm::length(to);
-    const glm::vec3 d = to / dist;
-    return {{origin.x, origin.y, origin.z, 0.0f}, {d.x, d.y, d.z, dist}};
-}
-
 // Shadow rays from random origins in the box toward one light, every seventh slot empty.
 std::vector<RcRay> Scattered(size_t n, const glm::vec3& light, unsigned seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> pos(-4.0f, 4.0f);
     std::vector<RcRay> rays;
     for (size_t i = 0; i < n; ++i) {
-        rays.push_back(ToLight({pos(rng), pos(rng), pos(rng)}, light));
+        rays.push_back(ShadowRay({pos(rng), pos(rng), pos(rng)}, light));
         if (i % 7 == 3) rays.back().direction = {0.0f, 0.0f, 0.0f, 0.0f};
     }
     return rays;
@@ -76,7 +71,7 @@ TEST(ShadowOrder, IsAPermutationWithEmptySlotsLastInTheirOrder) {
 }
 
 TEST(ShadowOrder, EqualRaysKeepTheirOrder) {
-    std::vector<RcRay> rays(100, ToLight({1.0f, 0.0f, 0.0f}, {0.0f, 2.0f, 0.0f}));
+    std::vector<RcRay> rays(100, ShadowRay({1.0f, 0.0f, 0.0f}, {0.0f, 2.0f, 0.0f}));
     ShadowOrder order(Box());
     const std::vector<uint32_t> sorted = order.Sort(rays);
     for (uint32_t i = 0; i < rays.size(); ++i) EXPECT_EQ(sorted[i], i);
@@ -101,7 +96,7 @@ TEST(ShadowOrder, RaysTowardTwoLightsFollowTheirLight) {
     std::vector<RcRay> rays;
     for (int i = 0; i < 4000; ++i) {
         const glm::vec3 o(pos(rng), pos(rng), pos(rng));
-        for (const glm::vec3& light : lights) rays.push_back(ToLight(o, light));
+        for (const glm::vec3& light : lights) rays.push_back(ShadowRay(o, light));
     }
     ShadowOrder order(Box());
     const std::vector<uint32_t> sorted = order.Sort(rays);
