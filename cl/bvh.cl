@@ -402,69 +402,53 @@ inline int16 rc_bvh_packet_triangle(const RcBvhPacket* p, __global const float* 
            (t > p->tmin) & (t < p->tmax);
 }
 
-/* Whether any lane of the mask is set, as one OR reduction: PoCL's any() tests lane by lane,
- * a branch each. */
-inline int rc_any16(int16 m) {
-    const int8 m8 = m.lo | m.hi;
-    const int4 m4 = m8.lo | m8.hi;
-    const int2 m2 = m4.lo | m4.hi;
-    return (m2.x | m2.y) < 0;
-}
-
-/* The least and the largest lane by selects, for values that are never NaN (fmin's reductions
- * check every step for one). */
-inline float rc_lanes_min16(float16 a) {
-    const float8 m8 = rc_min8(a.lo, a.hi);
-    const float4 m4 = select(m8.hi, m8.lo, m8.lo < m8.hi);
-    const float2 m2 = select(m4.hi, m4.lo, m4.lo < m4.hi);
-    return m2.x < m2.y ? m2.x : m2.y;
-}
-inline float rc_lanes_max16(float16 a) {
-    const float8 m8 = rc_max8(a.lo, a.hi);
-    const float4 m4 = select(m8.hi, m8.lo, m8.lo > m8.hi);
-    const float2 m2 = select(m4.hi, m4.lo, m4.lo > m4.hi);
-    return m2.x > m2.y ? m2.x : m2.y;
-}
-
-/* The packet's rays as intervals, for one test of a node's eight boxes that culls a box only
- * when no lane can enter it: along each axis the origins within [oLo, oHi] and the inverse
- * directions within [iLo, iHi]. Rounding to nearest is monotonic, so the slab test's own
- * operations on the interval's ends bound every lane's distances; an axis whose inverse
+/* Rays as intervals, for one slab test of a node's eight boxes that culls a box only when no
+ * ray can enter it: along each axis the points the distances are taken from within [lo, hi] and
+ * the inverse directions within [iLo, iHi]. Rounding to nearest is monotonic, so the slab test's
+ * own operations on the intervals' ends bound every ray's distances; an axis whose inverse
  * directions differ in sign bounds nothing. */
-typedef struct RcBvhSpan {
-    float nearO[3], farO[3]; /* the origins the entry and the exit distances are taken from */
+typedef struct RcBvhSlabs {
+    float nearP[3], farP[3]; /* the points the entry and the exit distances are taken from */
     float iLo[3], iHi[3];
     int positive[3], bounded[3];
-    float tmin; /* the least tmin */
-} RcBvhSpan;
+} RcBvhSlabs;
 
-inline void rc_span_axis(float16 o, float16 inv, int16 active, int a, RcBvhSpan* s) {
-    const float oLo = rc_active_min16(o, active), oHi = rc_active_max16(o, active);
-    s->iLo[a] = rc_active_min16(inv, active);
-    s->iHi[a] = rc_active_max16(inv, active);
-    s->positive[a] = s->iLo[a] > 0.0f;
-    s->bounded[a] = s->positive[a] || s->iHi[a] < 0.0f;
-    s->nearO[a] = s->positive[a] ? oHi : oLo;
-    s->farO[a] = s->positive[a] ? oLo : oHi;
+inline void rc_slabs_axis(float lo, float hi, float iLo, float iHi, int a, RcBvhSlabs* s) {
+    s->iLo[a] = iLo;
+    s->iHi[a] = iHi;
+    s->positive[a] = iLo > 0.0f;
+    s->bounded[a] = s->positive[a] || iHi < 0.0f;
+    s->nearP[a] = s->positive[a] ? hi : lo;
+    s->farP[a] = s->positive[a] ? lo : hi;
 }
 
-inline RcBvhSpan rc_bvh_span(const RcBvhPacket* p) {
-    RcBvhSpan s;
-    rc_span_axis(p->ox, p->ix, p->active, 0, &s);
-    rc_span_axis(p->oy, p->iy, p->active, 1, &s);
-    rc_span_axis(p->oz, p->iz, p->active, 2, &s);
-    s.tmin = rc_active_min16(p->tmin, p->active);
-    return s;
+/* Whether every axis bounds the distances (the inverse directions in one octant). */
+inline int rc_slabs_one_octant(const RcBvhSlabs* s) {
+    return s->bounded[0] && s->bounded[1] && s->bounded[2];
 }
 
-/* The least entry and the largest exit distance over the span's rays through the slabs
- * [lo, hi] of one axis, eight boxes, folded into *tn and *tf. */
-inline void rc_span_slab(const RcBvhSpan* s, int a, float8 lo, float8 hi, float8* tn, float8* tf) {
+/* The least entry and the largest exit distance over the intervals' rays through the slabs
+ * [lo, hi] of one axis, eight boxes, folded into *tn and *tf. The walks call it per axis: the
+ * three calls wrapped in one more function made both walks slower on PoCL. */
+inline void rc_slabs_test(const RcBvhSlabs* s, int a, float8 lo, float8 hi, float8* tn,
+                          float8* tf) {
     if (!s->bounded[a]) return;
     const float8 nearSide = s->positive[a] ? lo : hi, farSide = s->positive[a] ? hi : lo;
-    const float8 n = nearSide - s->nearO[a], f = farSide - s->farO[a];
+    const float8 n = nearSide - s->nearP[a], f = farSide - s->farP[a];
     *tn = rc_max8(*tn, n * select((float8)(s->iHi[a]), (float8)(s->iLo[a]), n >= 0.0f));
     *tf = rc_min8(*tf, f * select((float8)(s->iLo[a]), (float8)(s->iHi[a]), f >= 0.0f));
+}
+
+/* The packet's active lanes as intervals: their origins and inverse directions. */
+inline RcBvhSlabs rc_packet_slabs(const RcBvhPacket* p) {
+    RcBvhSlabs s;
+    rc_slabs_axis(rc_active_min16(p->ox, p->active), rc_active_max16(p->ox, p->active),
+                  rc_active_min16(p->ix, p->active), rc_active_max16(p->ix, p->active), 0, &s);
+    rc_slabs_axis(rc_active_min16(p->oy, p->active), rc_active_max16(p->oy, p->active),
+                  rc_active_min16(p->iy, p->active), rc_active_max16(p->iy, p->active), 1, &s);
+    rc_slabs_axis(rc_active_min16(p->oz, p->active), rc_active_max16(p->oz, p->active),
+                  rc_active_min16(p->iz, p->active), rc_active_max16(p->iz, p->active), 2, &s);
+    return s;
 }
 
 /* Walks the tree once for the packet: nearest hits in (bt, bp, bu, bv), or with anyHit the lanes
@@ -482,10 +466,11 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
     /* The answers stay in registers during the walk. */
     float16 bt = *btOut, bu = *buOut, bv = *bvOut;
     uint16 bp = *bpOut;
-    const RcBvhSpan span = rc_bvh_span(p);
+    const RcBvhSlabs span = rc_packet_slabs(p);
+    const float spanTmin = rc_active_min16(p->tmin, p->active);
     const int8 laneBit = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
     /* The farthest distance an active lane can still improve on. */
-    float far = rc_lanes_max16(select((float16)(-INFINITY), bt, active));
+    float far = rc_hmax16_ordered(select((float16)(-INFINITY), bt, active));
     for (;;) {
         if (ref & RC_BVH8_LEAF) {
             const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
@@ -509,15 +494,15 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                     }
                 }
             }
-            far = rc_lanes_max16(select((float16)(-INFINITY), bt, active));
+            far = rc_hmax16_ordered(select((float16)(-INFINITY), bt, active));
         } else {
             __global const RcBvh8Node* nd = nodes + ref;
             const float16 reach = rc_min16(p->tmax, bt);
             /* Only the children some lane may enter take the per-lane test. */
-            float8 sn = (float8)(span.tmin), sf = (float8)(INFINITY);
-            rc_span_slab(&span, 0, vload8(0, nd->loX), vload8(0, nd->hiX), &sn, &sf);
-            rc_span_slab(&span, 1, vload8(0, nd->loY), vload8(0, nd->hiY), &sn, &sf);
-            rc_span_slab(&span, 2, vload8(0, nd->loZ), vload8(0, nd->hiZ), &sn, &sf);
+            float8 sn = (float8)(spanTmin), sf = (float8)(INFINITY);
+            rc_slabs_test(&span, 0, vload8(0, nd->loX), vload8(0, nd->hiX), &sn, &sf);
+            rc_slabs_test(&span, 1, vload8(0, nd->loY), vload8(0, nd->hiY), &sn, &sf);
+            rc_slabs_test(&span, 2, vload8(0, nd->loZ), vload8(0, nd->hiZ), &sn, &sf);
             const int8 may = (sn <= rc_min8(sf * 1.0000004f, (float8)(far))) &
                              (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
             const int4 m4 = may.lo | may.hi;
@@ -538,7 +523,7 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                 const int16 enters = active & (tn <= rc_min16(tf, reach));
                 if (!rc_any16(enters)) continue;
                 /* The nearest entry over the lanes that enter orders and culls the child. */
-                const float near = rc_lanes_min16(select((float16)(INFINITY), tn, enters));
+                const float near = rc_hmin16_ordered(select((float16)(INFINITY), tn, enters));
                 int j = k++;
                 for (; !anyHit && j > 0 && t[j - 1] > near; --j) {
                     t[j] = t[j - 1];
@@ -579,11 +564,9 @@ inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
  * single-ray walk's slab test, before its triangles; the triangles take the packet's exact
  * test, so the blocked flags are those of the per-lane walk. */
 typedef struct RcBvhBeam {
-    float sNear[3], sFar[3]; /* the ends the entry and the exit distances are taken from */
-    float iLo[3], iHi[3];
-    int positive[3]; /* D's sign along the axis: the near side of a box is lo */
-    float reach;     /* the longest reversed segment */
-    float spread2;   /* the squared diagonal of the ends' box */
+    RcBvhSlabs slabs; /* the ends S and the inverses of D */
+    float reach;      /* the longest reversed segment */
+    float spread2;    /* the squared diagonal of the ends' box */
 } RcBvhBeam;
 
 /* The beam of one axis: the lanes' origins o, directions d and inverse directions inv along it. */
@@ -594,12 +577,8 @@ inline void rc_beam_axis(const RcBvhPacket* p, float16 o, float16 d, float16 inv
     const float pad = 1e-5f * rc_active_max16(size, p->active);
     const float endLo = rc_active_min16(end, p->active), endHi = rc_active_max16(end, p->active);
     b->spread2 += (endHi - endLo) * (endHi - endLo);
-    const float lo = endLo - pad, hi = endHi + pad;
-    b->iLo[a] = rc_active_min16(-inv, p->active);
-    b->iHi[a] = rc_active_max16(-inv, p->active);
-    b->positive[a] = b->iLo[a] > 0.0f;
-    b->sNear[a] = b->positive[a] ? hi : lo;
-    b->sFar[a] = b->positive[a] ? lo : hi;
+    rc_slabs_axis(endLo - pad, endHi + pad, rc_active_min16(-inv, p->active),
+                  rc_active_max16(-inv, p->active), a, &b->slabs);
 }
 
 inline RcBvhBeam rc_bvh_beam(const RcBvhPacket* p) {
@@ -610,15 +589,6 @@ inline RcBvhBeam rc_bvh_beam(const RcBvhPacket* p) {
     rc_beam_axis(p, p->oz, p->dz, p->iz, 2, &b);
     b.reach = rc_active_max16(p->tmax - p->tmin, p->active) * 1.0000004f;
     return b;
-}
-
-/* The beam's entry and exit distances through the slabs [lo, hi] of one axis, eight boxes: the
- * least entry and the largest exit over the ends and inverse directions it holds. */
-inline void rc_beam_slab(const RcBvhBeam* b, int a, float8 lo, float8 hi, float8* tn, float8* tf) {
-    const float8 nearSide = b->positive[a] ? lo : hi, farSide = b->positive[a] ? hi : lo;
-    const float8 n = nearSide - b->sNear[a], f = farSide - b->sFar[a];
-    *tn = rc_max8(*tn, n * select((float8)(b->iHi[a]), (float8)(b->iLo[a]), n >= 0.0f));
-    *tf = rc_min8(*tf, f * select((float8)(b->iLo[a]), (float8)(b->iHi[a]), f >= 0.0f));
 }
 
 /* The lanes of the packet that enter child c of nd (the single-ray walk's slab test). */
@@ -669,9 +639,9 @@ inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* beam,
         } else {
             __global const RcBvh8Node* nd = nodes + ref;
             float8 tn = (float8)(0.0f), tf = (float8)(beam->reach);
-            rc_beam_slab(beam, 0, vload8(0, nd->loX), vload8(0, nd->hiX), &tn, &tf);
-            rc_beam_slab(beam, 1, vload8(0, nd->loY), vload8(0, nd->hiY), &tn, &tf);
-            rc_beam_slab(beam, 2, vload8(0, nd->loZ), vload8(0, nd->hiZ), &tn, &tf);
+            rc_slabs_test(&beam->slabs, 0, vload8(0, nd->loX), vload8(0, nd->hiX), &tn, &tf);
+            rc_slabs_test(&beam->slabs, 1, vload8(0, nd->loY), vload8(0, nd->hiY), &tn, &tf);
+            rc_slabs_test(&beam->slabs, 2, vload8(0, nd->loZ), vload8(0, nd->hiZ), &tn, &tf);
             const int8 enters =
                 (tn <= tf * 1.0000004f) & (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
             const int4 m4 = enters.lo | enters.hi;
@@ -753,13 +723,6 @@ inline int rc_bvh_packet_bundled(const RcBvhPacket* p, __global const RcRay* ray
     return rc_count16(near) >= min(12u, n - first);
 }
 
-/* Whether the beam of a shadow packet whose ends meet is one-signed along every axis (one
- * octant of reversed directions), as rc_beam_slab needs. */
-inline int rc_beam_one_octant(const RcBvhBeam* b) {
-    return (b->iLo[0] > 0.0f || b->iHi[0] < 0.0f) && (b->iLo[1] > 0.0f || b->iHi[1] < 0.0f) &&
-           (b->iLo[2] > 0.0f || b->iHi[2] < 0.0f);
-}
-
 /* The answers of rays [first, first + 16) (rays order[first + k] where order is given): nearest
  * hits, or with anyHit blocked flags; tests[ray] its primitive tests. A coherent packet, or a
  * bundled packet of nearest-hit rays, walks the tree once, other rays one by one. Shadow
@@ -778,7 +741,8 @@ inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, __global const
         allowed && rc_bvh_load_packet(rays, order, first, n, anyHit, maxSpread2, &p);
     if (allowed && anyHit) {
         const RcBvhBeam beam = rc_bvh_beam(&p);
-        if (beam.spread2 <= maxSpread2 && (coherent || (order && rc_beam_one_octant(&beam)))) {
+        const int oneOctant = coherent || (order && rc_slabs_one_octant(&beam.slabs));
+        if (beam.spread2 <= maxSpread2 && oneOctant) {
             int16 blocked = (int16)(0);
             const uint16 count = rc_bvh_occlude_beam(&p, &beam, nodes, leaves, &blocked);
             rc_packet_store_blocked(first, n, blocked, order, blockedOut);

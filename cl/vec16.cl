@@ -60,6 +60,30 @@ RC_V16_INLINE float rc_active_max16(float16 a, int16 active) {
     return rc_hmax16(select((float16)(-INFINITY), a, active));
 }
 
+/* The least and the largest lane by selects, for values that are never NaN: rc_hmin16's fmin
+ * checks every step for one. */
+RC_V16_INLINE float rc_hmin16_ordered(float16 a) {
+    const float8 m8 = select(a.hi, a.lo, a.lo < a.hi);
+    const float4 m4 = select(m8.hi, m8.lo, m8.lo < m8.hi);
+    const float2 m2 = select(m4.hi, m4.lo, m4.lo < m4.hi);
+    return m2.x < m2.y ? m2.x : m2.y;
+}
+RC_V16_INLINE float rc_hmax16_ordered(float16 a) {
+    const float8 m8 = select(a.hi, a.lo, a.lo > a.hi);
+    const float4 m4 = select(m8.hi, m8.lo, m8.lo > m8.hi);
+    const float2 m2 = select(m4.hi, m4.lo, m4.lo > m4.hi);
+    return m2.x > m2.y ? m2.x : m2.y;
+}
+
+/* Whether any lane of the mask is set, as one OR reduction: PoCL's any() tests lane by lane,
+ * a branch each. */
+RC_V16_INLINE int rc_any16(int16 m) {
+    const int8 m8 = m.lo | m.hi;
+    const int4 m4 = m8.lo | m8.hi;
+    const int2 m2 = m4.lo | m4.hi;
+    return (m2.x | m2.y) < 0;
+}
+
 /* How many lanes of the mask are set. */
 RC_V16_INLINE int rc_count16(int16 mask) {
     const int16 ones = mask & 1;
