@@ -16,14 +16,14 @@
 #define RC_BVH_STACK 128
 
 /* min and max as one instruction each: the slab test below never meets a NaN. */
-inline float8 rc_min8(float8 a, float8 b) { return select(b, a, a < b); }
-inline float8 rc_max8(float8 a, float8 b) { return select(b, a, a > b); }
+static inline float8 rc_min8(float8 a, float8 b) { return select(b, a, a < b); }
+static inline float8 rc_max8(float8 a, float8 b) { return select(b, a, a > b); }
 
 /* 1 / d, with a zero component replaced by a huge finite value of its sign: then no slab distance
  * is 0 * infinity (NaN), and min and max can be plain selects. The boxes' padding keeps every
  * primitive strictly inside its slabs, so a ray parallel to a slab can reach the primitives only
  * from inside it (tests/render/bvh_query_test.cpp). */
-inline float3 rc_bvh_inverse(float3 d) {
+static inline float3 rc_bvh_inverse(float3 d) {
     const float3 inv = (float3)(1.0f) / d;
     return select(inv, copysign((float3)(1e30f), inv), isinf(inv));
 }
@@ -31,27 +31,27 @@ inline float3 rc_bvh_inverse(float3 d) {
 /* Eight lanes of array `a` of a leaf run of `stride` primitives from `lane0` on, zero in the
  * lanes beyond the run (live clear): those hold the next array's words, ids among them, which as
  * floats are denormals, slow to compute with. */
-inline float8 rc_leaf_load8(__global const float* lane0, uint stride, uint a, int8 live) {
+static inline float8 rc_leaf_load8(__global const float* lane0, uint stride, uint a, int8 live) {
     return select((float8)(0.0f), vload8(0, lane0 + a * stride), live);
 }
 
 /* The ids of a leaf run's eight lanes from `lane0` on, RC_NO_HIT beyond the run. */
-inline uint8 rc_leaf_prims8(__global const float* lane0, uint stride, int8 live) {
+static inline uint8 rc_leaf_prims8(__global const float* lane0, uint stride, int8 live) {
     return select((uint8)(RC_NO_HIT),
                   as_uint8(vload8(0, lane0 + (RC_BVH_LEAF_ARRAYS - 1) * stride)), live);
 }
 
 /* The id of lane k of a leaf run of `stride` primitives from `lane0` on. */
-inline uint rc_leaf_prim(__global const float* lane0, uint stride, uint k) {
+static inline uint rc_leaf_prim(__global const float* lane0, uint stride, uint k) {
     return as_uint(lane0[(RC_BVH_LEAF_ARRAYS - 1) * stride + k]);
 }
 
 /* Moeller-Trumbore of one ray against eight lanes of a leaf run (lanes beyond it zero edges,
  * which the test rejects), the same operations as rc_intersect_triangle lane by lane. Returns t
  * per lane, +inf where a lane misses or its t is not below `bound`. */
-inline float8 rc_bvh_triangles8(float3 o, float3 d, float tmin, float bound,
-                                __global const float* lane0, uint stride, int8 live, float8* uOut,
-                                float8* vOut) {
+static inline float8 rc_bvh_triangles8(float3 o, float3 d, float tmin, float bound,
+                                       __global const float* lane0, uint stride, int8 live,
+                                       float8* uOut, float8* vOut) {
     const float8 e1x = rc_leaf_load8(lane0, stride, 3, live);
     const float8 e1y = rc_leaf_load8(lane0, stride, 4, live);
     const float8 e1z = rc_leaf_load8(lane0, stride, 5, live);
@@ -83,11 +83,12 @@ inline float8 rc_bvh_triangles8(float3 o, float3 d, float tmin, float bound,
 
 /* The leaf one primitive at a time, for the watertight triangle test, which has no eight-lane
  * form: the same answer and count as rc_bvh_leaf. */
-inline int rc_bvh_leaf_scalar(uint count, __global const float* leaf, float3 o, float3 d,
-                              float tmin, float tmax, int anyHit,
-                              __global const RcTriangle* triangles,
-                              __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-                              uint nT, uint nS, RcHit* best, uint* tests) {
+static inline int rc_bvh_leaf_scalar(uint count, __global const float* leaf, float3 o, float3 d,
+                                     float tmin, float tmax, int anyHit,
+                                     __global const RcTriangle* triangles,
+                                     __global const RcSphere* spheres,
+                                     __global const RcQuadric* quadrics, uint nT, uint nS,
+                                     RcHit* best, uint* tests) {
     for (uint k = 0; k < count; ++k) {
         ++*tests;
         if (rc_intersect_primitive(rc_leaf_prim(leaf, count, k), o, d, tmin, tmax, triangles,
@@ -101,10 +102,11 @@ inline int rc_bvh_leaf_scalar(uint count, __global const float* leaf, float3 o, 
 /* The leaf whose `count` primitives fill the run at `leaf`, with the lower-id tie-break.
  * Returns 1 when anyHit and a primitive was hit; *tests counts the primitives tested, as if one
  * at a time in lane order up to an any-hit (the count rc_intersect_primitive walks would give). */
-inline int rc_bvh_leaf(uint count, __global const float* leaf, float3 o, float3 d, float tmin,
-                       float tmax, int anyHit, __global const RcTriangle* triangles,
-                       __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-                       uint nT, uint nS, RcHit* best, uint* tests) {
+static inline int rc_bvh_leaf(uint count, __global const float* leaf, float3 o, float3 d,
+                              float tmin, float tmax, int anyHit,
+                              __global const RcTriangle* triangles,
+                              __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+                              uint nT, uint nS, RcHit* best, uint* tests) {
     for (uint first = 0; first < count; first += 8) {
         __global const float* lane0 = leaf + first;
         const uint lanes = min(8u, count - first);
@@ -167,10 +169,11 @@ inline int rc_bvh_leaf(uint count, __global const float* leaf, float3 o, float3 
 #endif
 
 /* Walks the tree; with anyHit it returns at the first hit. Returns the primitive tests done. */
-inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
-                         __global const RcBvh8Node* nodes, __global const float* leaves,
-                         __global const RcTriangle* triangles, __global const RcSphere* spheres,
-                         __global const RcQuadric* quadrics, uint nT, uint nS, RcHit* best) {
+static inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
+                                __global const RcBvh8Node* nodes, __global const float* leaves,
+                                __global const RcTriangle* triangles,
+                                __global const RcSphere* spheres,
+                                __global const RcQuadric* quadrics, uint nT, uint nS, RcHit* best) {
     const float8 ox = (float8)(o.x), oy = (float8)(o.y), oz = (float8)(o.z);
     const float3 inv = rc_bvh_inverse(d);
     const float8 ix = (float8)(inv.x), iy = (float8)(inv.y), iz = (float8)(inv.z);
@@ -249,8 +252,8 @@ inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int anyHit,
  * by ray. */
 #define RC_PACKET 16
 
-inline float16 rc_min16(float16 a, float16 b) { return select(b, a, a < b); }
-inline float16 rc_max16(float16 a, float16 b) { return select(b, a, a > b); }
+static inline float16 rc_min16(float16 a, float16 b) { return select(b, a, a < b); }
+static inline float16 rc_max16(float16 a, float16 b) { return select(b, a, a > b); }
 
 /* The rays of a packet, the lanes over the rays; inactive lanes hold a harmless ray. */
 typedef struct RcBvhPacket {
@@ -261,8 +264,9 @@ typedef struct RcBvhPacket {
 /* The packet's nearest hits (bt, bp, bu, bv) as the answers of rays [first, first + 16) below
  * n, a lane without a hit as t = inf. Lane k answers ray order[first + k] where order is given
  * (a sorted batch), else ray first + k. */
-inline void rc_packet_store_hits(uint first, uint n, float16 bt, uint16 bp, float16 bu, float16 bv,
-                                 __global const uint* order, __global RcHit* hits) {
+static inline void rc_packet_store_hits(uint first, uint n, float16 bt, uint16 bp, float16 bu,
+                                        float16 bv, __global const uint* order,
+                                        __global RcHit* hits) {
     float ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
     uint ps[RC_PACKET];
     vstore16(bt, 0, ts);
@@ -280,8 +284,8 @@ inline void rc_packet_store_hits(uint first, uint n, float16 bt, uint16 bp, floa
 }
 
 /* Per-lane counts as out[ray], the rays as in rc_packet_store_hits. */
-inline void rc_packet_store_counts(uint first, uint n, uint16 counts, __global const uint* order,
-                                   __global uint* out) {
+static inline void rc_packet_store_counts(uint first, uint n, uint16 counts,
+                                          __global const uint* order, __global uint* out) {
     uint cs[RC_PACKET];
     vstore16(counts, 0, cs);
     for (uint k = 0; k < RC_PACKET && first + k < n; ++k)
@@ -289,8 +293,8 @@ inline void rc_packet_store_counts(uint first, uint n, uint16 counts, __global c
 }
 
 /* The lanes that found a hit as blocked flags, the rays as in rc_packet_store_hits. */
-inline void rc_packet_store_blocked(uint first, uint n, int16 blocked, __global const uint* order,
-                                    __global uchar* out) {
+static inline void rc_packet_store_blocked(uint first, uint n, int16 blocked,
+                                           __global const uint* order, __global uchar* out) {
     int bs[RC_PACKET];
     vstore16(blocked, 0, bs);
     for (uint k = 0; k < RC_PACKET && first + k < n; ++k)
@@ -300,7 +304,7 @@ inline void rc_packet_store_blocked(uint first, uint n, int16 blocked, __global 
 /* The largest spread of a packet's origins that walks as one, squared: a 32nd of the diagonal
  * of the root's children's boxes. Rays from scattered points share few nodes even when their
  * directions agree (shadow rays toward one light after several bounces). */
-inline float rc_bvh_max_spread2(__global const RcBvh8Node* root) {
+static inline float rc_bvh_max_spread2(__global const RcBvh8Node* root) {
     float3 lo = (float3)(INFINITY), hi = (float3)(-INFINITY);
     for (uint c = 0; c < root->nChildren; ++c) {
         lo = fmin(lo, (float3)(root->loX[c], root->loY[c], root->loZ[c]));
@@ -312,7 +316,7 @@ inline float rc_bvh_max_spread2(__global const RcBvh8Node* root) {
 
 /* The active lanes whose directions lie within the cone about d of squared cosine cos2, their
  * squared lengths len2. */
-inline int16 rc_packet_within(const RcBvhPacket* p, float16 len2, float3 d, float cos2) {
+static inline int16 rc_packet_within(const RcBvhPacket* p, float16 len2, float3 d, float cos2) {
     const float16 dd = p->dx * d.x + p->dy * d.y + p->dz * d.z;
     return p->active & (dd > 0.0f) & (dd * dd > cos2 * len2 * dot(d, d));
 }
@@ -322,8 +326,9 @@ inline int16 rc_packet_within(const RcBvhPacket* p, float16 len2, float3 d, floa
  * skipEmpty. Returns whether the packet is coherent enough to walk as one: every active
  * direction in the first active one's octant and within about 18 degrees of it (cos > 0.95),
  * the origins' box's diagonal squared at most maxSpread2. */
-inline int rc_bvh_load_packet(__global const RcRay* rays, __global const uint* order, uint first,
-                              uint n, int skipEmpty, float maxSpread2, RcBvhPacket* p) {
+static inline int rc_bvh_load_packet(__global const RcRay* rays, __global const uint* order,
+                                     uint first, uint n, int skipEmpty, float maxSpread2,
+                                     RcBvhPacket* p) {
     /* Rays read as float4 and transposed in registers: lanes written one float at a time to
      * private arrays go through memory on PoCL (see rc_load_packet, classified.cl). */
     float4 o[RC_PACKET], d[RC_PACKET];
@@ -375,8 +380,9 @@ inline int rc_bvh_load_packet(__global const RcRay* rays, __global const uint* o
 /* Triangle k of a leaf run of `count` primitives at `leaf` against the packet's rays,
  * rc_intersect_triangle's operations lane by lane: t, u and v per ray, and the rays that cross
  * the triangle between their tmin and tmax. */
-inline int16 rc_bvh_packet_triangle(const RcBvhPacket* p, __global const float* leaf, uint count,
-                                    uint k, float16* tOut, float16* uOut, float16* vOut) {
+static inline int16 rc_bvh_packet_triangle(const RcBvhPacket* p, __global const float* leaf,
+                                           uint count, uint k, float16* tOut, float16* uOut,
+                                           float16* vOut) {
     /* lane k of the run's arrays */
     __global const float* w = leaf + k;
     const float e1x = w[3 * count], e1y = w[4 * count], e1z = w[5 * count];
@@ -413,7 +419,7 @@ typedef struct RcBvhSlabs {
     int positive[3], bounded[3];
 } RcBvhSlabs;
 
-inline void rc_slabs_axis(float lo, float hi, float iLo, float iHi, int a, RcBvhSlabs* s) {
+static inline void rc_slabs_axis(float lo, float hi, float iLo, float iHi, int a, RcBvhSlabs* s) {
     s->iLo[a] = iLo;
     s->iHi[a] = iHi;
     s->positive[a] = iLo > 0.0f;
@@ -423,15 +429,15 @@ inline void rc_slabs_axis(float lo, float hi, float iLo, float iHi, int a, RcBvh
 }
 
 /* Whether every axis bounds the distances (the inverse directions in one octant). */
-inline int rc_slabs_one_octant(const RcBvhSlabs* s) {
+static inline int rc_slabs_one_octant(const RcBvhSlabs* s) {
     return s->bounded[0] && s->bounded[1] && s->bounded[2];
 }
 
 /* The least entry and the largest exit distance over the intervals' rays through the slabs
  * [lo, hi] of one axis, eight boxes, folded into *tn and *tf. The walks call it per axis: the
  * three calls wrapped in one more function made both walks slower on PoCL. */
-inline void rc_slabs_test(const RcBvhSlabs* s, int a, float8 lo, float8 hi, float8* tn,
-                          float8* tf) {
+static inline void rc_slabs_test(const RcBvhSlabs* s, int a, float8 lo, float8 hi, float8* tn,
+                                 float8* tf) {
     if (!s->bounded[a]) return;
     const float8 nearSide = s->positive[a] ? lo : hi, farSide = s->positive[a] ? hi : lo;
     const float8 n = nearSide - s->nearP[a], f = farSide - s->farP[a];
@@ -440,7 +446,7 @@ inline void rc_slabs_test(const RcBvhSlabs* s, int a, float8 lo, float8 hi, floa
 }
 
 /* The packet's active lanes as intervals: their origins and inverse directions. */
-inline RcBvhSlabs rc_packet_slabs(const RcBvhPacket* p) {
+static inline RcBvhSlabs rc_packet_slabs(const RcBvhPacket* p) {
     RcBvhSlabs s;
     rc_slabs_axis(rc_active_min16(p->ox, p->active), rc_active_max16(p->ox, p->active),
                   rc_active_min16(p->ix, p->active), rc_active_max16(p->ix, p->active), 0, &s);
@@ -453,10 +459,11 @@ inline RcBvhSlabs rc_packet_slabs(const RcBvhPacket* p) {
 
 /* Walks the tree once for the packet: nearest hits in (bt, bp, bu, bv), or with anyHit the lanes
  * that found a hit in *blocked (a lane stops at its first). Returns primitive tests per lane. */
-inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
-                                  __global const RcBvh8Node* nodes, __global const float* leaves,
-                                  float16* btOut, uint16* bpOut, float16* buOut, float16* bvOut,
-                                  int16* blocked) {
+static inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
+                                         __global const RcBvh8Node* nodes,
+                                         __global const float* leaves, float16* btOut,
+                                         uint16* bpOut, float16* buOut, float16* bvOut,
+                                         int16* blocked) {
     uint stackRef[RC_BVH_STACK];
     float stackT[RC_BVH_STACK];
     int sp = 0;
@@ -570,8 +577,8 @@ typedef struct RcBvhBeam {
 } RcBvhBeam;
 
 /* The beam of one axis: the lanes' origins o, directions d and inverse directions inv along it. */
-inline void rc_beam_axis(const RcBvhPacket* p, float16 o, float16 d, float16 inv, int a,
-                         RcBvhBeam* b) {
+static inline void rc_beam_axis(const RcBvhPacket* p, float16 o, float16 d, float16 inv, int a,
+                                RcBvhBeam* b) {
     const float16 end = o + p->tmax * d;
     const float16 size = fabs(o) + 2.0f * fabs(p->tmax * d);
     const float pad = 1e-5f * rc_active_max16(size, p->active);
@@ -581,7 +588,7 @@ inline void rc_beam_axis(const RcBvhPacket* p, float16 o, float16 d, float16 inv
                   rc_active_max16(-inv, p->active), a, &b->slabs);
 }
 
-inline RcBvhBeam rc_bvh_beam(const RcBvhPacket* p) {
+static inline RcBvhBeam rc_bvh_beam(const RcBvhPacket* p) {
     RcBvhBeam b;
     b.spread2 = 0.0f;
     rc_beam_axis(p, p->ox, p->dx, p->ix, 0, &b);
@@ -592,8 +599,8 @@ inline RcBvhBeam rc_bvh_beam(const RcBvhPacket* p) {
 }
 
 /* The lanes of the packet that enter child c of nd (the single-ray walk's slab test). */
-inline int16 rc_packet_enters(const RcBvhPacket* p, __global const RcBvh8Node* nd, uint c,
-                              int16 active) {
+static inline int16 rc_packet_enters(const RcBvhPacket* p, __global const RcBvh8Node* nd, uint c,
+                                     int16 active) {
     const float16 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
     const float16 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
     const float16 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
@@ -606,8 +613,9 @@ inline int16 rc_packet_enters(const RcBvhPacket* p, __global const RcBvh8Node* n
 
 /* The packet's triangles of one leaf against its active lanes: the lanes they block join
  * *blocked and leave active. Returns the tests per lane. */
-inline uint16 rc_packet_leaf_occluded(const RcBvhPacket* p, uint ref, __global const float* leaves,
-                                      int16* active, int16* blocked) {
+static inline uint16 rc_packet_leaf_occluded(const RcBvhPacket* p, uint ref,
+                                             __global const float* leaves, int16* active,
+                                             int16* blocked) {
     const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
     __global const float* leaf = leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN;
     uint16 tests = (uint16)(0);
@@ -623,9 +631,9 @@ inline uint16 rc_packet_leaf_occluded(const RcBvhPacket* p, uint ref, __global c
 
 /* Walks the tree once for a packet of shadow rays as a beam: the lanes that found a blocker in
  * *blocked. Returns primitive tests per lane. */
-inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* beam,
-                                  __global const RcBvh8Node* nodes, __global const float* leaves,
-                                  int16* blocked) {
+static inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* beam,
+                                         __global const RcBvh8Node* nodes,
+                                         __global const float* leaves, int16* blocked) {
     const int8 laneBit = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
     uint stack[RC_BVH_STACK];
     int sp = 0;
@@ -668,7 +676,7 @@ inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* beam,
 
 /* Whether packets may walk the tree: triangles only (at least one), tested as
  * rc_intersect_triangle tests. */
-inline int rc_packets_allowed(__constant const RcRenderParams* params) {
+static inline int rc_packets_allowed(__constant const RcRenderParams* params) {
 #ifdef RC_WATERTIGHT
     return 0;
 #else
@@ -678,10 +686,10 @@ inline int rc_packets_allowed(__constant const RcRenderParams* params) {
 
 /* The packet's answers: nearest hits, or with anyHit blocked flags; the rays as in
  * rc_packet_store_hits. */
-inline void rc_packet_store_answers(int anyHit, uint first, uint n, float16 bt, uint16 bp,
-                                    float16 bu, float16 bv, int16 blocked,
-                                    __global const uint* order, __global RcHit* hits,
-                                    __global uchar* blockedOut) {
+static inline void rc_packet_store_answers(int anyHit, uint first, uint n, float16 bt, uint16 bp,
+                                           float16 bu, float16 bv, int16 blocked,
+                                           __global const uint* order, __global RcHit* hits,
+                                           __global uchar* blockedOut) {
     if (anyHit)
         rc_packet_store_blocked(first, n, blocked, order, blockedOut);
     else
@@ -690,15 +698,15 @@ inline void rc_packet_store_answers(int anyHit, uint first, uint n, float16 bt, 
 
 /* Whether a single ray needs a walk: not in a scene without primitives, nor, when anyHit, an
  * empty shadow slot (tmax 0), which nothing can block. */
-inline int rc_ray_walks(int anyHit, float tmax, __constant const RcRenderParams* params) {
+static inline int rc_ray_walks(int anyHit, float tmax, __constant const RcRenderParams* params) {
     return params->nTriangles + params->nSpheres + params->nQuadrics > 0 &&
            !(anyHit && tmax == 0.0f);
 }
 
 /* A single ray's answer: hits[i] its nearest hit (t = inf without one), or with anyHit
  * blockedOut[i] whether it found one. */
-inline void rc_ray_store_answer(int anyHit, uint i, RcHit best, __global RcHit* hits,
-                                __global uchar* blockedOut) {
+static inline void rc_ray_store_answer(int anyHit, uint i, RcHit best, __global RcHit* hits,
+                                       __global uchar* blockedOut) {
     if (anyHit) {
         blockedOut[i] = best.prim != RC_NO_HIT;
     } else {
@@ -713,8 +721,8 @@ inline void rc_ray_store_answer(int anyHit, uint i, RcHit best, __global RcHit* 
  * bundles, which still share most of their nodes; diffuse bounces scatter too widely, and their
  * lanes would add up the nodes of 16 walks. Their origins' spread is not limited: a walk of 16
  * lanes that share few nodes still waits on fewer loads than 16 single-ray walks. */
-inline int rc_bvh_packet_bundled(const RcBvhPacket* p, __global const RcRay* rays, uint first,
-                                 uint n) {
+static inline int rc_bvh_packet_bundled(const RcBvhPacket* p, __global const RcRay* rays,
+                                        uint first, uint n) {
     const float16 len2 = p->dx * p->dx + p->dy * p->dy + p->dz * p->dz;
     /* within 30 degrees: cos^2 > 3/4 */
     const int16 near =
@@ -728,12 +736,13 @@ inline int rc_bvh_packet_bundled(const RcBvhPacket* p, __global const RcRay* ray
  * bundled packet of nearest-hit rays, walks the tree once, other rays one by one. Shadow
  * packets whose ends meet (a point light) walk as a beam, whatever their origins' spread, when
  * sorted by their directions from the light (ShadowOrder): their directions then lie close. */
-inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, __global const uint* order,
-                          uint first, uint n, __global const RcBvh8Node* nodes,
-                          __global const float* leaves, __global const RcTriangle* triangles,
-                          __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-                          __constant const RcRenderParams* params, __global RcHit* hits,
-                          __global uchar* blockedOut, __global uint* tests) {
+static inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, __global const uint* order,
+                                 uint first, uint n, __global const RcBvh8Node* nodes,
+                                 __global const float* leaves, __global const RcTriangle* triangles,
+                                 __global const RcSphere* spheres,
+                                 __global const RcQuadric* quadrics,
+                                 __constant const RcRenderParams* params, __global RcHit* hits,
+                                 __global uchar* blockedOut, __global uint* tests) {
     RcBvhPacket p;
     const float maxSpread2 = rc_bvh_max_spread2(nodes);
     const int allowed = rc_packets_allowed(params);

@@ -6,7 +6,7 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-inline float3 rc_eye_direction(__constant const RcCamera* cam, uint x, uint y) {
+static inline float3 rc_eye_direction(__constant const RcCamera* cam, uint x, uint y) {
     const float sx = (2.0f * ((float)x + 0.5f) / (float)cam->width - 1.0f) * cam->tanHalfFovX;
     const float sy = (1.0f - 2.0f * ((float)y + 0.5f) / (float)cam->height) * cam->tanHalfFovY;
     return normalize(cam->forward.xyz + sx * cam->right.xyz + sy * cam->up.xyz);

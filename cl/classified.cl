@@ -20,7 +20,7 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-inline float rc_face_component(float3 v, uint face) {
+static inline float rc_face_component(float3 v, uint face) {
     const uint axis = face >> 1;
     const float c = axis == 0 ? v.x : (axis == 1 ? v.y : v.z);
     return (face & 1) ? -c : c;
@@ -29,7 +29,7 @@ inline float rc_face_component(float3 v, uint face) {
 /* The largest X a shadow ray's segment (tmin, tmax) reaches in the frame of its leaf's face:
  * its end, or its start when the classification took it from its far end, the light
  * (classify::CommonEnds); candidates whose box starts beyond it cannot block it. */
-inline float rc_segment_end_x(float3 o, float3 d, float tmin, float tmax, uint face) {
+static inline float rc_segment_end_x(float3 o, float3 d, float tmin, float tmax, uint face) {
     const float dx = rc_face_component(d, face);
     return rc_face_component(o, face) + (dx > 0.0f ? tmax : tmin) * dx;
 }
@@ -145,9 +145,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_gath
 
 /* Moeller-Trumbore of one ray against the 16 triangle lanes of a block, the same operations as
  * rc_intersect_triangle lane by lane. Returns t per lane, +inf where a lane misses. */
-inline float16 rc_triangles16(float3 o, float3 d, float tmin, float tmax,
-                              __global const RcTriangleBlock16* blk, float16* uOut,
-                              float16* vOut) {
+static inline float16 rc_triangles16(float3 o, float3 d, float tmin, float tmax,
+                                     __global const RcTriangleBlock16* blk, float16* uOut,
+                                     float16* vOut) {
     const float16 e1x = vload16(0, blk->e1x), e1y = vload16(0, blk->e1y),
                   e1z = vload16(0, blk->e1z);
     const float16 e2x = vload16(0, blk->e2x), e2y = vload16(0, blk->e2y),
@@ -175,8 +175,8 @@ inline float16 rc_triangles16(float3 o, float3 d, float tmin, float tmax,
     return select((float16)(INFINITY), t, ok);
 }
 
-inline void rc_vertex_update(float16 t, float16 u, float16 v, __global const RcTriangleBlock16* blk,
-                             RcHit* best) {
+static inline void rc_vertex_update(float16 t, float16 u, float16 v,
+                                    __global const RcTriangleBlock16* blk, RcHit* best) {
     const float tMin16 = min(min(min(t.s0, t.s1), min(t.s2, t.s3)),
                              min(min(t.s4, t.s5), min(t.s6, t.s7)));
     const float tMin16b = min(min(min(t.s8, t.s9), min(t.sa, t.sb)),
@@ -199,12 +199,12 @@ inline void rc_vertex_update(float16 t, float16 u, float16 v, __global const RcT
 
 /* The nearest hit of one ray over its leaf's blocks; *tested counts the candidates in the blocks
  * it went through. */
-inline RcHit rc_vertex_nearest(const RcRay* ray, RcLeaf leaf, uint firstBlock,
-                               __global const RcTriangleBlock16* blocks,
-                               __global const RcTriangle* triangles,
-                               __global const RcSphere* spheres,
-                               __global const RcQuadric* quadrics,
-                               __constant const RcRenderParams* params, uint* tested) {
+static inline RcHit rc_vertex_nearest(const RcRay* ray, RcLeaf leaf, uint firstBlock,
+                                      __global const RcTriangleBlock16* blocks,
+                                      __global const RcTriangle* triangles,
+                                      __global const RcSphere* spheres,
+                                      __global const RcQuadric* quadrics,
+                                      __constant const RcRenderParams* params, uint* tested) {
     const float3 o = ray->origin.xyz, d = ray->direction.xyz;
     const float tmin = ray->origin.w, tmax = ray->direction.w;
     const float originX = rc_face_component(o, leaf.face);

@@ -24,7 +24,7 @@
 /* Whether spheres (centre c, radius r) meet the cone (Eberly's cone-sphere test: the centre
  * inside the cone grown by r, then the region behind the apex), with angles compared through
  * the perpendicular distance, which keeps its precision in narrow cones. */
-inline int16 rc_cone_spheres16(RcCone cone, float16 cx, float16 cy, float16 cz, float16 r) {
+static inline int16 rc_cone_spheres16(RcCone cone, float16 cx, float16 cy, float16 cz, float16 r) {
     if (cone.apex.w < 0.0f) return (int16)(-1);
     const float tan2 = cone.apex.w, invSin = cone.axis.w;
     const float ax = cone.axis.x, ay = cone.axis.y, az = cone.axis.z;
@@ -43,7 +43,7 @@ inline int16 rc_cone_spheres16(RcCone cone, float16 cx, float16 cy, float16 cz, 
     return inGrown & (~behind | (bx * bx + by * by + bz * bz <= r * r));
 }
 
-inline int rc_cone_sphere(RcCone cone, float cx, float cy, float cz, float r) {
+static inline int rc_cone_sphere(RcCone cone, float cx, float cy, float cz, float r) {
     return rc_cone_spheres16(cone, (float16)(cx), (float16)(cy), (float16)(cz), (float16)(r)).s0;
 }
 
@@ -59,14 +59,14 @@ inline int rc_cone_sphere(RcCone cone, float cx, float cy, float cz, float r) {
 #define RC_CONE_ANGLE_MARGIN 1e-4f
 
 /* The angle between a and b (any lengths), accurate down to 0. */
-inline float16 rc_v16_angle(RcVec16 a, RcVec16 b) {
+static inline float16 rc_v16_angle(RcVec16 a, RcVec16 b) {
     return atan2(rc_v16_length(rc_v16_cross(a, b)), rc_v16_dot(a, b));
 }
 
 /* Ray k of each lane's tile (tile 16 g + lane: sorted positions [64 tile, 64 tile + 64) below
  * n): origin, unit direction, and whether it counts (it exists and has a direction). */
-inline int16 rc_cones_tile_ray16(__global const RcRay* sorted, uint n, uint g, uint k,
-                                 RcVec16* o, RcVec16* r) {
+static inline int16 rc_cones_tile_ray16(__global const RcRay* sorted, uint n, uint g, uint k,
+                                        RcVec16* o, RcVec16* r) {
     float ox[RC_PACKET], oy[RC_PACKET], oz[RC_PACKET], dx[RC_PACKET], dy[RC_PACKET],
         dz[RC_PACKET];
     int ok[RC_PACKET];
@@ -90,8 +90,8 @@ inline int16 rc_cones_tile_ray16(__global const RcRay* sorted, uint n, uint g, u
 /* Step (a), in the lanes `m`: the smallest cone with the same apex holding the cone (axis *x,
  * half-angle's cosine and sine *c, *s) and the unit direction r. Returns the lanes where that
  * cone would open to 180 degrees or beyond the largest half-angle. */
-inline int16 rc_cones_widen_to_direction(int16 m, RcVec16* x, float16* c, float16* s,
-                                         RcVec16 r) {
+static inline int16 rc_cones_widen_to_direction(int16 m, RcVec16* x, float16* c, float16* s,
+                                                RcVec16 r) {
     const float16 cr = rc_v16_dot(*x, r);
     const int16 need = m & (cr < *c);
     if (!any(need)) return (int16)(0);
@@ -117,8 +117,8 @@ inline int16 rc_cones_widen_to_direction(int16 m, RcVec16* x, float16* c, float1
 /* Step (b), in the lanes `m`: where p lies outside the cone (apex *a, axis x, half-angle's
  * cosine and sine c, s), the apex slides back along the far generator until the near one passes
  * through p, or where no slide reaches p, backs off along the axis (accel::EnclosingCone). */
-inline void rc_cones_widen_to_origin(int16 m, RcVec16* a, RcVec16 x, float16 c, float16 s,
-                                     RcVec16 p) {
+static inline void rc_cones_widen_to_origin(int16 m, RcVec16* a, RcVec16 x, float16 c, float16 s,
+                                            RcVec16 p) {
     const RcVec16 cv = rc_v16_sub(p, *a);
     const float16 along = rc_v16_dot(x, cv);
     const RcVec16 qRaw = rc_v16_sub(rc_v16_scale(x, along), cv);
@@ -139,7 +139,7 @@ inline void rc_cones_widen_to_origin(int16 m, RcVec16* a, RcVec16 x, float16 c, 
 }
 
 /* A cone that culls nothing (accel::EnclosingCone's unbounded one). */
-inline RcCone rc_cones_unbounded(void) {
+static inline RcCone rc_cones_unbounded(void) {
     RcCone c;
     c.apex = (float4)(0.0f, 0.0f, 0.0f, -1.0f);
     c.axis = (float4)(0.0f, 0.0f, 1.0f, 1.0f);
@@ -147,7 +147,7 @@ inline RcCone rc_cones_unbounded(void) {
 }
 
 /* The cone of apex a, axis x and half-angle phi as the cull kernels read it. */
-inline RcCone rc_cones_make(float3 a, float3 x, float phi) {
+static inline RcCone rc_cones_make(float3 a, float3 x, float phi) {
     RcCone c;
     const float t = tan(phi);
     c.apex = (float4)(a, t * t);
@@ -158,9 +158,9 @@ inline RcCone rc_cones_make(float3 a, float3 x, float phi) {
 /* The group's cone from its tiles' (axes x, half-angles phi, apexes a, `count` of them): the
  * mean axis, the half-angle holding every tile's directions, and the apex backed off along the
  * axis until every tile's apex lies inside, half the margin from the surface. */
-inline RcCone rc_cones_group(const float* ax, const float* ay, const float* az, const float* px,
-                             const float* py, const float* pz, const float* phis,
-                             const int* bad, uint count, float margin) {
+static inline RcCone rc_cones_group(const float* ax, const float* ay, const float* az,
+                                    const float* px, const float* py, const float* pz,
+                                    const float* phis, const int* bad, uint count, float margin) {
     float3 sum = (float3)(0.0f), centroid = (float3)(0.0f);
     int unbounded = count == 0;
     for (uint t = 0; t < count; ++t) {
@@ -305,9 +305,10 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_cone
 }
 
 /* The candidates of sorted position j's tile: *n of them from *ids, or all. */
-inline uint rc_cones_tile_candidates(uint j, __global const uint* tileOffsets,
-                                     __global const uint* tileCounts, __global const uint* tileList,
-                                     uint nPrims, __global const uint** ids) {
+static inline uint rc_cones_tile_candidates(uint j, __global const uint* tileOffsets,
+                                            __global const uint* tileCounts,
+                                            __global const uint* tileList, uint nPrims,
+                                            __global const uint** ids) {
     const uint t = j / RC_CONE_TILE_RAYS;
     if (tileOffsets[t] == RC_CONES_ALL) {
         *ids = 0;
@@ -319,11 +320,11 @@ inline uint rc_cones_tile_candidates(uint j, __global const uint* tileOffsets,
 
 /* Primitive `id` against the lanes `live` one lane at a time, through rc_intersect_primitive.
  * Returns the lanes it hit. */
-inline int16 rc_cones_primitive_lanes(const RcBvhPacket* p, int16 live, uint id,
-                                      __global const RcTriangle* triangles,
-                                      __global const RcSphere* spheres,
-                                      __global const RcQuadric* quadrics, uint nT, uint nS,
-                                      float16* bt, uint16* bp, float16* bu, float16* bv) {
+static inline int16 rc_cones_primitive_lanes(const RcBvhPacket* p, int16 live, uint id,
+                                             __global const RcTriangle* triangles,
+                                             __global const RcSphere* spheres,
+                                             __global const RcQuadric* quadrics, uint nT, uint nS,
+                                             float16* bt, uint16* bp, float16* bu, float16* bv) {
     float ox[RC_PACKET], oy[RC_PACKET], oz[RC_PACKET], dx[RC_PACKET], dy[RC_PACKET],
         dz[RC_PACKET], tn[RC_PACKET], tf[RC_PACKET], ts[RC_PACKET], us[RC_PACKET], vs[RC_PACKET];
     uint ps[RC_PACKET];
@@ -353,11 +354,12 @@ inline int16 rc_cones_primitive_lanes(const RcBvhPacket* p, int16 live, uint id,
  * triangles sixteen lanes at once with rc_intersect_triangle's operations (accel_common.cl),
  * other primitives lane by lane; with anyHit a lane stops at its first hit. Returns the
  * primitive tests per lane. */
-inline uint16 rc_cones_packet(const RcBvhPacket* p, int anyHit, uint count,
-                              __global const uint* ids, __global const RcTriangle* triangles,
-                              __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-                              uint nT, uint nS, float16* bt, uint16* bp, float16* bu, float16* bv,
-                              int16* blocked) {
+static inline uint16 rc_cones_packet(const RcBvhPacket* p, int anyHit, uint count,
+                                     __global const uint* ids, __global const RcTriangle* triangles,
+                                     __global const RcSphere* spheres,
+                                     __global const RcQuadric* quadrics, uint nT, uint nS,
+                                     float16* bt, uint16* bp, float16* bu, float16* bv,
+                                     int16* blocked) {
     int16 live = p->active;
     uint16 tests = (uint16)(0);
     for (uint k = 0; k < count && any(live); ++k) {
@@ -387,13 +389,14 @@ inline uint16 rc_cones_packet(const RcBvhPacket* p, int anyHit, uint count,
 /* The answers of the rays at sorted positions [first, first + 16) (all of one tile), whose
  * places in the batch are order[j]: nearest hits, or with anyHit blocked flags; counters[ray]
  * the primitive tests. */
-inline void rc_cones_answer(int anyHit, __global const RcRay* sorted, uint first, uint n,
-                            __global const uint* order, __global const uint* tileOffsets,
-                            __global const uint* tileCounts, __global const uint* tileList,
-                            __global const RcTriangle* triangles, __global const RcSphere* spheres,
-                            __global const RcQuadric* quadrics,
-                            __constant const RcRenderParams* params, __global RcHit* hits,
-                            __global uchar* blockedOut, __global uint* counters) {
+static inline void rc_cones_answer(int anyHit, __global const RcRay* sorted, uint first, uint n,
+                                   __global const uint* order, __global const uint* tileOffsets,
+                                   __global const uint* tileCounts, __global const uint* tileList,
+                                   __global const RcTriangle* triangles,
+                                   __global const RcSphere* spheres,
+                                   __global const RcQuadric* quadrics,
+                                   __constant const RcRenderParams* params, __global RcHit* hits,
+                                   __global uchar* blockedOut, __global uint* counters) {
     const uint nT = params->nTriangles, nS = params->nSpheres;
     const uint nPrims = nT + nS + params->nQuadrics;
     __global const uint* ids;

@@ -12,7 +12,7 @@
 
 #define RC_PI_F 3.14159265358979323846f
 
-inline uint rc_polar16_encode(float3 d) {
+static inline uint rc_polar16_encode(float3 d) {
     const float phi = atan2(d.y, d.x);
     const float theta = atan2(sqrt(d.x * d.x + d.y * d.y), d.z);
     const uint p = (uint)rint((phi + RC_PI_F) * (65535.0f / (2.0f * RC_PI_F)));
@@ -20,7 +20,7 @@ inline uint rc_polar16_encode(float3 d) {
     return (min(p, 65535u) << 16) | min(t, 65535u);
 }
 
-inline float3 rc_polar16_decode(uint packed) {
+static inline float3 rc_polar16_decode(uint packed) {
     const float phi = (float)(packed >> 16) * (2.0f * RC_PI_F / 65535.0f) - RC_PI_F;
     const float theta = (float)(packed & 0xFFFFu) * (RC_PI_F / 65535.0f);
     const float s = sin(theta);
@@ -28,7 +28,7 @@ inline float3 rc_polar16_decode(uint packed) {
 }
 
 /* The direction a ray actually carries. */
-inline float3 rc_encode_direction(float3 d) {
+static inline float3 rc_encode_direction(float3 d) {
 #ifdef RC_POLAR16
     return rc_polar16_decode(rc_polar16_encode(d));
 #else

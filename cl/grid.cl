@@ -24,11 +24,13 @@
 /* Walks the cells, unless the ray needs no walk (rc_ray_walks); with anyHit it returns at the
  * first hit. Returns the primitive tests done and adds the cells visited to *visits. boxLo.w:
  * the slack's absolute part; cellSize.xyz; res.xyz: cells along each axis. */
-inline uint rc_grid_trace(RcRay ray, int anyHit, __global const uint* cellStart,
-                          __global const uint* primIndex, float4 boxLo, float4 boxHi,
-                          float4 cellSize, uint4 res, __global const RcTriangle* triangles,
-                          __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-                          __constant const RcRenderParams* params, RcHit* best, uint* visits) {
+static inline uint rc_grid_trace(RcRay ray, int anyHit, __global const uint* cellStart,
+                                 __global const uint* primIndex, float4 boxLo, float4 boxHi,
+                                 float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+                                 __global const RcSphere* spheres,
+                                 __global const RcQuadric* quadrics,
+                                 __constant const RcRenderParams* params, RcHit* best,
+                                 uint* visits) {
     const float3 o = ray.origin.xyz, d = ray.direction.xyz;
     float3 inv;
     float t0, t1;
@@ -72,14 +74,14 @@ inline uint rc_grid_trace(RcRay ray, int anyHit, __global const uint* cellStart,
 }
 
 /* Component `axis` of a packet's float16 triple. */
-inline float16 rc_grid_lane_axis(float16 x, float16 y, float16 z, uint axis) {
+static inline float16 rc_grid_lane_axis(float16 x, float16 y, float16 z, uint axis) {
     return axis == 0 ? x : (axis == 1 ? y : z);
 }
 
 /* The cells [*c0, *c1] along one axis (origin lo, cell size, res cells) that hold the points
  * o + t d for t in [t0, t1] of the lanes `in`. */
-inline void rc_grid_lane_range(float16 o, float16 d, float16 t0, float16 t1, int16 in, float lo,
-                               float size, uint res, int* c0, int* c1) {
+static inline void rc_grid_lane_range(float16 o, float16 d, float16 t0, float16 t1, int16 in,
+                                      float lo, float size, uint res, int* c0, int* c1) {
     const float16 a = o + t0 * d, b = o + t1 * d;
     const float lowest = rc_hmin16(select((float16)(INFINITY), fmin(a, b), in));
     const float highest = rc_hmax16(select((float16)(-INFINITY), fmax(a, b), in));
@@ -89,8 +91,8 @@ inline void rc_grid_lane_range(float16 o, float16 d, float16 t0, float16 t1, int
 
 /* The lanes' parameter intervals [*t0, *t1] inside slices [s0, s1] along the slicing axis
  * (origin component ok, inverse direction ik), widened by the slack and clipped to [tn, tf]. */
-inline void rc_grid_slab(float lo, float size, int s0, int s1, float16 ok, float16 ik, float16 tn,
-                         float16 tf, float slackAbs, float16* t0, float16* t1) {
+static inline void rc_grid_slab(float lo, float size, int s0, int s1, float16 ok, float16 ik,
+                                float16 tn, float16 tf, float slackAbs, float16* t0, float16* t1) {
     const float16 ta = (lo + (float)s0 * size - ok) * ik;
     const float16 tb = (lo + (float)(s1 + 1) * size - ok) * ik;
     const float16 ea = fmin(ta, tb), eb = fmax(ta, tb);
@@ -101,8 +103,8 @@ inline void rc_grid_slab(float lo, float size, int s0, int s1, float16 ok, float
 /* Whether a macro cell of slab mk along axis k, rows [u0, u1] x [w0, w1] of cells (one more on
  * each side, against rounding) along axes u and w, holds a primitive. mres: macro cells an
  * axis, mres.w: cells a macro cell along each axis. */
-inline int rc_grid_macro_any(__global const uchar* macroOccupied, uint4 mres, uint k, uint u,
-                             uint w, int mk, int u0, int u1, int w0, int w1) {
+static inline int rc_grid_macro_any(__global const uchar* macroOccupied, uint4 mres, uint k, uint u,
+                                    uint w, int mk, int u0, int u1, int w0, int w1) {
     const uint m = mres.w;
     const uint r[3] = {mres.x, mres.y, mres.z};
     uint mc[3];
@@ -125,12 +127,11 @@ inline int rc_grid_macro_any(__global const uchar* macroOccupied, uint4 mres, ui
  * into the slice and its nearest hit (-inf once blocked) does not lie before it. The slices go
  * a slab of macro cells at a time: a slab whose macro cells under the lanes are all empty is
  * passed over whole. */
-inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit, __global const uint* cellStart,
-                                   __global const uint* primIndex,
-                                   __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
-                                   float4 cellSize, uint4 res, __global const RcTriangle* triangles,
-                                   float16* bt, uint16* bp, float16* bu, float16* bv,
-                                   int16* blocked, uint16* visits) {
+static inline uint16 rc_grid_trace_packet(
+    const RcBvhPacket* p, int anyHit, __global const uint* cellStart,
+    __global const uint* primIndex, __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
+    float4 cellSize, uint4 res, __global const RcTriangle* triangles, float16* bt, uint16* bp,
+    float16* bu, float16* bv, int16* blocked, uint16* visits) {
     const float slackAbs = boxLo.w;
     float16 tn, tf;
     rc_accel_clip16(p, boxLo, boxHi, &tn, &tf);
@@ -225,12 +226,12 @@ inline uint16 rc_grid_trace_packet(const RcBvhPacket* p, int anyHit, __global co
 
 /* The coherent-packet walk's answers for rays [first, first + 16): nearest hits, or blocked
  * flags when anyHit. */
-inline void rc_grid_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
-                           __global const uint* cellStart, __global const uint* primIndex,
-                           __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
-                           float4 cellSize, uint4 res, __global const RcTriangle* triangles,
-                           __global RcHit* hits, __global uchar* blockedOut,
-                           __global uint* counters) {
+static inline void rc_grid_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
+                                  __global const uint* cellStart, __global const uint* primIndex,
+                                  __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
+                                  float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+                                  __global RcHit* hits, __global uchar* blockedOut,
+                                  __global uint* counters) {
     float16 bt = p->tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
     uint16 bp = (uint16)(RC_NO_HIT), visits = (uint16)(0);
     int16 blocked = (int16)(0);
@@ -243,13 +244,14 @@ inline void rc_grid_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
 
 /* The answers of rays [first, first + 16): nearest hits, or with anyHit blocked flags, and
  * their counters. A coherent packet walks the grid once, other rays one by one. */
-inline void rc_grid_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
-                           __global const uint* cellStart, __global const uint* primIndex,
-                           __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
-                           float4 cellSize, uint4 res, __global const RcTriangle* triangles,
-                           __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-                           __constant const RcRenderParams* params, __global RcHit* hits,
-                           __global uchar* blockedOut, __global uint* counters) {
+static inline void rc_grid_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
+                                  __global const uint* cellStart, __global const uint* primIndex,
+                                  __global const uchar* macroOccupied, float4 boxLo, float4 boxHi,
+                                  float4 cellSize, uint4 res, __global const RcTriangle* triangles,
+                                  __global const RcSphere* spheres,
+                                  __global const RcQuadric* quadrics,
+                                  __constant const RcRenderParams* params, __global RcHit* hits,
+                                  __global uchar* blockedOut, __global uint* counters) {
     RcBvhPacket p;
     if (rc_accel_load_packet(rays, first, n, anyHit, boxLo, boxHi, params, &p)) {
         rc_grid_packet(&p, anyHit, first, n, cellStart, primIndex, macroOccupied, boxLo, boxHi,

@@ -18,8 +18,8 @@
 #include "patch.cl"
 
 /* Moeller & Trumbore 1997. u, v: barycentrics of vertices 1 and 2. */
-inline int rc_intersect_triangle(float3 o, float3 d, float tmin, float tmax, float3 p0, float3 p1,
-                                 float3 p2, float* t, float* u, float* v) {
+static inline int rc_intersect_triangle(float3 o, float3 d, float tmin, float tmax, float3 p0,
+                                        float3 p1, float3 p2, float* t, float* u, float* v) {
     const float3 e1 = p1 - p0;
     const float3 e2 = p2 - p0;
     const float3 pv = RC_CROSS3(d, e2);
@@ -39,8 +39,9 @@ inline int rc_intersect_triangle(float3 o, float3 d, float tmin, float tmax, flo
 /* Woop, Benthin & Wald 2013, "Watertight Ray/Triangle Intersection": the twin of
  * IntersectTriangleWatertight in geometry/intersect.h (edge functions in a ray-sheared frame,
  * recomputed in double where they round to zero and the device has fp64). */
-inline int rc_intersect_triangle_watertight(float3 o, float3 d, float tmin, float tmax, float3 p0,
-                                            float3 p1, float3 p2, float* t, float* u, float* v) {
+static inline int rc_intersect_triangle_watertight(float3 o, float3 d, float tmin, float tmax,
+                                                   float3 p0, float3 p1, float3 p2, float* t,
+                                                   float* u, float* v) {
     const float dd[3] = {d.x, d.y, d.z};
     int kz = 0;
     if (fabs(dd[1]) > fabs(dd[kz])) kz = 1;
@@ -90,8 +91,8 @@ inline int rc_intersect_triangle_watertight(float3 o, float3 d, float tmin, floa
 #endif
 
 /* Cancellation-free discriminant, Ray Tracing Gems ch. 7. */
-inline int rc_intersect_sphere(float3 o, float3 d, float tmin, float tmax, float4 centerRadius,
-                               float* t) {
+static inline int rc_intersect_sphere(float3 o, float3 d, float tmin, float tmax,
+                                      float4 centerRadius, float* t) {
     const float3 f = o - centerRadius.xyz;
     const float r = centerRadius.w;
     const float a = RC_DOT3(d, d);
@@ -119,25 +120,25 @@ inline int rc_intersect_sphere(float3 o, float3 d, float tmin, float tmax, float
     return 0;
 }
 
-inline float rc_quadric_value(float4 c0, float4 c1, float4 c2, float3 p) {
+static inline float rc_quadric_value(float4 c0, float4 c1, float4 c2, float3 p) {
     return c0.x * p.x * p.x + c0.y * p.y * p.y + c0.z * p.z * p.z + c0.w * p.x * p.y +
            c1.x * p.x * p.z + c1.y * p.y * p.z + c1.z * p.x + c1.w * p.y + c2.x * p.z + c2.y;
 }
 
-inline float3 rc_quadric_gradient(float4 c0, float4 c1, float4 c2, float3 p) {
+static inline float3 rc_quadric_gradient(float4 c0, float4 c1, float4 c2, float3 p) {
     return (float3)(2.0f * c0.x * p.x + c0.w * p.y + c1.x * p.z + c1.z,
                     2.0f * c0.y * p.y + c0.w * p.x + c1.y * p.z + c1.w,
                     2.0f * c0.z * p.z + c1.x * p.x + c1.y * p.y + c2.x);
 }
 
-inline int rc_inside_box(float3 p, float3 lo, float3 hi) {
+static inline int rc_inside_box(float3 p, float3 lo, float3 hi) {
     return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
 }
 
 /* The quadric along the ray, a t^2 + b t + c, with the stable root pair; the nearest root in
  * (tmin, tmax) whose point lies in the clip box wins. */
-inline int rc_intersect_quadric(float3 o, float3 d, float tmin, float tmax,
-                                __global const RcQuadric* q, float* t) {
+static inline int rc_intersect_quadric(float3 o, float3 d, float tmin, float tmax,
+                                       __global const RcQuadric* q, float* t) {
     const float4 c0 = q->c0, c1 = q->c1, c2 = q->c2;
     const float a = c0.x * d.x * d.x + c0.y * d.y * d.y + c0.z * d.z * d.z + c0.w * d.x * d.y +
                     c1.x * d.x * d.z + c1.y * d.y * d.z;
@@ -178,19 +179,19 @@ inline int rc_intersect_quadric(float3 o, float3 d, float tmin, float tmax,
 
 /* Waechter & Binder, Ray Tracing Gems ch. 6: move p off the surface by 256 ulps along n (unit,
  * on the side the new ray leaves towards), or by an absolute 2^-16 near the origin. */
-inline float rc_offset_component(float p, float n) {
+static inline float rc_offset_component(float p, float n) {
     const int ulps = convert_int_rtz(256.0f * n);
     const float stepped = as_float(as_int(p) + (p < 0.0f ? -ulps : ulps));
     return fabs(p) < (1.0f / 32.0f) ? p + (1.0f / 65536.0f) * n : stepped;
 }
 
-inline float3 rc_offset_ray_origin(float3 p, float3 n) {
+static inline float3 rc_offset_ray_origin(float3 p, float3 n) {
     return (float3)(rc_offset_component(p.x, n.x), rc_offset_component(p.y, n.y),
                     rc_offset_component(p.z, n.z));
 }
 
 /* No hit yet on the segment (tmin, tmax): the start of every nearest-hit and any-hit search. */
-inline RcHit rc_no_hit(float tmax) {
+static inline RcHit rc_no_hit(float tmax) {
     RcHit h;
     h.t = tmax;
     h.prim = RC_NO_HIT;
@@ -200,11 +201,11 @@ inline RcHit rc_no_hit(float tmax) {
 
 /* Nearest hit of one ray over primitive `id`, with the lower-id tie-break. Returns 1 when it
  * improved *best. */
-inline int rc_intersect_primitive(uint id, float3 o, float3 d, float tmin, float tmax,
-                                  __global const RcTriangle* triangles,
-                                  __global const RcSphere* spheres,
-                                  __global const RcQuadric* quadrics, uint nTriangles,
-                                  uint nSpheres, RcHit* best) {
+static inline int rc_intersect_primitive(uint id, float3 o, float3 d, float tmin, float tmax,
+                                         __global const RcTriangle* triangles,
+                                         __global const RcSphere* spheres,
+                                         __global const RcQuadric* quadrics, uint nTriangles,
+                                         uint nSpheres, RcHit* best) {
     /* A hit at exactly best->t may still win on its lower id. */
     const float bound = fmin(tmax, nextafter(best->t, INFINITY));
     float t = 0.0f, u = 0.0f, v = 0.0f;

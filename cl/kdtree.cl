@@ -29,11 +29,11 @@
 
 /* Walks the tree, unless the ray needs no walk (rc_ray_walks); with anyHit it returns at the
  * first hit. Returns the primitive tests done and adds the nodes visited to *visits. */
-inline uint rc_kd_trace(RcRay ray, int anyHit, __global const RcKdNode* nodes,
-                        __global const uint* prims, float4 boxLo, float4 boxHi,
-                        __global const RcTriangle* triangles, __global const RcSphere* spheres,
-                        __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
-                        RcHit* best, uint* visits) {
+static inline uint rc_kd_trace(RcRay ray, int anyHit, __global const RcKdNode* nodes,
+                               __global const uint* prims, float4 boxLo, float4 boxHi,
+                               __global const RcTriangle* triangles,
+                               __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+                               __constant const RcRenderParams* params, RcHit* best, uint* visits) {
     const float3 o = ray.origin.xyz, d = ray.direction.xyz;
     float3 inv;
     float tn, tf;
@@ -99,10 +99,11 @@ inline uint rc_kd_trace(RcRay ray, int anyHit, __global const RcKdNode* nodes,
  * the primitive tests (returned) and the nodes visited (*visits). A lane is live in a cell while
  * its interval there is not empty and does not begin beyond its reach (its nearest hit, or -inf
  * once blocked). */
-inline uint16 rc_kd_trace_packet(const RcBvhPacket* p, int anyHit, __global const RcKdNode* nodes,
-                                 __global const uint* prims, __global const RcTriangle* triangles,
-                                 float4 boxLo, float4 boxHi, float16* bt, uint16* bp, float16* bu,
-                                 float16* bv, int16* blocked, uint16* visits) {
+static inline uint16 rc_kd_trace_packet(const RcBvhPacket* p, int anyHit,
+                                        __global const RcKdNode* nodes, __global const uint* prims,
+                                        __global const RcTriangle* triangles, float4 boxLo,
+                                        float4 boxHi, float16* bt, uint16* bp, float16* bu,
+                                        float16* bv, int16* blocked, uint16* visits) {
     const float slackAbs = boxLo.w;
     float16 tn, tf;
     rc_accel_clip16(p, boxLo, boxHi, &tn, &tf);
@@ -180,11 +181,11 @@ inline uint16 rc_kd_trace_packet(const RcBvhPacket* p, int anyHit, __global cons
 
 /* The coherent-packet walk's answers for rays [first, first + 16): nearest hits, or blocked
  * flags when anyHit. */
-inline void rc_kd_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
-                         __global const RcKdNode* nodes, __global const uint* prims,
-                         __global const RcTriangle* triangles, float4 boxLo, float4 boxHi,
-                         __global RcHit* hits, __global uchar* blockedOut,
-                         __global uint* counters) {
+static inline void rc_kd_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
+                                __global const RcKdNode* nodes, __global const uint* prims,
+                                __global const RcTriangle* triangles, float4 boxLo, float4 boxHi,
+                                __global RcHit* hits, __global uchar* blockedOut,
+                                __global uint* counters) {
     float16 bt = p->tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
     uint16 bp = (uint16)(RC_NO_HIT), visits = (uint16)(0);
     int16 blocked = (int16)(0);
@@ -196,12 +197,13 @@ inline void rc_kd_packet(const RcBvhPacket* p, int anyHit, uint first, uint n,
 
 /* The answers of rays [first, first + 16): nearest hits, or with anyHit blocked flags, and
  * their counters. A coherent packet walks the tree once, other rays one by one. */
-inline void rc_kd_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
-                         __global const RcKdNode* nodes, __global const uint* prims, float4 boxLo,
-                         float4 boxHi, __global const RcTriangle* triangles,
-                         __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-                         __constant const RcRenderParams* params, __global RcHit* hits,
-                         __global uchar* blockedOut, __global uint* counters) {
+static inline void rc_kd_answer(int anyHit, __global const RcRay* rays, uint first, uint n,
+                                __global const RcKdNode* nodes, __global const uint* prims,
+                                float4 boxLo, float4 boxHi, __global const RcTriangle* triangles,
+                                __global const RcSphere* spheres,
+                                __global const RcQuadric* quadrics,
+                                __constant const RcRenderParams* params, __global RcHit* hits,
+                                __global uchar* blockedOut, __global uint* counters) {
     RcBvhPacket p;
     if (rc_accel_load_packet(rays, first, n, anyHit, boxLo, boxHi, params, &p)) {
         rc_kd_packet(&p, anyHit, first, n, nodes, prims, triangles, boxLo, boxHi, hits, blockedOut,

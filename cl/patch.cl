@@ -21,7 +21,7 @@
 #define RC_PATCH_EPS (1.0f / 262144.0f)
 
 /* The two planes through the ray (unit normals n1, n2, both orthogonal to d). */
-inline void rc_patch_planes(float3 d, float3* n1, float3* n2) {
+static inline void rc_patch_planes(float3 d, float3* n1, float3* n2) {
     float3 n = fabs(d.x) > fabs(d.y) && fabs(d.x) > fabs(d.z) ? (float3)(d.y, -d.x, 0.0f)
                                                               : (float3)(0.0f, d.z, -d.y);
     n = n / sqrt(RC_DOT3(n, n));
@@ -45,11 +45,11 @@ inline void rc_patch_planes(float3 d, float3* n1, float3* n2) {
         db[3] = 3.0f * s * s;                     \
     }
 
-RC_DEFINE_BERNSTEIN3(inline, rc_bernstein3, float)
+RC_DEFINE_BERNSTEIN3(static inline, rc_bernstein3, float)
 
 /* Value and derivatives of one channel c[16] at the weights (bu, dbu) x (bv, dbv). */
-inline float3 rc_patch_channel(const float* c, const float* bu, const float* dbu, const float* bv,
-                               const float* dbv) {
+static inline float3 rc_patch_channel(const float* c, const float* bu, const float* dbu,
+                                      const float* bv, const float* dbv) {
     float x = 0.0f, xs = 0.0f, xt = 0.0f;
     for (int i = 0; i < 4; ++i) {
         const float row =
@@ -79,9 +79,9 @@ inline float3 rc_patch_channel(const float* c, const float* bu, const float* dbu
 
 /* One Newton search on the projected channels from (*s, *t): how it ended (RC_NEWTON_*, never
  * culled) after *steps updates; (*s, *t) and the weights are those of the last point evaluated. */
-inline int rc_patch_newton_search(const float* a, const float* b, const float* w, float eps,
-                                  float* sIo, float* tIo, float* bu, float* dbu, float* bv,
-                                  float* dbv, int* steps) {
+static inline int rc_patch_newton_search(const float* a, const float* b, const float* w, float eps,
+                                         float* sIo, float* tIo, float* bu, float* dbu, float* bv,
+                                         float* dbv, int* steps) {
     float s = *sIo, t = *tIo, prev = INFINITY;
     int outcome;
     for (int it = 0;; ++it) {
@@ -137,12 +137,12 @@ inline int rc_patch_newton_search(const float* a, const float* b, const float* w
         q[3] = upper ? c3 : m;                                                            \
     }
 
-RC_DEFINE_HALF_CURVE(inline, rc_patch_half_curve, float)
+RC_DEFINE_HALF_CURVE(static inline, rc_patch_half_curve, float)
 
 /* Whether channel x of the box's quarter (qu, qv) (1: the upper half of u, of v) takes both signs
  * on the quarter's control points, zero counting as either: where it does not for a or b, the ray
  * misses the quarter's hull and a restart there is spared. */
-inline int rc_patch_quarter_straddles(const float* x, int qu, int qv) {
+static inline int rc_patch_quarter_straddles(const float* x, int qu, int qv) {
     float h[16];
     for (int j = 0; j < 4; ++j) {
         float q[4];
@@ -160,10 +160,10 @@ inline int rc_patch_quarter_straddles(const float* x, int qu, int qv) {
 
 /* rc_intersect_patch_box, also telling how the search from the box's centre ended and after how
  * many Newton steps, and the steps of the restarts in all (-1: none ran). */
-inline int rc_patch_box_newton(float3 o, float3 d, float tmin, float tmax,
-                               __global const float4* analytic, __global const RcPatchBox* box,
-                               float* tOut, float* uOut, float* vOut, int* outcome, int* steps,
-                               int* restartSteps) {
+static inline int rc_patch_box_newton(float3 o, float3 d, float tmin, float tmax,
+                                      __global const float4* analytic,
+                                      __global const RcPatchBox* box, float* tOut, float* uOut,
+                                      float* vOut, int* outcome, int* steps, int* restartSteps) {
     float3 n1, n2;
     rc_patch_planes(d, &n1, &n2);
     __global const float4* pts = analytic + box->points;
@@ -229,9 +229,10 @@ inline int rc_patch_box_newton(float3 o, float3 d, float tmin, float tmax,
 }
 
 /* The nearest hit of the ray with the patch box in (tmin, tmax): t and the local (u, v). */
-inline int rc_intersect_patch_box(float3 o, float3 d, float tmin, float tmax,
-                                  __global const float4* analytic, __global const RcPatchBox* box,
-                                  float* tOut, float* uOut, float* vOut) {
+static inline int rc_intersect_patch_box(float3 o, float3 d, float tmin, float tmax,
+                                         __global const float4* analytic,
+                                         __global const RcPatchBox* box, float* tOut, float* uOut,
+                                         float* vOut) {
     int outcome, steps, restartSteps;
     return rc_patch_box_newton(o, d, tmin, tmax, analytic, box, tOut, uOut, vOut, &outcome,
                                &steps, &restartSteps);
@@ -241,7 +242,8 @@ inline int rc_intersect_patch_box(float3 o, float3 d, float tmin, float tmax,
  * derivatives are parallel or vanish (a collapsed edge, like the teapot's lid and bottom, whose
  * edge rows meet in one point) the normal is taken a little inside, where it tends to the
  * limit normal. */
-inline float3 rc_patch_normal_at(__global const float4* pts, float s, float t, float3* point) {
+static inline float3 rc_patch_normal_at(__global const float4* pts, float s, float t,
+                                        float3* point) {
     for (int attempt = 0; attempt < 3; ++attempt) {
         float bu[4], dbu[4], bv[4], dbv[4];
         rc_bernstein3(s, bu, dbu);

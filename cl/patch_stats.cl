@@ -11,8 +11,8 @@
  * tests that restarted from the quarters, their steps and their hits. */
 #define RC_NEWTON_COUNTERS 11
 
-inline int rc_segment_meets_box(float3 o, float3 inv, float tmin, float tmax, float3 lo,
-                                float3 hi) {
+static inline int rc_segment_meets_box(float3 o, float3 inv, float tmin, float tmax, float3 lo,
+                                       float3 hi) {
     const float3 a = (lo - o) * inv, b = (hi - o) * inv;
     const float3 near = fmin(a, b), far = fmax(a, b);
     const float t0 = fmax(fmax(near.x, near.y), fmax(near.z, tmin));

@@ -11,7 +11,7 @@
 
 /* The shading helpers are forced inline: PoCL left them as calls, and each work-group loop then
  * ran them one work-item at a time instead of across the work-group's lanes. */
-#define RC_SHADE_INLINE __attribute__((always_inline)) inline
+#define RC_SHADE_INLINE static __attribute__((always_inline)) inline
 
 typedef struct RcSurface {
     float3 p;      /* hit point */
@@ -83,7 +83,7 @@ RC_SHADE_INLINE RcSurface rc_surface(float3 o, float3 d, RcHit hit, __global con
 
 /* Unpolarised dielectric Fresnel reflectance; eta = n_incident / n_transmitted. 1 on total
  * internal reflection. */
-inline float rc_fresnel_dielectric(float cosi, float eta) {
+static inline float rc_fresnel_dielectric(float cosi, float eta) {
     const float sin2t = eta * eta * (1.0f - cosi * cosi);
     if (sin2t >= 1.0f) return 1.0f;
     const float cost = sqrt(1.0f - sin2t);
@@ -92,7 +92,7 @@ inline float rc_fresnel_dielectric(float cosi, float eta) {
     return 0.5f * (rs * rs + rp * rp);
 }
 
-inline int rc_worth_spawning(float3 w, uint depth, __constant const RcRenderParams* params) {
+static inline int rc_worth_spawning(float3 w, uint depth, __constant const RcRenderParams* params) {
     return depth <= params->maxDepth && fmax(w.x, fmax(w.y, w.z)) >= params->minWeight;
 }
 

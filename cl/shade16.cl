@@ -54,7 +54,7 @@ RC_SHADE_INLINE int16 rc_rescaled16(float16 dd) { return !(dd >= FLT_MIN && dd <
 /* The scalar fallbacks below are not inlined: PoCL keeps a kernel's private arrays in
  * per-work-item context arrays, a called function's on its own stack. Vectors go in and out by
  * value; a struct goes through the caller's memory, which becomes a context array. */
-#define RC_SCALAR_FALLBACK __attribute__((noinline))
+#define RC_SCALAR_FALLBACK static __attribute__((noinline))
 
 /* r with the lanes `odd` replaced by the scalar length of (x, y, z) (axis < 0) or by component
  * `axis` of its scalar normalize. */

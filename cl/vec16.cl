@@ -4,7 +4,7 @@
 #define RC_VEC16_CL
 
 /* Forced inline: a call per vector operation would pass its float16s through memory. */
-#define RC_V16_INLINE __attribute__((always_inline)) inline
+#define RC_V16_INLINE static __attribute__((always_inline)) inline
 
 /* A 3-vector a lane. */
 typedef struct RcVec16 {
