@@ -28,10 +28,6 @@ constexpr int kMinCellBits = 2, kMaxCellBits = 8;  // 4 to 256 cells a side (8-b
 // share of a generation's rays again for a few percent fewer tests.
 constexpr size_t kRefineCandidates = 256;
 
-// A cell's bounds grow by this on each side: (u + 1) rounds by at most 2^-24 for |u| <= 1, so u
-// lies at most that far outside the cell its rounded value picks.
-constexpr float kCellPad = 1.0f / float(1 << 20);
-
 // The low 8 bits of x on the even bits of 16 (a cell's u goes to the odd ones).
 constexpr uint32_t Spread(uint32_t x) {
     x = (x | (x << 4)) & 0x0F0Fu;
@@ -270,6 +266,7 @@ bool LightCellSubdivision::Classify(const Generation& gen, LeafBatch& out) {
     core_.counters.fromEnd += fromEnd;
     core_.counters.rayMoves = nLeafRays;
     core_.counters.cellsPerSide = 1u << g.bits;
+    cones_.Use(g.ends);
     BuildRoots(nLeafRays, out);
     rayOut_ = nullptr;
     return true;
@@ -399,7 +396,8 @@ void LightCellSubdivision::BuildRoots(uint32_t nLeafRays, LeafBatch& out) {
 
 size_t LightCellSubdivision::ScratchBytes() const {
     const CellGrid& g = cells_;
-    size_t bytes = (g.key.capacity() + g.begin.capacity()) * 4 + g.box.capacity() * sizeof(CellBox);
+    size_t bytes = (g.key.capacity() + g.begin.capacity()) * 4 +
+                   g.box.capacity() * sizeof(CellBox) + cones_.Bytes();
     for (size_t p = 0; p < g.count.size(); ++p) {
         bytes += (g.count[p].capacity() + g.end[p].capacity()) * 4;
     }
@@ -469,6 +467,13 @@ Bounds6 LightCellSubdivision::CellBounds(const CellAt& at) const {
     return t;
 }
 
+ListView LightCellSubdivision::Source(Worker& w, const CellAt& at, const Bounds6& tight,
+                                      const ListView& list) {
+    if (at.depth > LightCones::kDepth) return list;
+    const ListView cone = cones_.List(at.root, at.prefix, at.depth, w.counters.boxTests);
+    return CountUpTo(cone, tight.hi[kDims]) < CountUpTo(list, tight.hi[kDims]) ? cone : list;
+}
+
 void LightCellSubdivision::SpawnCells(const CellAt& at, const ListView& list, bool reuseList) {
     const uint32_t begin = cells_.rootBegin[at.root] +
                            cells_.begin[size_t(at.root) * ((size_t(1) << (2 * cells_.bits)) + 1) +
@@ -502,8 +507,9 @@ void LightCellSubdivision::ProcessCells(Worker& w, CellAt at, const ListView& li
     const int face = int(at.root % kFaceCount);
     const Bounds6 tight = CellBounds(at);
     const bool spawns = nRays > core_.pool.Cut();
-    const bool filtered = !reuseList && !KeepsMost(tight, list);
-    ListView own = filtered ? w.Filter(tight, list, spawns) : CutAtEnd(tight, list);
+    const ListView from = reuseList ? list : Source(w, at, tight, list);
+    const bool filtered = !reuseList && !KeepsMost(tight, from);
+    ListView own = filtered ? w.Filter(tight, from, spawns) : CutAtEnd(tight, from);
     Node node;
     node.box = tight.ToBox5();
     node.face = uint8_t(face);
@@ -526,7 +532,7 @@ void LightCellSubdivision::ProcessCells(Worker& w, CellAt at, const ListView& li
         if (!spawns) ProcessCells(w, right, own, reuse);
         return;
     }
-    if (!filtered) own = w.Filter(tight, list, false);
+    if (!filtered) own = w.Filter(tight, from, false);
     RcLeaf leaf{};
     leaf.rayBegin = begin;
     leaf.rayCount = nRays;
