@@ -215,6 +215,35 @@ RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f&
     done = i;
     return true;
 }
+
+// SortRays' loop over rays [i, end) of a piece: each run of equal keys within a block of 16 takes
+// its positions with one update of its cell's next position and one store of its ids, which are
+// consecutive (neighbouring rays often share a cell). Returns the rays done.
+RC_AVX512 uint32_t SortBlocks16(const uint32_t* key, uint32_t i, uint32_t end, int bits2,
+                                const uint32_t* rootBegin, uint32_t* next, rc_uint* to) {
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    const __m512i before = _mm512_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14);
+    for (; i + 16 <= end; i += 16) {
+        const __m512i k = _mm512_loadu_si512(key + i);
+        const __m512i previous = _mm512_maskz_permutexvar_epi32(0xFFFF, before, k);
+        const unsigned starts = unsigned(_mm512_cmpneq_epi32_mask(k, previous)) | 1u;
+        const __m512i ids = _mm512_add_epi32(lane, _mm512_set1_epi32(int(i)));
+        for (unsigned rest = starts; rest;) {
+            const int first = std::countr_zero(rest);
+            rest &= rest - 1;
+            const int len = (rest ? std::countr_zero(rest) : 16) - first;
+            const uint32_t cell = key[i + uint32_t(first)];
+            if (cell == kNoNode) continue;
+            uint32_t& at = next[cell];
+            const uint32_t pos = rootBegin[cell >> bits2] + at;
+            at += uint32_t(len);
+            // Lanes first .. first + len - 1 to positions pos ..: the ids moved down to lane 0.
+            const __m512i run = _mm512_maskz_add_epi32(0xFFFF, ids, _mm512_set1_epi32(first));
+            _mm512_mask_storeu_epi32(to + pos, __mmask16((1u << len) - 1u), run);
+        }
+    }
+    return i;
+}
 #endif
 
 const CellBox kEmptyCell{255, 0, 255, 0, -kInf};
@@ -362,7 +391,11 @@ void LightCellSubdivision::SortRays(const Pieces& pieces) {
             const uint32_t* rootBegin = g.rootBegin.data();
             rc_uint* to = rayOut_;
             const uint32_t end = uint32_t(std::min(size_t(n), (p + 1) * pieces.step));
-            for (uint32_t i = uint32_t(p * pieces.step); i < end; ++i) {
+            uint32_t i = uint32_t(p * pieces.step);
+#if defined(RC_AVX512_PATHS)
+            if (UseAvx512()) i = SortBlocks16(key, i, end, bits2, rootBegin, next, to);
+#endif
+            for (; i < end; ++i) {
                 const uint32_t k = key[i];
                 if (k != kNoNode) to[rootBegin[k >> bits2] + next[k]++] = i;
             }
