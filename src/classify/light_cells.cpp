@@ -28,10 +28,6 @@ constexpr int kMinCellBits = 2, kMaxCellBits = 8;  // 4 to 256 cells a side (8-b
 // share of a generation's rays again for a few percent fewer tests.
 constexpr size_t kRefineCandidates = 256;
 
-// A cell's bounds grow by this on each side: (u + 1) rounds by at most 2^-24 for |u| <= 1, so u
-// lies at most that far outside the cell its rounded value picks.
-constexpr float kCellPad = 1.0f / float(1 << 20);
-
 // The low 8 bits of x on the even bits of 16 (a cell's u goes to the odd ones).
 constexpr uint32_t Spread(uint32_t x) {
     x = (x | (x << 4)) & 0x0F0Fu;
@@ -219,6 +215,35 @@ RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f&
     done = i;
     return true;
 }
+
+// SortRays' loop over rays [i, end) of a piece: each run of equal keys within a block of 16 takes
+// its positions with one update of its cell's next position and one store of its ids, which are
+// consecutive (neighbouring rays often share a cell). Returns the rays done.
+RC_AVX512 uint32_t SortBlocks16(const uint32_t* key, uint32_t i, uint32_t end, int bits2,
+                                const uint32_t* rootBegin, uint32_t* next, rc_uint* to) {
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    const __m512i before = _mm512_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14);
+    for (; i + 16 <= end; i += 16) {
+        const __m512i k = _mm512_loadu_si512(key + i);
+        const __m512i previous = _mm512_maskz_permutexvar_epi32(0xFFFF, before, k);
+        const unsigned starts = unsigned(_mm512_cmpneq_epi32_mask(k, previous)) | 1u;
+        const __m512i ids = _mm512_add_epi32(lane, _mm512_set1_epi32(int(i)));
+        for (unsigned rest = starts; rest;) {
+            const int first = std::countr_zero(rest);
+            rest &= rest - 1;
+            const int len = (rest ? std::countr_zero(rest) : 16) - first;
+            const uint32_t cell = key[i + uint32_t(first)];
+            if (cell == kNoNode) continue;
+            uint32_t& at = next[cell];
+            const uint32_t pos = rootBegin[cell >> bits2] + at;
+            at += uint32_t(len);
+            // Lanes first .. first + len - 1 to positions pos ..: the ids moved down to lane 0.
+            const __m512i run = _mm512_maskz_add_epi32(0xFFFF, ids, _mm512_set1_epi32(first));
+            _mm512_mask_storeu_epi32(to + pos, __mmask16((1u << len) - 1u), run);
+        }
+    }
+    return i;
+}
 #endif
 
 const CellBox kEmptyCell{255, 0, 255, 0, -kInf};
@@ -270,6 +295,7 @@ bool LightCellSubdivision::Classify(const Generation& gen, LeafBatch& out) {
     core_.counters.fromEnd += fromEnd;
     core_.counters.rayMoves = nLeafRays;
     core_.counters.cellsPerSide = 1u << g.bits;
+    cones_.Use(g.ends);
     BuildRoots(nLeafRays, out);
     rayOut_ = nullptr;
     return true;
@@ -365,7 +391,11 @@ void LightCellSubdivision::SortRays(const Pieces& pieces) {
             const uint32_t* rootBegin = g.rootBegin.data();
             rc_uint* to = rayOut_;
             const uint32_t end = uint32_t(std::min(size_t(n), (p + 1) * pieces.step));
-            for (uint32_t i = uint32_t(p * pieces.step); i < end; ++i) {
+            uint32_t i = uint32_t(p * pieces.step);
+#if defined(RC_AVX512_PATHS)
+            if (UseAvx512()) i = SortBlocks16(key, i, end, bits2, rootBegin, next, to);
+#endif
+            for (; i < end; ++i) {
                 const uint32_t k = key[i];
                 if (k != kNoNode) to[rootBegin[k >> bits2] + next[k]++] = i;
             }
@@ -399,7 +429,8 @@ void LightCellSubdivision::BuildRoots(uint32_t nLeafRays, LeafBatch& out) {
 
 size_t LightCellSubdivision::ScratchBytes() const {
     const CellGrid& g = cells_;
-    size_t bytes = (g.key.capacity() + g.begin.capacity()) * 4 + g.box.capacity() * sizeof(CellBox);
+    size_t bytes = (g.key.capacity() + g.begin.capacity()) * 4 +
+                   g.box.capacity() * sizeof(CellBox) + cones_.Bytes();
     for (size_t p = 0; p < g.count.size(); ++p) {
         bytes += (g.count[p].capacity() + g.end[p].capacity()) * 4;
     }
@@ -469,6 +500,13 @@ Bounds6 LightCellSubdivision::CellBounds(const CellAt& at) const {
     return t;
 }
 
+ListView LightCellSubdivision::Source(Worker& w, const CellAt& at, const Bounds6& tight,
+                                      const ListView& list) {
+    if (at.depth > LightCones::kDepth) return list;
+    const ListView cone = cones_.List(at.root, at.prefix, at.depth, w.counters.boxTests);
+    return CountUpTo(cone, tight.hi[kDims]) < CountUpTo(list, tight.hi[kDims]) ? cone : list;
+}
+
 void LightCellSubdivision::SpawnCells(const CellAt& at, const ListView& list, bool reuseList) {
     const uint32_t begin = cells_.rootBegin[at.root] +
                            cells_.begin[size_t(at.root) * ((size_t(1) << (2 * cells_.bits)) + 1) +
@@ -502,8 +540,9 @@ void LightCellSubdivision::ProcessCells(Worker& w, CellAt at, const ListView& li
     const int face = int(at.root % kFaceCount);
     const Bounds6 tight = CellBounds(at);
     const bool spawns = nRays > core_.pool.Cut();
-    const bool filtered = !reuseList && !KeepsMost(tight, list);
-    ListView own = filtered ? w.Filter(tight, list, spawns) : CutAtEnd(tight, list);
+    const ListView from = reuseList ? list : Source(w, at, tight, list);
+    const bool filtered = !reuseList && !KeepsMost(tight, from);
+    ListView own = filtered ? w.Filter(tight, from, spawns) : CutAtEnd(tight, from);
     Node node;
     node.box = tight.ToBox5();
     node.face = uint8_t(face);
@@ -526,7 +565,7 @@ void LightCellSubdivision::ProcessCells(Worker& w, CellAt at, const ListView& li
         if (!spawns) ProcessCells(w, right, own, reuse);
         return;
     }
-    if (!filtered) own = w.Filter(tight, list, false);
+    if (!filtered) own = w.Filter(tight, from, false);
     RcLeaf leaf{};
     leaf.rayBegin = begin;
     leaf.rayCount = nRays;

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core.h"
+#include "light_cones.h"
 
 namespace rayclass::classify {
 
@@ -37,7 +38,7 @@ struct KeyOut {
 
 class LightCellSubdivision {
   public:
-    explicit LightCellSubdivision(Core& core) : core_(core) {}
+    explicit LightCellSubdivision(Core& core) : core_(core), cones_(core) {}
 
     // Classifies `gen` into `out` when it is one array of any-hit rays that end at common points
     // (or miss); false, with `out` untouched, otherwise.
@@ -98,6 +99,9 @@ class LightCellSubdivision {
     void ProcessCells(Worker& w, CellAt at, const ListView& list, bool reuseList);
     void SpawnCells(const CellAt& at, const ListView& list, bool reuseList);
     Bounds6 CellBounds(const CellAt& at) const;
+    // What node `at` filters its list from: `list`, its parent's, or its cone's list when that
+    // is shorter up to the node's end.
+    ListView Source(Worker& w, const CellAt& at, const Bounds6& tight, const ListView& list);
     // A single cell whose rays the cost function splits further: its rays, read again, are
     // split ray by ray (midpoints of their tight (u, v) bounds) below the grid.
     void RefineCell(Worker& w, uint32_t root, uint32_t begin, uint32_t n, int depth,
@@ -109,6 +113,7 @@ class LightCellSubdivision {
 
     Core& core_;
     CellGrid cells_;
+    LightCones cones_;
     rc_uint* rayOut_ = nullptr;  // the output's rayIndex, during Classify
     std::vector<std::vector<CellRay>>
         refine_;  // per worker: the rays of the cell RefineCell splits

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <vector>
 
 #include "classify_support.h"
@@ -153,6 +154,40 @@ TEST(LightCells, TestsStayCloseToTheGeneralPath) {
         tests[cells == 0 ? 0 : 1] = QueryHost(s, b, rays, hits, true);
     }
     EXPECT_LT(double(tests[1]), 1.3 * double(tests[0])) << tests[0] << " " << tests[1];
+}
+
+// The upper nodes' cone lists are kept from one generation to the next (light_cones.h): a later
+// generation to the same light, whose common end lies a little elsewhere, tests fewer boxes than
+// a new hierarchy does, and every generation answers as brute force, whichever lights come and
+// go.
+TEST(LightCells, LaterGenerationsReuseTheConeListsAndStayExact) {
+    const scene::Scene s = RandomScene(93, 1000, 4, 2);
+    const Params params = CellParams(s, -1);
+    // Within reach of the first generation's cones.
+    const glm::vec3 moved = kLights[0] + glm::vec3(0.1f * params.padding);
+    Hierarchy h(s, params);
+    for (uint32_t g = 0; g < 2; ++g) {
+        const std::vector<Ray> rays = ShadowSlots(s, {g == 0 ? kLights[0] : moved}, 94 + g, 2000);
+        h.Reset();
+        const LeafBatch b = h.Classify(rays, RayUse::kAnyHit);
+        ASSERT_GT(h.Counters().cellsPerSide, 0u);
+        EXPECT_EQ(Blocked(s, b, rays), BlockedBruteForce(s, rays)) << g;
+    }
+    Hierarchy fresh(s, params);
+    fresh.Classify(ShadowSlots(s, {moved}, 95, 2000), RayUse::kAnyHit);
+    EXPECT_LT(h.Counters().boxTests, fresh.Counters().boxTests);
+    std::mt19937 rng(96);
+    std::uniform_real_distribution<float> pos(-0.8f, 0.8f);
+    for (int g = 0; g < 4; ++g) {
+        std::vector<glm::vec3> lights(3);
+        for (glm::vec3& l : lights) l = {pos(rng), pos(rng), pos(rng)};
+        if (g % 2 == 1) lights[1] = kLights[0];
+        const std::vector<Ray> rays = ShadowSlots(s, lights, 97 + uint32_t(g), 400);
+        h.Reset();
+        const LeafBatch b = h.Classify(rays, RayUse::kAnyHit);
+        ASSERT_GT(h.Counters().cellsPerSide, 0u);
+        EXPECT_EQ(Blocked(s, b, rays), BlockedBruteForce(s, rays)) << g;
+    }
 }
 
 TEST(LightCells, OtherGenerationsTakeTheGeneralPath) {
