@@ -464,6 +464,53 @@ RC_SHADE_INLINE int16 rc_packet_quadric(const RcLanes16* L, __global const RcQua
 
 #include "patch_packet.cl"
 
+/* The nearest hit of each lane of L over `leaf`'s candidates, into best*; returns the
+ * candidates tested. `trianglesOnly` is a constant at both call sites: the loop of a scene of
+ * triangles alone then holds no sphere, quadric or patch set-up, which the compiler otherwise
+ * hoists out of the loop, per packet, and whose values crowd the loop's registers. */
+RC_SHADE_INLINE uint rc_fragment_nearest(const RcLanes16* L, RcLeaf leaf,
+                                         __global const RcCandidate* candidates,
+                                         __global const RcTriangle* triangles,
+                                         __global const RcSphere* spheres,
+                                         __global const RcQuadric* quadrics, uint nT, uint nS,
+                                         const bool trianglesOnly, float16* bestT,
+                                         float16* bestU, float16* bestV, uint16* bestPrim) {
+    uint c = 0;
+    for (; c < leaf.candCount; ++c) {
+        const RcCandidate cand = candidates[leaf.candBegin + c];
+        /* Every lane done: its hit is strictly nearer than this candidate's box. */
+        const int16 done =
+            (*bestPrim != (uint16)(RC_NO_HIT)) & (L->x + *bestT * L->speed < cand.nearX);
+        if (all(done)) break;
+        const uint prim = cand.prim;
+        float16 t, u = 0.0f, v = 0.0f;
+        int16 inside;
+        if (trianglesOnly || prim < nT) {
+            inside = rc_packet_triangle(L, triangles[prim], &t, &u, &v);
+        } else {
+            /* rc_intersect_primitive's bound: a hit at exactly bestT may still win on its id. */
+            const float16 bound = fmin(L->tmax, nextafter(*bestT, (float16)(INFINITY)));
+            if (prim < nT + nS) {
+                inside = rc_packet_sphere(L, spheres[prim - nT].centerRadius, bound, &t);
+            } else if (quadrics[prim - nT - nS].kind == RC_ANALYTIC_PATCH_BOX) {
+                inside = rc_packet_patch(L, (__global const float4*)quadrics,
+                                         (__global const RcPatchBox*)(quadrics + (prim - nT - nS)),
+                                         bound, &t, &u, &v);
+            } else {
+                inside = rc_packet_quadric(L, quadrics + (prim - nT - nS), bound, &t);
+            }
+        }
+        /* Nearer, or equally near with a lower id: the depth test with the id tie-break. */
+        const int16 better =
+            inside & ((t < *bestT) | ((t == *bestT) & ((uint16)(prim) < *bestPrim)));
+        *bestT = select(*bestT, t, better);
+        *bestU = select(*bestU, u, better);
+        *bestV = select(*bestV, v, better);
+        *bestPrim = select(*bestPrim, (uint16)(prim), as_uint16(better));
+    }
+    return c;
+}
+
 /* One work-item per packet: packetLeaf[p] and packetFirst[p] (the packet's first ray within its
  * leaf); the packet holds min(16, rayCount - first) rays. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_fragment(
@@ -484,38 +531,12 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     float16 bestT = L.tmax, bestU = 0.0f, bestV = 0.0f;
     uint16 bestPrim = (uint16)(RC_NO_HIT);
     const uint nT = params->nTriangles, nS = params->nSpheres;
-    uint c = 0;
-    for (; c < leaf.candCount; ++c) {
-        const RcCandidate cand = candidates[leaf.candBegin + c];
-        /* Every lane done: its hit is strictly nearer than this candidate's box. */
-        const int16 done =
-            (bestPrim != (uint16)(RC_NO_HIT)) & (L.x + bestT * L.speed < cand.nearX);
-        if (all(done)) break;
-        const uint prim = cand.prim;
-        float16 t, u = 0.0f, v = 0.0f;
-        int16 inside;
-        if (prim < nT) {
-            inside = rc_packet_triangle(&L, triangles[prim], &t, &u, &v);
-        } else {
-            /* rc_intersect_primitive's bound: a hit at exactly bestT may still win on its id. */
-            const float16 bound = fmin(L.tmax, nextafter(bestT, (float16)(INFINITY)));
-            if (prim < nT + nS) {
-                inside = rc_packet_sphere(&L, spheres[prim - nT].centerRadius, bound, &t);
-            } else if (quadrics[prim - nT - nS].kind == RC_ANALYTIC_PATCH_BOX) {
-                inside = rc_packet_patch(&L, (__global const float4*)quadrics,
-                                         (__global const RcPatchBox*)(quadrics + (prim - nT - nS)),
-                                         bound, &t, &u, &v);
-            } else {
-                inside = rc_packet_quadric(&L, quadrics + (prim - nT - nS), bound, &t);
-            }
-        }
-        /* Nearer, or equally near with a lower id: the depth test with the id tie-break. */
-        const int16 better = inside & ((t < bestT) | ((t == bestT) & ((uint16)(prim) < bestPrim)));
-        bestT = select(bestT, t, better);
-        bestU = select(bestU, u, better);
-        bestV = select(bestV, v, better);
-        bestPrim = select(bestPrim, (uint16)(prim), as_uint16(better));
-    }
+    const uint c =
+        nS == 0 && params->nQuadrics == 0
+            ? rc_fragment_nearest(&L, leaf, candidates, triangles, spheres, quadrics, nT, nS, true,
+                                  &bestT, &bestU, &bestV, &bestPrim)
+            : rc_fragment_nearest(&L, leaf, candidates, triangles, spheres, quadrics, nT, nS,
+                                  false, &bestT, &bestU, &bestV, &bestPrim);
     float bt[16], bu[16], bv[16];
     uint bp[16];
     vstore16(bestT, 0, bt);
