@@ -522,14 +522,10 @@ RC_SHADE_INLINE void rc_shade16_rays(__global const RcRay* rays, __global const 
 #undef RC_STORE_SPAWNED
 }
 
-__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade16(
-    __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits, uint n,
-    RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {
-    rc_shade16_rays(rays, infos, hits, 0, n, RC_SHADE_SCENE_ARGS, RC_SHADE_OUT_ARGS);
-}
-
-/* The rays ids[0, nIds) of the batch, or its rays [0, nIds) when ids is null (rc_shade_ids's
- * lists, whose lights this kernel shades too). */
+/* The rays ids[0, nIds) of the batch (rc_shade_ids's lists, whose lights this kernel shades too),
+ * or its rays [0, nIds) when ids is null (the renderer's shading of the queries that do not
+ * shade). One kernel for both: PoCL parses the program's whole bitcode on every load, and a
+ * second kernel would carry a second copy of rc_shade16_rays. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_shade16_ids(
     __global const RcRay* rays, __global const RcRayInfo* infos, __global const RcHit* hits,
     __global const uint* ids, uint nIds, RC_SHADE_SCENE_PARAMS, RC_SHADE_OUT_PARAMS) {

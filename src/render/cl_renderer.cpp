@@ -281,7 +281,7 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
       cam_(basis_.ToDevice()),
       camBuffer_(UploadVector(ctx, std::vector<RcCamera>{cam_})),
       eyeKernel_(program_, "rc_generate_eye_rays"),
-      shadeKernel_(program_, "rc_shade16"),
+      shadeKernel_(program_, "rc_shade16_ids"),
       batch_(BatchRays(options.batchRays, basis_.window.PixelCount(), params_.nLights,
                        ctx.info().maxAllocBytes)),
       buffers_(ctx, batch_, params_.nLights),
@@ -392,8 +392,9 @@ QueryResult Frame::Intersect(const Batch& b, std::unique_ptr<PreparedBatch> prep
 void Frame::Shade(const Batch& b) {
     const ShadeBuffers& shade = buffers_.shade;
     const SceneBuffers& s = sceneBuffers_;
-    SetArgs(shadeKernel_, rays_.pages[b.page].rays, shade.rayInfo, buffers_.hits, b.n, s.triangles,
-            s.triangleShading, s.spheres, s.quadrics, s.materials, s.lights, s.params,
+    const cl::Buffer everyRay;  // no id list: the batch's rays [0, b.n)
+    SetArgs(shadeKernel_, rays_.pages[b.page].rays, shade.rayInfo, buffers_.hits, everyRay, b.n,
+            s.triangles, s.triangleShading, s.spheres, s.quadrics, s.materials, s.lights, s.params,
             shade.radiance, shade.NormalsOut(), shade.shadow.rays, shade.shadow.contribution,
             shade.secondary.rays, shade.secondary.info, shade.spawned);
     Launch(ctx_, shadeKernel_, PacketItems(b.n), timer_);

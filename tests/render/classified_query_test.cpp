@@ -205,7 +205,7 @@ bool SameBytes(const std::vector<T>& a, const std::vector<T>& b) {
 }
 
 // `rays` as eye rays through q, shaded by the query's own kernels or, when it shades nothing
-// itself, by rc_shade16 as the renderer does (or by the scalar rc_shade where `scalarShade`);
+// itself, by rc_shade16_ids as the renderer does (or by the scalar rc_shade where `scalarShade`);
 // with explicit eye infos or with none (the renderer's generation 0), with the shading normals
 // wanted or not.
 ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
@@ -233,16 +233,18 @@ ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
     const bool shaded = q.Intersect(rayBuf, n, prepared.get(), hits, shade, timer).shaded;
     q.Recycle(std::move(prepared));
     if (!shaded) {
-        cl::Kernel k(program, scalarShade ? "rc_shade" : "rc_shade16");
+        cl::Kernel k(program, scalarShade ? "rc_shade" : "rc_shade16_ids");
         cl_uint a = 0;
         auto arg = [&](const auto& v) { k.setArg(a++, v); };
-        arg(rayBuf), arg(shade.rayInfo), arg(hits), arg(n), arg(scene.triangles);
+        arg(rayBuf), arg(shade.rayInfo), arg(hits);
+        if (!scalarShade) arg(cl::Buffer());  // no id list: every ray
+        arg(n), arg(scene.triangles);
         arg(scene.triangleShading), arg(scene.spheres), arg(scene.quadrics), arg(scene.materials);
         arg(scene.lights), arg(scene.params), arg(shade.radiance);
         arg(shade.NormalsOut());
         arg(shade.shadow.rays), arg(shade.shadow.contribution), arg(shade.secondary.rays);
         arg(shade.secondary.info), arg(shade.spawned);
-        const size_t items = scalarShade ? n : (n + 15) / 16;  // rc_shade16: 16 rays an item
+        const size_t items = scalarShade ? n : (n + 15) / 16;  // rc_shade16_ids: 16 rays an item
         TestContext().queue().enqueueNDRangeKernel(
             k, cl::NullRange, cl::NDRange(clrt::RoundUp(items, 64)), cl::NDRange(64));
     }
@@ -260,7 +262,7 @@ ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
 
 // Generation 0 writes no ray infos: every shading kernel, given none or eye infos, shades
 // byte for byte as the scalar rc_shade shades brute force's hits from explicit eye infos
-// (weight 1, depth 0), with one light and with two, in every kernel style and by rc_shade16
+// (weight 1, depth 0), with one light and with two, in every kernel style and by rc_shade16_ids
 // after a BVH query.
 // Without the normals wanted, the same is shaded, and no normals are written.
 TEST(ClassifiedQuery, EyeRaysWithoutInfosShadeAsWithEyeInfos) {

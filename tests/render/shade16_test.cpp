@@ -1,11 +1,11 @@
-// rc_shade16 (cl/shade16.cl) shades 16 rays a work-item in float16 lanes and must write what the
-// scalar rc_shade (cl/shade.cl) writes, byte for byte: radiance, normals, shadow slots, secondary
-// rays and their flags. The hits are made up rather than found, so every kind of primitive (the
-// teapot's patch boxes and sphere, triangles with and without vertex normals, degenerate and
-// tiny triangles whose squared lengths leave the normal float range, quadrics) meets every kind
-// of material (matte, specular, mirror, glass with and without Fresnel, emissive), with misses,
-// weights below the spawn threshold, depths at the limit and a batch that is not a multiple of
-// 16 rays.
+// rc_shade16_ids (cl/shade16.cl), given no id list, shades 16 rays a work-item in float16 lanes
+// and must write what the scalar rc_shade (cl/shade.cl) writes, byte for byte: radiance, normals,
+// shadow slots, secondary rays and their flags. The hits are made up rather than found, so every
+// kind of primitive (the teapot's patch boxes and sphere, triangles with and without vertex
+// normals, degenerate and tiny triangles whose squared lengths leave the normal float range,
+// quadrics) meets every kind of material (matte, specular, mirror, glass with and without Fresnel,
+// emissive), with misses, weights below the spawn threshold, depths at the limit and a batch that
+// is not a multiple of 16 rays.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -126,7 +126,7 @@ std::vector<uint8_t> Bytes(const cl::Buffer& b) {
 }
 
 Outputs Shade(const cl::Program& program, const SceneBuffers& scene, const Batch& batch,
-              bool withInfos, const char* kernel, size_t raysPerItem) {
+              bool withInfos, size_t raysPerItem) {
     const uint32_t n = uint32_t(batch.rays.size()), nLights = scene.hostParams.nLights;
     const cl::Buffer rays = UploadVector(TestContext(), batch.rays),
                      hits = UploadVector(TestContext(), batch.hits);
@@ -138,11 +138,17 @@ Outputs Shade(const cl::Program& program, const SceneBuffers& scene, const Batch
           &shade.secondary.rays, &shade.secondary.info, &shade.spawned}) {
         TestContext().queue().enqueueFillBuffer(*b, uint8_t(0xA5), 0, b->getInfo<CL_MEM_SIZE>());
     }
-    cl::Kernel k(program, kernel);
-    SetArgs(k, rays, shade.rayInfo, hits, n, scene.triangles, scene.triangleShading, scene.spheres,
-            scene.quadrics, scene.materials, scene.lights, scene.params, shade.radiance,
-            shade.normals, shade.shadow.rays, shade.shadow.contribution, shade.secondary.rays,
-            shade.secondary.info, shade.spawned);
+    // rc_shade16_ids takes 16 rays a work-item and an id list before the count, here none.
+    const bool packets = raysPerItem == kPacketRays;
+    cl::Kernel k(program, packets ? "rc_shade16_ids" : "rc_shade");
+    cl_uint a = 0;
+    const auto arg = [&](const auto& v) { k.setArg(a++, v); };
+    arg(rays), arg(shade.rayInfo), arg(hits);
+    if (packets) arg(cl::Buffer());
+    arg(n), arg(scene.triangles), arg(scene.triangleShading), arg(scene.spheres);
+    arg(scene.quadrics), arg(scene.materials), arg(scene.lights), arg(scene.params);
+    arg(shade.radiance), arg(shade.normals), arg(shade.shadow.rays), arg(shade.shadow.contribution);
+    arg(shade.secondary.rays), arg(shade.secondary.info), arg(shade.spawned);
     KernelTimer timer;
     Launch(TestContext(), k, (n + raysPerItem - 1) / raysPerItem, timer);
     return {Bytes(shade.radiance),       Bytes(shade.normals),
@@ -159,8 +165,8 @@ TEST(Shade16, WritesWhatTheScalarKernelWrites) {
     const Batch batch = MadeUpHits(4001, uint32_t(s.triangles.size()), s.PrimitiveCount());
     for (bool withInfos : {true, false}) {
         SCOPED_TRACE(withInfos ? "with infos" : "eye rays without infos");
-        const Outputs want = Shade(program, scene, batch, withInfos, "rc_shade", 1);
-        const Outputs got = Shade(program, scene, batch, withInfos, "rc_shade16", 16);
+        const Outputs want = Shade(program, scene, batch, withInfos, 1);
+        const Outputs got = Shade(program, scene, batch, withInfos, kPacketRays);
         EXPECT_EQ(got.radiance, want.radiance);
         EXPECT_EQ(got.normals, want.normals);
         EXPECT_EQ(got.shadow, want.shadow);

@@ -73,7 +73,7 @@ void SetArgs(cl::Kernel& kernel, const Args&... args) {
 // its device time to `timer`.
 void Launch(clrt::Context& ctx, cl::Kernel& kernel, size_t n, KernelTimer& timer);
 
-// Rays a work-item of the 16-lane kernels (RC_PACKET in cl/bvh.cl, rc_shade16), and the
+// Rays a work-item of the 16-lane kernels (RC_PACKET in cl/bvh.cl, rc_shade16_ids), and the
 // work-items they take for n rays.
 constexpr uint32_t kPacketRays = 16;
 constexpr size_t PacketItems(size_t n) { return (n + kPacketRays - 1) / kPacketRays; }
