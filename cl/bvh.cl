@@ -49,9 +49,9 @@ static inline uint rc_leaf_prim(__global const float* lane0, uint stride, uint k
 /* Moeller-Trumbore of one ray against eight lanes of a leaf run (lanes beyond it zero edges,
  * which the test rejects), the same operations as rc_intersect_triangle lane by lane. Returns t
  * per lane, +inf where a lane misses or its t is not below `bound`. */
-inline float8 rc_bvh_triangles8(float3 o, float3 d, float tmin, float bound,
-                                __global const float* lane0, uint stride, int8 live, float8* uOut,
-                                float8* vOut) {
+static inline float8 rc_bvh_triangles8(float3 o, float3 d, float tmin, float bound,
+                                       __global const float* lane0, uint stride, int8 live,
+                                       float8* uOut, float8* vOut) {
     const float8 e1x = rc_leaf_load8(lane0, stride, 3, live);
     const float8 e1y = rc_leaf_load8(lane0, stride, 4, live);
     const float8 e1z = rc_leaf_load8(lane0, stride, 5, live);
@@ -102,10 +102,11 @@ static inline int rc_bvh_leaf_scalar(uint count, __global const float* leaf, flo
 /* The leaf whose `count` primitives fill the run at `leaf`, with the lower-id tie-break.
  * Returns 1 when anyHit and a primitive was hit; *tests counts the primitives tested, as if one
  * at a time in lane order up to an any-hit (the count rc_intersect_primitive walks would give). */
-inline int rc_bvh_leaf(uint count, __global const float* leaf, float3 o, float3 d, float tmin,
-                       float tmax, int anyHit, __global const RcTriangle* triangles,
-                       __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-                       uint nT, uint nS, RcHit* best, uint* tests) {
+static inline int rc_bvh_leaf(uint count, __global const float* leaf, float3 o, float3 d,
+                              float tmin, float tmax, int anyHit,
+                              __global const RcTriangle* triangles,
+                              __global const RcSphere* spheres, __global const RcQuadric* quadrics,
+                              uint nT, uint nS, RcHit* best, uint* tests) {
     for (uint first = 0; first < count; first += 8) {
         __global const float* lane0 = leaf + first;
         const uint lanes = min(8u, count - first);
