@@ -128,43 +128,43 @@ class CellKeyer16 {
     __m512i top_;
 };
 
+// Lanes of v moved up by `step`, zeros below (the zero-masked form: see Min16).
+template <int step>
+RC_AVX512 __m512 Up16(__m512 v) {
+    return _mm512_castsi512_ps(_mm512_maskz_alignr_epi32(0xFFFF, _mm512_castps_si512(v),
+                                                         _mm512_setzero_si512(), 16 - step));
+}
+
 // Adds the lanes `fast` of keys k with ends e to their cells' counts and largest ends.
 // Neighbouring rays often share a cell, so each run of equal keys in the block updates its cell
-// once (its length, and the largest end found by a segmented max over the run).
+// once (its length, and the largest end found by a segmented max over the run). The runs' bounds
+// are bit masks in scalar registers: they cost no vector work.
 RC_AVX512 void AddRuns16(__m512i k, __m512 e, __mmask16 fast, uint32_t* count, float* end) {
-    const __mmask16 all = 0xFFFF;
-    const __m512i zeroI = _mm512_setzero_si512(), oneI = _mm512_set1_epi32(1);
-    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-    // Lane i: the mask of lanes 0 .. i.
-    const __m512i lanesUpTo =
-        _mm512_maskz_sub_epi32(all, _mm512_maskz_sllv_epi32(all, _mm512_set1_epi32(2), lane), oneI);
-    const __m512i previous = _mm512_maskz_permutexvar_epi32(
-        all, _mm512_maskz_sub_epi32(all, _mm512_maskz_max_epi32(all, lane, oneI), oneI), k);
-    const __mmask16 starts = __mmask16(_mm512_cmpneq_epi32_mask(k, previous) | 1u);
-    const __mmask16 runEnds = __mmask16(((starts >> 1) | 0x8000u) & fast);
-    // Each lane's run starts at the last start at or below it.
-    const __m512i below = _mm512_and_si512(_mm512_set1_epi32(starts), lanesUpTo);
-    const __m512i runStart =
-        _mm512_sub_epi32(_mm512_set1_epi32(31), _mm512_maskz_lzcnt_epi32(all, below));
-    const __m512i runLength = _mm512_add_epi32(_mm512_sub_epi32(lane, runStart), oneI);
+    const __m512i previous = _mm512_maskz_alignr_epi32(0xFFFF, k, _mm512_setzero_si512(), 15);
+    const unsigned starts = unsigned(_mm512_cmpneq_epi32_mask(k, previous)) | 1u;
+    // A lane takes the lane `step` below while no run starts in between: `near` holds the lanes
+    // with a start among the `step` lanes up to them (lane 0 starts a run, so no lane reaches
+    // below it).
+    unsigned near = starts;
     __m512 runEnd = e;
-    for (int step = 1; step < 16; step *= 2) {
-        const __m512i from = _mm512_sub_epi32(lane, _mm512_set1_epi32(step));
-        const __mmask16 inRun = _mm512_cmpge_epi32_mask(from, runStart);
-        runEnd = _mm512_mask_max_ps(
-            runEnd, inRun, runEnd,
-            _mm512_maskz_permutexvar_ps(all, _mm512_maskz_max_epi32(all, from, zeroI), runEnd));
-    }
-    alignas(64) uint32_t runKey[16], runCount[16];
+    runEnd = _mm512_mask_max_ps(runEnd, __mmask16(~near), runEnd, Up16<1>(runEnd));
+    near |= near << 1;
+    runEnd = _mm512_mask_max_ps(runEnd, __mmask16(~near), runEnd, Up16<2>(runEnd));
+    near |= near << 2;
+    runEnd = _mm512_mask_max_ps(runEnd, __mmask16(~near), runEnd, Up16<4>(runEnd));
+    near |= near << 4;
+    runEnd = _mm512_mask_max_ps(runEnd, __mmask16(~near), runEnd, Up16<8>(runEnd));
+    alignas(64) uint32_t key[16];
     alignas(64) float runMax[16];
-    _mm512_store_si512(runKey, _mm512_maskz_compress_epi32(runEnds, k));
-    _mm512_store_si512(runCount, _mm512_maskz_compress_epi32(runEnds, runLength));
-    _mm512_store_ps(runMax, _mm512_maskz_compress_ps(runEnds, runEnd));
-    for (int j = 0, runs = std::popcount(unsigned(runEnds)); j < runs; ++j) {
-        float* at = end + runKey[j];
-        count[runKey[j]] += runCount[j];
+    _mm512_store_si512(key, k);
+    _mm512_store_ps(runMax, runEnd);
+    for (unsigned rest = ((starts >> 1) | 0x8000u) & fast; rest; rest &= rest - 1) {
+        const int last = std::countr_zero(rest);
+        const int first = std::bit_width(starts & ((2u << last) - 1u)) - 1;
+        float* at = end + key[last];
+        count[key[last]] += uint32_t(last - first + 1);
         // A max without a branch: a compare and jump around the store mispredicts.
-        _mm_store_ss(at, _mm_max_ss(_mm_load_ss(at), _mm_load_ss(runMax + j)));
+        _mm_store_ss(at, _mm_max_ss(_mm_load_ss(at), _mm_load_ss(runMax + last)));
     }
 }
 
@@ -180,6 +180,7 @@ RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f&
     const __m512 bhi[3] = {_mm512_set1_ps(box.hi.x), _mm512_set1_ps(box.hi.y),
                            _mm512_set1_ps(box.hi.z)};
     const CellKeyer16 keyer(bits);
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const size_t n = rays.size();
     size_t i = 0;
     for (; i < n; i += 16) {
@@ -188,10 +189,19 @@ RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f&
                           : Gather16(rays.Floats(i), idx, live);
         __m512i which = _mm512_setzero_si512();
         const __mmask16 matched = Orient16(ends, live, r, &which);
-        for (unsigned other = unsigned(live & ~matched); other; other &= other - 1) {
-            const size_t j = size_t(std::countr_zero(other));
-            if (!Dead(rays[i + j])) return false;
-            missed.push_back(firstId + uint32_t(i + j));
+        if (const __mmask16 other = __mmask16(live & ~matched)) {
+            // Empty segments (a share of a render's slots) miss without the scalar check.
+            const __mmask16 empty =
+                __mmask16(other & ~_mm512_cmp_ps_mask(r.tmin, r.tmax, _CMP_LT_OQ));
+            for (unsigned rest = unsigned(other & ~empty); rest; rest &= rest - 1) {
+                if (!Dead(rays[i + size_t(std::countr_zero(rest))])) return false;
+            }
+            alignas(64) rc_uint ids[16];
+            _mm512_store_si512(
+                ids,
+                _mm512_maskz_compress_epi32(
+                    other, _mm512_add_epi32(lane, _mm512_set1_epi32(int(firstId + uint32_t(i))))));
+            missed.insert(missed.end(), ids, ids + std::popcount(unsigned(other)));
         }
         const Axis16 axes = DominantAxis16(r.dx, r.dy, r.dz);
         const __mmask16 fast = __mmask16(matched & InBox16(r.ox, r.oy, r.oz, blo, bhi) &
