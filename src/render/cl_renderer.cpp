@@ -540,7 +540,7 @@ ClRenderer::ClRenderer(clrt::Context& ctx, const scene::Scene& scene, const Rend
       wrapQuery_(std::move(wrapQuery)) {}
 
 void ClRenderer::UseProgram(FrameProgram program) {
-    if (!ServesFrame(program, options_)) {
+    if (!ServesFrame(ctx_, program, options_)) {
         throw std::invalid_argument("UseProgram: a program built for other render options");
     }
     program_ = std::move(program);

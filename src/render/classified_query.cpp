@@ -37,6 +37,27 @@ struct ClassifiedBatch final : PreparedBatch {
 constexpr uint64_t kVertexIteration = 3;
 constexpr float kCpuGatherCost = 13.0f;
 
+float GatherCost(const clrt::Context& ctx, const classify::Params& params) {
+    return params.vertexGatherCost >= 0.0f ? params.vertexGatherCost
+           : ctx.info().type == "cpu"      ? kCpuGatherCost
+                                           : 0.0f;
+}
+
+// True when a query with `style` may launch the vertex-style kernels. Auto's rule (SortLeaves)
+// prefers the fragment style for every leaf once the gather costs at least 16 - kVertexIteration:
+// a leaf of r rays then costs at most r + 15 <= kVertexIteration r + gatherCost per block as
+// packets.
+bool TakesVertex(KernelStyle style, float gatherCost) {
+    return style == KernelStyle::kVertex ||
+           (style == KernelStyle::kAuto && gatherCost < float(16 - kVertexIteration));
+}
+
+// `name`'s kernel in `program` where `needed`, else none: a frame's program holds only the
+// kernel files its style launches (ClassifiedKernelFiles).
+cl::Kernel KernelIf(bool needed, const cl::Program& program, const char* name) {
+    return needed ? cl::Kernel(program, name) : cl::Kernel();
+}
+
 class ClassifiedQuery final : public RayQuery {
   public:
     ClassifiedQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& buffers,
@@ -46,14 +67,13 @@ class ClassifiedQuery final : public RayQuery {
           hierarchy_(scene, params),
           shadowHierarchy_(hierarchy_),  // a copy: it shares the presorted face lists
           style_(style),
-          gatherCost_(params.vertexGatherCost >= 0.0f ? params.vertexGatherCost
-                      : ctx.info().type == "cpu"      ? kCpuGatherCost
-                                                      : 0.0f),
-          queryScalar_(program, "rc_query_scalar"),
-          occludedScalar_(program, "rc_occluded_scalar"),
-          gather_(program, "rc_gather_blocks"),
-          queryVertexShade_(program, "rc_query_vertex_shade"),
-          occludedVertex_(program, "rc_occluded_vertex"),
+          gatherCost_(GatherCost(ctx, params)),
+          queryScalar_(KernelIf(style == KernelStyle::kScalar, program, "rc_query_scalar")),
+          occludedScalar_(KernelIf(style == KernelStyle::kScalar, program, "rc_occluded_scalar")),
+          gather_(KernelIf(TakesVertex(style, gatherCost_), program, "rc_gather_blocks")),
+          queryVertexShade_(
+              KernelIf(TakesVertex(style, gatherCost_), program, "rc_query_vertex_shade")),
+          occludedVertex_(KernelIf(TakesVertex(style, gatherCost_), program, "rc_occluded_vertex")),
           queryFragment_(program, "rc_query_fragment"),
           occludedFragment_(program, "rc_occluded_fragment"),
           shadeIds_(program, "rc_shade16_ids"),
@@ -475,6 +495,19 @@ std::unique_ptr<RayQuery> MakeClassifiedQuery(clrt::Context& ctx, const cl::Prog
                                               const scene::Scene& scene,
                                               const classify::Params& params, KernelStyle style) {
     return std::make_unique<ClassifiedQuery>(ctx, program, buffers, scene, params, style);
+}
+
+KernelStyle ClassifiedStyle(const RenderOptions& options) {
+    return options.triangleTest == TriangleTest::kWatertight ? KernelStyle::kScalar
+                                                             : options.kernel;
+}
+
+std::vector<std::string> ClassifiedKernelFiles(const clrt::Context& ctx,
+                                               const classify::Params& params, KernelStyle style) {
+    std::vector<std::string> files = {"classified.cl"};
+    if (TakesVertex(style, GatherCost(ctx, params))) files.push_back("classified_vertex.cl");
+    if (style == KernelStyle::kScalar) files.push_back("classified_scalar.cl");
+    return files;
 }
 
 }  // namespace rayclass::render

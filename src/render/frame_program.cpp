@@ -3,21 +3,26 @@
 #include <chrono>
 #include <vector>
 
+#include "rayclass/classify/params.h"
+#include "rayclass/render/classified_query.h"
 #include "rayclass/render/launch.h"
 
 namespace rayclass::render {
 
 namespace {
 
-// The kernel files of `accel`'s query, in BuildRenderProgram's order.
-std::vector<std::string> QueryFiles(Accel accel) {
+// The kernel files of `accel`'s query (the classified query's: those of `classified`), in
+// BuildRenderProgram's order.
+std::vector<std::string> AccelFiles(Accel accel, const std::vector<std::string>& classified) {
+    std::vector<std::string> out = classified;
     switch (accel) {
         case Accel::kClassify:
-            return {"classified.cl"};
+            return out;
         case Accel::kBvh:
             return {"bvh.cl"};
         case Accel::kAuto:
-            return {"classified.cl", "bvh.cl"};
+            out.push_back("bvh.cl");
+            return out;
         case Accel::kBrute:
             return {"brute.cl"};
         case Accel::kKdTree:
@@ -36,6 +41,12 @@ double SecondsSince(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
+std::vector<std::string> FrameQueryFiles(const clrt::Context& ctx, const RenderOptions& options) {
+    classify::Params params;
+    for (const classify::ParamSetting& setting : options.classifyParams) setting.ApplyTo(params);
+    return AccelFiles(options.accel, ClassifiedKernelFiles(ctx, params, ClassifiedStyle(options)));
+}
+
 std::string FrameBuildOptions(const RenderOptions& options) {
     std::string out;
     for (const std::string& option :
@@ -50,16 +61,17 @@ std::string FrameBuildOptions(const RenderOptions& options) {
 
 namespace {
 
-// The program of `accel`'s query kernels, or of every query's (none), and what it took.
+// The program of the query kernels in `queryFiles`, or of every query's (none), and what it took.
 FrameProgram Build(const clrt::Context& ctx, const RenderOptions& options,
-                   std::optional<Accel> accel) {
+                   std::vector<std::string> queryFiles) {
     const auto t0 = std::chrono::steady_clock::now();
     FrameProgram out;
-    out.accel = accel;
+    out.queryFiles = std::move(queryFiles);
     out.buildOptions = FrameBuildOptions(options);
-    out.program = accel ? BuildProgramFiles(ctx, RenderProgramFiles(QueryFiles(*accel)),
-                                            out.buildOptions, &out.fromCache)
-                        : BuildRenderProgram(ctx, out.buildOptions, &out.fromCache);
+    out.program = out.queryFiles.empty()
+                      ? BuildRenderProgram(ctx, out.buildOptions, &out.fromCache)
+                      : BuildProgramFiles(ctx, RenderProgramFiles(out.queryFiles), out.buildOptions,
+                                          &out.fromCache);
     out.seconds = SecondsSince(t0);
     return out;
 }
@@ -67,15 +79,16 @@ FrameProgram Build(const clrt::Context& ctx, const RenderOptions& options,
 }  // namespace
 
 FrameProgram BuildFrameProgram(const clrt::Context& ctx, const RenderOptions& options) {
-    return Build(ctx, options, options.accel);
+    return Build(ctx, options, FrameQueryFiles(ctx, options));
 }
 
 FrameProgram BuildSharedFrameProgram(const clrt::Context& ctx, const RenderOptions& options) {
-    return Build(ctx, options, std::nullopt);
+    return Build(ctx, options, {});
 }
 
-bool ServesFrame(const FrameProgram& program, const RenderOptions& options) {
-    return (!program.accel || *program.accel == options.accel) &&
+bool ServesFrame(const clrt::Context& ctx, const FrameProgram& program,
+                 const RenderOptions& options) {
+    return (program.queryFiles.empty() || program.queryFiles == FrameQueryFiles(ctx, options)) &&
            program.buildOptions == FrameBuildOptions(options);
 }
 

@@ -46,10 +46,11 @@ std::vector<std::string> RenderProgramFiles(const std::vector<std::string>& quer
 
 cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions,
                                bool* fromCache) {
-    return BuildProgramFiles(ctx,
-                             RenderProgramFiles({"brute.cl", "classified.cl", "bvh.cl", "kdtree.cl",
-                                                 "grid.cl", "cones.cl"}),
-                             extraOptions, fromCache);
+    std::vector<std::string> files =
+        RenderProgramFiles({"brute.cl", "classified.cl", "classified_vertex.cl",
+                            "classified_scalar.cl", "bvh.cl", "kdtree.cl", "grid.cl", "cones.cl"});
+    files.push_back("shade_scalar.cl");
+    return BuildProgramFiles(ctx, files, extraOptions, fromCache);
 }
 
 void KernelTimer::Record(const std::string& kernel, const cl::Event& event) {

@@ -68,10 +68,8 @@ std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& progr
     const auto t0 = Clock::now();
     classify::Params params = classify::Params::ForScene(scene);
     for (const classify::ParamSetting& setting : options.classifyParams) setting.ApplyTo(params);
-    // The 16-lane kernels are Moeller-Trumbore only: the watertight test runs the scalar style.
-    const KernelStyle style =
-        options.triangleTest == TriangleTest::kWatertight ? KernelStyle::kScalar : options.kernel;
-    auto query = MakeClassifiedQuery(ctx, program, buffers, scene, params, style);
+    auto query =
+        MakeClassifiedQuery(ctx, program, buffers, scene, params, ClassifiedStyle(options));
     stats.timeS["classify_setup"] = SecondsSince(t0);
     if (options.accel == Accel::kAuto) return MakeAutoQuery(ctx, std::move(query), makeBvh);
     return query;

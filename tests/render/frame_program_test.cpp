@@ -83,6 +83,25 @@ INSTANTIATE_TEST_SUITE_P(Queries, FrameProgramOfQuery, ::testing::ValuesIn(Queri
                              return std::string(info.param.name);
                          });
 
+TEST(FrameProgram, EveryKernelStyleRendersBruteForcesImageFromItsOwnProgram) {
+    // Each style's frame program holds only the classified kernel files it may launch: a kernel
+    // missing from it would fail the render.
+    const scene::Scene scene = SmallCornell();
+    RenderStats bruteStats;
+    const image::Image brute =
+        ClRenderer(SharedContext(), scene, Quiet(Accel::kBrute)).Render(bruteStats);
+    for (const auto& [name, style] : kKernelStyles) {
+        RenderOptions options = Quiet(Accel::kClassify);
+        options.kernel = style;
+        RenderStats stats;
+        ClRenderer renderer(SharedContext(), scene, options);
+        renderer.UseProgram(BuildFrameProgram(SharedContext(), options));
+        const image::ImageComparison same = image::Compare(renderer.Render(stats), brute);
+        EXPECT_EQ(same.idMismatchPixels, 0u) << name;
+        EXPECT_EQ(same.maxAbsError, 0.0) << name;
+    }
+}
+
 TEST(FrameProgram, EveryQueryRendersBruteForcesImageFromTheSharedProgram) {
     // A renderer given no program builds the shared one: every query's kernels in one program.
     const scene::Scene scene = SmallCornell();
@@ -104,12 +123,12 @@ TEST(FrameProgram, ARendererRefusesAProgramBuiltForOtherOptions) {
     const scene::Scene scene = SmallCornell();
     ClRenderer renderer(SharedContext(), scene, Quiet(Accel::kAuto));
     FrameProgram other;
-    other.accel = Accel::kBvh;
+    other.queryFiles = FrameQueryFiles(SharedContext(), Quiet(Accel::kBvh));
     other.buildOptions = FrameBuildOptions(Quiet(Accel::kAuto));
     EXPECT_THROW(renderer.UseProgram(other), std::invalid_argument);
     RenderOptions polar = Quiet(Accel::kAuto);
     polar.rayEncoding = RayEncoding::kPolar16;
-    other.accel = Accel::kAuto;
+    other.queryFiles = FrameQueryFiles(SharedContext(), Quiet(Accel::kAuto));
     other.buildOptions = FrameBuildOptions(polar);
     EXPECT_THROW(renderer.UseProgram(other), std::invalid_argument);
     other.buildOptions = FrameBuildOptions(Quiet(Accel::kAuto));

@@ -25,8 +25,9 @@ cl::Program BuildProgramFiles(const clrt::Context& ctx, const std::vector<std::s
 // `queryFiles` (the ray queries' kernels), the Newton statistics of --stats last.
 std::vector<std::string> RenderProgramFiles(const std::vector<std::string>& queryFiles);
 
-// The program holding every kernel the renderer uses, with the options they need
-// (*fromCache: see clrt::Context::BuildProgram).
+// The program holding every kernel the renderer uses, with the options they need, and the scalar
+// shading kernel the tests hold the renderer's to (cl/shade_scalar.cl) (*fromCache: see
+// clrt::Context::BuildProgram).
 cl::Program BuildRenderProgram(const clrt::Context& ctx, const std::string& extraOptions = {},
                                bool* fromCache = nullptr);
 
