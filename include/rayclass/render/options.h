@@ -49,7 +49,7 @@ inline constexpr Named<Accel> kAccels[] = {{"classify", Accel::kClassify}, {"bvh
                                            {"kdtree", Accel::kKdTree},     {"grid", Accel::kGrid},
                                            {"cones", Accel::kCones}};
 
-// The classified query's kernels (cl/classified.cl).
+// The classified query's kernels (cl/classified.cl, classified_vertex.cl, classified_scalar.cl).
 enum class KernelStyle : uint8_t {
     kScalar,    // one work-item per ray, one candidate at a time
     kVertex,    // one work-item per ray, 16 candidates per step (float16 lanes over candidates)
