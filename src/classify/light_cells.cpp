@@ -135,13 +135,18 @@ RC_AVX512 __m512 Up16(__m512 v) {
                                                          _mm512_setzero_si512(), 16 - step));
 }
 
+// The lanes of k where a run of equal keys starts (lane 0 always).
+RC_AVX512 unsigned RunStarts16(__m512i k) {
+    const __m512i previous = _mm512_maskz_alignr_epi32(0xFFFF, k, _mm512_setzero_si512(), 15);
+    return unsigned(_mm512_cmpneq_epi32_mask(k, previous)) | 1u;
+}
+
 // Adds the lanes `fast` of keys k with ends e to their cells' counts and largest ends.
 // Neighbouring rays often share a cell, so each run of equal keys in the block updates its cell
 // once (its length, and the largest end found by a segmented max over the run). The runs' bounds
 // are bit masks in scalar registers: they cost no vector work.
 RC_AVX512 void AddRuns16(__m512i k, __m512 e, __mmask16 fast, uint32_t* count, float* end) {
-    const __m512i previous = _mm512_maskz_alignr_epi32(0xFFFF, k, _mm512_setzero_si512(), 15);
-    const unsigned starts = unsigned(_mm512_cmpneq_epi32_mask(k, previous)) | 1u;
+    const unsigned starts = RunStarts16(k);
     // A lane takes the lane `step` below while no run starts in between: `near` holds the lanes
     // with a start among the `step` lanes up to them (lane 0 starts a run, so no lane reaches
     // below it).
@@ -232,11 +237,9 @@ RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f&
 RC_AVX512 uint32_t SortBlocks16(const uint32_t* key, uint32_t i, uint32_t end, int bits2,
                                 const uint32_t* rootBegin, uint32_t* next, rc_uint* to) {
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-    const __m512i before = _mm512_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14);
     for (; i + 16 <= end; i += 16) {
         const __m512i k = _mm512_loadu_si512(key + i);
-        const __m512i previous = _mm512_maskz_permutexvar_epi32(0xFFFF, before, k);
-        const unsigned starts = unsigned(_mm512_cmpneq_epi32_mask(k, previous)) | 1u;
+        const unsigned starts = RunStarts16(k);
         const __m512i ids = _mm512_add_epi32(lane, _mm512_set1_epi32(int(i)));
         for (unsigned rest = starts; rest;) {
             const int first = std::countr_zero(rest);
