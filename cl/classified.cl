@@ -51,33 +51,93 @@ typedef struct RcLanes16 {
                             * leaf's face */
 } RcLanes16;
 
-/* The rays of a packet as lanes: the leaf's rays [first, first + 16), unused lanes repeating the
- * first ray (their results are not written); ids[k] is lane k's ray (RcRay: origin, w: tmin;
- * direction, w: tmax; shadow rays too). The rays are read as float4 into registers and
- * transposed there (RC_LANES16): lanes written one float at a time to private arrays and read
- * back as float16 cost half the fragment kernel's time on PoCL (the arrays become per-work-item
- * context memory). */
+/* The shuffles of rc_transpose_pairs, a pair per round: from two vectors, the positions whose
+ * bit 2 (1, 0) is clear (_LO) or set (_HI), the first vector's and the second's in turn; that
+ * bit of the position then tells which vector the element came from. */
+#define RC_BIT2_LO (uint16)(0, 1, 2, 3, 16, 17, 18, 19, 8, 9, 10, 11, 24, 25, 26, 27)
+#define RC_BIT2_HI (uint16)(4, 5, 6, 7, 20, 21, 22, 23, 12, 13, 14, 15, 28, 29, 30, 31)
+#define RC_BIT1_LO (uint16)(0, 1, 16, 17, 4, 5, 20, 21, 8, 9, 24, 25, 12, 13, 28, 29)
+#define RC_BIT1_HI (uint16)(2, 3, 18, 19, 6, 7, 22, 23, 10, 11, 26, 27, 14, 15, 30, 31)
+#define RC_BIT0_LO (uint16)(0, 16, 2, 18, 4, 20, 6, 22, 8, 24, 10, 26, 12, 28, 14, 30)
+#define RC_BIT0_HI (uint16)(1, 17, 3, 19, 5, 21, 7, 23, 9, 25, 11, 27, 13, 29, 15, 31)
+
+/* The 8 fields of 16 rays as lanes, from v[j] = rays a_j and b_j whole (position 8 r + f: field
+ * f of a_j for r = 0, of b_j for r = 1): lane j holds a_j, lane 8 + j b_j. Three rounds, each
+ * exchanging one bit of the vector index with one bit of the position. */
+RC_SHADE_INLINE void rc_transpose_pairs(float16* v) {
+    float16 w[8];
+#pragma unroll
+    for (uint k = 0; k < 4; ++k) {
+        w[k] = shuffle2(v[k], v[k + 4], RC_BIT2_LO);
+        w[k + 4] = shuffle2(v[k], v[k + 4], RC_BIT2_HI);
+    }
+#pragma unroll
+    for (uint h = 0; h < 8; h += 4) {
+#pragma unroll
+        for (uint k = 0; k < 2; ++k) {
+            v[h + k] = shuffle2(w[h + k], w[h + k + 2], RC_BIT1_LO);
+            v[h + k + 2] = shuffle2(w[h + k], w[h + k + 2], RC_BIT1_HI);
+        }
+    }
+#pragma unroll
+    for (uint k = 0; k < 8; k += 2) {
+        w[k] = shuffle2(v[k], v[k + 1], RC_BIT0_LO);
+        w[k + 1] = shuffle2(v[k], v[k + 1], RC_BIT0_HI);
+    }
+#pragma unroll
+    for (uint k = 0; k < 8; ++k) v[k] = w[k];
+}
+
+/* The rays of a packet as lanes: the leaf's rays [first, first + 16) (RcRay: origin, w: tmin;
+ * direction, w: tmax; shadow rays too); ids[k] is lane k's ray. Eye rays come in runs of pixels:
+ * a full packet whose rays pair up in consecutive slots (2j, 2j + 1) reads each pair as one
+ * float16 and transposes the 8 vectors with shuffles (rc_transpose_pairs), its lanes in the
+ * order of the pairs' first rays then of their second ones. Other packets read each ray as two
+ * float4s, in order, unused lanes repeating the first ray (their results are not written), and
+ * build the lanes element by element (RC_LANES16), which compiles to several times the
+ * shuffles: LLVM folds shuffles of such loads back into that. Lanes written one float at a time
+ * to private arrays and read back as float16 cost more still on PoCL (the arrays become
+ * per-work-item context memory). */
 RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const RcRay* rays, __global const uint* rayIndex,
                                          RcLeaf leaf, uint first, uint* ids) {
     const uint count = min(16u, leaf.rayCount - first);
     __global const uint* index = rayIndex + leaf.rayBegin + first;
-    float4 o[16], d[16];
-#pragma unroll
-    for (uint k = 0; k < 16; ++k) {
-        const uint id = index[k < count ? k : 0];
-        ids[k] = id;
-        o[k] = rays[id].origin;
-        d[k] = rays[id].direction;
-    }
     RcLanes16 l;
-    l.ox = RC_LANES16(o, x);
-    l.oy = RC_LANES16(o, y);
-    l.oz = RC_LANES16(o, z);
-    l.tmin = RC_LANES16(o, w);
-    l.dx = RC_LANES16(d, x);
-    l.dy = RC_LANES16(d, y);
-    l.dz = RC_LANES16(d, z);
-    l.tmax = RC_LANES16(d, w);
+    uint16 id16 = (uint16)(0);
+    if (count == 16) id16 = vload16(0, index);
+    const uint8 a = id16.even, b = id16.odd;
+    if (count == 16 && all(b == a + 1u)) {
+        vstore16((uint16)(a, b), 0, ids);
+        float16 v[8];
+#pragma unroll
+        for (uint j = 0; j < 8; ++j) v[j] = vload16(0, (__global const float*)(rays + ids[j]));
+        rc_transpose_pairs(v);
+        l.ox = v[0];
+        l.oy = v[1];
+        l.oz = v[2];
+        l.tmin = v[3];
+        l.dx = v[4];
+        l.dy = v[5];
+        l.dz = v[6];
+        l.tmax = v[7];
+    } else {
+        float4 o[16], d[16];
+#pragma unroll
+        for (uint k = 0; k < 16; ++k) {
+            const uint id = index[k < count ? k : 0];
+            ids[k] = id;
+            o[k] = rays[id].origin;
+            d[k] = rays[id].direction;
+        }
+        l.ox = RC_LANES16(o, x);
+        l.oy = RC_LANES16(o, y);
+        l.oz = RC_LANES16(o, z);
+        l.tmin = RC_LANES16(o, w);
+        l.dx = RC_LANES16(d, x);
+        l.dy = RC_LANES16(d, y);
+        l.dz = RC_LANES16(d, z);
+        l.tmax = RC_LANES16(d, w);
+    }
     const uint axis = leaf.face >> 1;
     const float sign = (leaf.face & 1) ? -1.0f : 1.0f;
     l.x = sign * (axis == 0 ? l.ox : (axis == 1 ? l.oy : l.oz));
@@ -267,6 +327,35 @@ RC_SHADE_INLINE uint rc_fragment_nearest(const RcLanes16* L, RcLeaf leaf,
     return c;
 }
 
+#define RC_PAIRS_LO (uint16)(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23)
+#define RC_PAIRS_HI (uint16)(8, 24, 9, 25, 10, 26, 11, 27, 12, 28, 13, 29, 14, 30, 15, 31)
+#define RC_QUADS_LO (uint16)(0, 1, 16, 17, 2, 3, 18, 19, 4, 5, 20, 21, 6, 7, 22, 23)
+#define RC_QUADS_HI (uint16)(8, 9, 24, 25, 10, 11, 26, 27, 12, 13, 28, 29, 14, 15, 30, 31)
+
+/* Lane k's hit (RcHit: t, prim, u, v from the lanes of t, prim's bits, u and v) to
+ * hits[ids[k]], k < count: the four lane vectors transposed into four vectors of four hits each
+ * by two rounds of shuffles, and each hit stored as a float4 (element by element, the stores
+ * went through a private array). */
+RC_SHADE_INLINE void rc_store_hits(__global RcHit* hits, const uint* ids, uint count, float16 t,
+                                   float16 prim, float16 u, float16 v) {
+    const float16 tp0 = shuffle2(t, prim, RC_PAIRS_LO), tp1 = shuffle2(t, prim, RC_PAIRS_HI);
+    const float16 uv0 = shuffle2(u, v, RC_PAIRS_LO), uv1 = shuffle2(u, v, RC_PAIRS_HI);
+    /* h[q]: the hits of lanes 4 q to 4 q + 3. */
+    const float16 h[4] = {shuffle2(tp0, uv0, RC_QUADS_LO), shuffle2(tp0, uv0, RC_QUADS_HI),
+                          shuffle2(tp1, uv1, RC_QUADS_LO), shuffle2(tp1, uv1, RC_QUADS_HI)};
+#pragma unroll
+    for (uint q = 0; q < 4; ++q) {
+        __global float* at0 = (__global float*)(hits + ids[4 * q]);
+        __global float* at1 = (__global float*)(hits + ids[4 * q + 1]);
+        __global float* at2 = (__global float*)(hits + ids[4 * q + 2]);
+        __global float* at3 = (__global float*)(hits + ids[4 * q + 3]);
+        if (4 * q < count) vstore4(h[q].s0123, 0, at0);
+        if (4 * q + 1 < count) vstore4(h[q].s4567, 0, at1);
+        if (4 * q + 2 < count) vstore4(h[q].s89ab, 0, at2);
+        if (4 * q + 3 < count) vstore4(h[q].scdef, 0, at3);
+    }
+}
+
 /* One work-item per packet: packetLeaf[p] and packetFirst[p] (the packet's first ray within its
  * leaf); the packet holds min(16, rayCount - first) rays. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_query_fragment(
@@ -293,20 +382,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
                                   &bestT, &bestU, &bestV, &bestPrim)
             : rc_fragment_nearest(&L, leaf, candidates, triangles, spheres, quadrics, nT, nS,
                                   false, &bestT, &bestU, &bestV, &bestPrim);
-    float bt[16], bu[16], bv[16];
-    uint bp[16];
-    vstore16(bestT, 0, bt);
-    vstore16(bestU, 0, bu);
-    vstore16(bestV, 0, bv);
-    vstore16(bestPrim, 0, bp);
-    for (uint k = 0; k < count; ++k) {
-        RcHit h;
-        h.prim = bp[k];
-        h.t = bp[k] == RC_NO_HIT ? INFINITY : bt[k];
-        h.u = bu[k];
-        h.v = bv[k];
-        hits[ids[k]] = h;
-    }
+    const float16 t = select(bestT, (float16)(INFINITY), bestPrim == (uint16)(RC_NO_HIT));
+    rc_store_hits(hits, ids, count, t, as_float16(bestPrim), bestU, bestV);
     tests[p] = c * count;
 }
 
