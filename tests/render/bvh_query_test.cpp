@@ -196,6 +196,23 @@ std::vector<RcRay> ScatteredShadowRays() {
     return rays;
 }
 
+// Rays from random points of the grid in random directions, their reach random too (every
+// other ray unlimited, every fifth slot empty when `emptySlots`), and a count that leaves the last
+// packet of 16 short and odd: no packet is walked as one, so the kernels take the single-ray walk
+// for each ray, walks that end after very different numbers of steps (cl/bvh.cl).
+std::vector<RcRay> ScatteredRaysOfMixedReach(bool emptySlots) {
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<float> pos(-0.5f, 3.5f), dir(-1.0f, 1.0f), reach(0.05f, 3.0f);
+    std::vector<RcRay> rays;
+    for (int i = 0; i < 16 * 400 + 7; ++i) {
+        const glm::vec3 d = glm::normalize(glm::vec3(dir(rng), dir(rng), dir(rng)));
+        const float tmax = i % 2 == 0 ? INFINITY : reach(rng);
+        rays.push_back({{pos(rng), pos(rng), pos(rng), 1e-4f}, {d.x, d.y, d.z, tmax}});
+    }
+    if (emptySlots) EmptyEveryFifthSlot(rays);
+    return rays;
+}
+
 struct Queries {
     scene::Scene scene = GridOfSquares();
     cl::Program program = BuildRenderProgram(TestContext());
@@ -275,6 +292,16 @@ TEST(BvhQuery, ShadowPacketsTowardPointLightsAreBlockedAsByBruteForce) {
 TEST(BvhQuery, ScatteredShadowRaysTowardPointLightsAreBlockedAsByBruteForce) {
     Queries q;
     ExpectBruteForcesBlocked(q, ScatteredShadowRays());
+}
+
+TEST(BvhQuery, ScatteredRaysOfMixedReachHitWhatBruteForceHits) {
+    Queries q;
+    ExpectBruteForcesHits(q, ScatteredRaysOfMixedReach(false));
+}
+
+TEST(BvhQuery, ScatteredRaysOfMixedReachAreBlockedAsByBruteForce) {
+    Queries q;
+    ExpectBruteForcesBlocked(q, ScatteredRaysOfMixedReach(true));
 }
 
 }  // namespace
