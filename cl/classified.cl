@@ -403,7 +403,8 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const uint count = min(16u, leaf.rayCount - packetFirst[p]);
     uint ids[16];
     const RcLanes16 L = rc_load_packet(rays, rayIndex, leaf, packetFirst[p], ids);
-    rc_prefetch_packet(rays, rayIndex, leaves, packetLeaf, packetFirst, p + 1, nPackets);
+    /* Two packets ahead, as rc_query_fragment: one packet's tests did not hide the fetch. */
+    rc_prefetch_packet(rays, rayIndex, leaves, packetLeaf, packetFirst, p + 2, nPackets);
     const float16 endX = L.x + select(L.tmin, L.tmax, L.dX > 0.0f) * L.dX;
     int16 hit = (int16)(0);
     const uint nT = params->nTriangles, nS = params->nSpheres;
