@@ -297,7 +297,7 @@ RC_SHADE_INLINE uint rc_fragment_nearest(const RcLanes16* L, RcLeaf leaf,
         /* Every lane done: its hit is strictly nearer than this candidate's box. */
         const int16 done =
             (*bestPrim != (uint16)(RC_NO_HIT)) & (L->x + *bestT * L->speed < cand.nearX);
-        if (all(done)) break;
+        if (rc_all16(done)) break;
         const uint prim = cand.prim;
         float16 t, u = 0.0f, v = 0.0f;
         int16 inside;

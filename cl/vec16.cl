@@ -84,6 +84,22 @@ RC_V16_INLINE int rc_any16(int16 m) {
     return (m2.x | m2.y) < 0;
 }
 
+/* Whether every lane of the mask is set. Clang's reduction of the lanes' signs compiles to one
+ * mask test, where PoCL's all() extracts the signs and folds them with a chain of shuffles;
+ * other OpenCL compilers keep all(). */
+#if defined(__clang__) && defined(__has_builtin)
+#if __has_builtin(__builtin_reduce_and)
+#define RC_HAVE_REDUCE_AND
+#endif
+#endif
+RC_V16_INLINE int rc_all16(int16 m) {
+#ifdef RC_HAVE_REDUCE_AND
+    return __builtin_reduce_and(m < 0) != 0;
+#else
+    return all(m);
+#endif
+}
+
 /* How many lanes of the mask are set. */
 RC_V16_INLINE int rc_count16(int16 mask) {
     const int16 ones = mask & 1;
