@@ -408,6 +408,10 @@ static inline int16 rc_bvh_packet_triangle(const RcBvhPacket* p, __global const 
            (t > p->tmin) & (t < p->tmax);
 }
 
+/* Whether any lane of the mask is set: LLVM tests the lanes' sign bits together (vptest), where
+ * rc_any16's OR tree and PoCL's any() take a chain of shuffles. */
+static inline int rc_packet_any(int16 m) { return __builtin_reduce_or(m < 0) != 0; }
+
 /* Rays as intervals, for one slab test of a node's eight boxes that culls a box only when no
  * ray can enter it: along each axis the points the distances are taken from within [lo, hi] and
  * the inverse directions within [iLo, iHi]. Rounding to nearest is monotonic, so the slab test's
@@ -457,6 +461,72 @@ static inline RcBvhSlabs rc_packet_slabs(const RcBvhPacket* p) {
     return s;
 }
 
+/* The per-lane slab test of a packet whose active lanes share an octant (positive[a]: their
+ * inverse directions along axis a are positive), one multiply-add a plane: a box's entry
+ * distance along axis a is fma(near side, inv, nearOff) with nearOff = -o * inv - m, its exit
+ * fma(far side, inv, farOff) with farOff = -o * inv + m. The sign tells the near side, so no
+ * min or max of the two planes is needed. The margin m = |o * inv| 2^-22 outweighs the rounding
+ * of o * inv and of the offsets (2 ulp of |o * inv| together), so each distance is within one
+ * rounding of the exact (side - o) * inv, entries below and exits above it: no farther from it
+ * than the single-ray walk's own distances, which its far distance's widening covers. Packets
+ * in several octants, or with an offset that overflows (a huge inverse), are not `usable`. */
+typedef struct RcPacketPlanes {
+    float16 nearOff[3], farOff[3];
+    int positive[3];
+    int usable;
+} RcPacketPlanes;
+
+/* Axis a of the planes; returns the lanes whose offsets are finite. */
+static inline int16 rc_planes_axis(float16 o, float16 inv, int positive, int a, RcPacketPlanes* q) {
+    const float16 oi = o * inv;
+    const float16 m = fabs(oi) * 0x1p-22f;
+    q->nearOff[a] = -oi - m;
+    q->farOff[a] = -oi + m;
+    q->positive[a] = positive;
+    return isfinite(q->nearOff[a]) & isfinite(q->farOff[a]);
+}
+
+static inline RcPacketPlanes rc_packet_planes(const RcBvhPacket* p, int px, int py, int pz,
+                                              int oneOctant) {
+    RcPacketPlanes q;
+    const int16 finite = rc_planes_axis(p->ox, p->ix, px, 0, &q) &
+                         rc_planes_axis(p->oy, p->iy, py, 1, &q) &
+                         rc_planes_axis(p->oz, p->iz, pz, 2, &q);
+    q.usable = oneOctant && !rc_any16(p->active & ~finite);
+    return q;
+}
+
+/* The lanes' entry (*tn, at least tmin) and widened exit (*tf) distances of child c of nd:
+ * with one multiply-add a plane where the planes are usable, else with the single-ray walk's
+ * operations lane by lane. */
+static inline void rc_packet_child(const RcBvhPacket* p, const RcPacketPlanes* q,
+                                   __global const RcBvh8Node* nd, uint c, float16* tn,
+                                   float16* tf) {
+    if (q->usable) {
+        const float16 nx =
+            fma((float16)(q->positive[0] ? nd->loX[c] : nd->hiX[c]), p->ix, q->nearOff[0]);
+        const float16 ny =
+            fma((float16)(q->positive[1] ? nd->loY[c] : nd->hiY[c]), p->iy, q->nearOff[1]);
+        const float16 nz =
+            fma((float16)(q->positive[2] ? nd->loZ[c] : nd->hiZ[c]), p->iz, q->nearOff[2]);
+        const float16 fx =
+            fma((float16)(q->positive[0] ? nd->hiX[c] : nd->loX[c]), p->ix, q->farOff[0]);
+        const float16 fy =
+            fma((float16)(q->positive[1] ? nd->hiY[c] : nd->loY[c]), p->iy, q->farOff[1]);
+        const float16 fz =
+            fma((float16)(q->positive[2] ? nd->hiZ[c] : nd->loZ[c]), p->iz, q->farOff[2]);
+        *tn = rc_max16(rc_max16(nx, ny), rc_max16(nz, p->tmin));
+        *tf = rc_min16(rc_min16(fx, fy), fz) * 1.0000004f;
+        return;
+    }
+    const float16 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
+    const float16 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
+    const float16 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
+    *tn =
+        rc_max16(rc_max16(rc_min16(ax, bx), rc_min16(ay, by)), rc_max16(rc_min16(az, bz), p->tmin));
+    *tf = rc_min16(rc_min16(rc_max16(ax, bx), rc_max16(ay, by)), rc_max16(az, bz)) * 1.0000004f;
+}
+
 /* Walks the tree once for the packet: nearest hits in (bt, bp, bu, bv), or with anyHit the lanes
  * that found a hit in *blocked (a lane stops at its first). Returns primitive tests per lane. */
 static inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
@@ -474,6 +544,8 @@ static inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
     float16 bt = *btOut, bu = *buOut, bv = *bvOut;
     uint16 bp = *bpOut;
     const RcBvhSlabs span = rc_packet_slabs(p);
+    const RcPacketPlanes planes = rc_packet_planes(p, span.positive[0], span.positive[1],
+                                                   span.positive[2], rc_slabs_one_octant(&span));
     const float spanTmin = rc_active_min16(p->tmin, p->active);
     const int8 laneBit = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
     /* The farthest distance an active lane can still improve on. */
@@ -482,8 +554,10 @@ static inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
         if (ref & RC_BVH8_LEAF) {
             const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
             __global const float* leaf = leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN;
+            /* Without anyHit the lanes stay active through the leaf. */
+            if (!anyHit) tests += as_uint16(active) & (uint16)(count);
             for (uint k = 0; k < count; ++k) {
-                tests += as_uint16(active) & (uint16)(1);
+                if (anyHit) tests += as_uint16(active) & (uint16)(1);
                 float16 t, u, v;
                 const int16 crosses = rc_bvh_packet_triangle(p, leaf, count, k, &t, &u, &v);
                 const uint16 prim16 = (uint16)(rc_leaf_prim(leaf, count, k));
@@ -495,7 +569,7 @@ static inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                 if (anyHit) {
                     *blocked |= hit;
                     active &= ~hit;
-                    if (!rc_any16(active)) {
+                    if (!rc_packet_any(active)) {
                         *btOut = bt, *bpOut = bp, *buOut = bu, *bvOut = bv;
                         return tests;
                     }
@@ -519,16 +593,10 @@ static inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
             int k = 0;
             for (int mask = m2.x | m2.y; mask != 0; mask &= mask - 1) {
                 const int c = popcount((mask & -mask) - 1);
-                const float16 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
-                const float16 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
-                const float16 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
-                const float16 tn = rc_max16(rc_max16(rc_min16(ax, bx), rc_min16(ay, by)),
-                                            rc_max16(rc_min16(az, bz), p->tmin));
-                const float16 tf =
-                    rc_min16(rc_min16(rc_max16(ax, bx), rc_max16(ay, by)), rc_max16(az, bz)) *
-                    1.0000004f;
+                float16 tn, tf;
+                rc_packet_child(p, &planes, nd, c, &tn, &tf);
                 const int16 enters = active & (tn <= rc_min16(tf, reach));
-                if (!rc_any16(enters)) continue;
+                if (!rc_packet_any(enters)) continue;
                 /* The nearest entry over the lanes that enter orders and culls the child. */
                 const float near = rc_hmin16_ordered(select((float16)(INFINITY), tn, enters));
                 int j = k++;
@@ -598,16 +666,11 @@ static inline RcBvhBeam rc_bvh_beam(const RcBvhPacket* p) {
     return b;
 }
 
-/* The lanes of the packet that enter child c of nd (the single-ray walk's slab test). */
-static inline int16 rc_packet_enters(const RcBvhPacket* p, __global const RcBvh8Node* nd, uint c,
-                                     int16 active) {
-    const float16 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
-    const float16 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
-    const float16 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
-    const float16 tn =
-        rc_max16(rc_max16(rc_min16(ax, bx), rc_min16(ay, by)), rc_max16(rc_min16(az, bz), p->tmin));
-    const float16 tf =
-        rc_min16(rc_min16(rc_max16(ax, bx), rc_max16(ay, by)), rc_max16(az, bz)) * 1.0000004f;
+/* The lanes of the packet that enter child c of nd. */
+static inline int16 rc_packet_enters(const RcBvhPacket* p, const RcPacketPlanes* q,
+                                     __global const RcBvh8Node* nd, uint c, int16 active) {
+    float16 tn, tf;
+    rc_packet_child(p, q, nd, c, &tn, &tf);
     return active & (tn <= rc_min16(tf, p->tmax));
 }
 
@@ -619,7 +682,7 @@ static inline uint16 rc_packet_leaf_occluded(const RcBvhPacket* p, uint ref,
     const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
     __global const float* leaf = leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN;
     uint16 tests = (uint16)(0);
-    for (uint k = 0; k < count && any(*active); ++k) {
+    for (uint k = 0; k < count && rc_packet_any(*active); ++k) {
         tests += as_uint16(*active) & (uint16)(1);
         float16 t, u, v;
         const int16 hit = *active & rc_bvh_packet_triangle(p, leaf, count, k, &t, &u, &v);
@@ -640,10 +703,14 @@ static inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* 
     uint ref = 0;
     uint16 tests = (uint16)(0);
     int16 active = p->active;
+    /* The beam runs the lanes reversed: their own inverse directions have the other signs. */
+    const RcPacketPlanes planes =
+        rc_packet_planes(p, !beam->slabs.positive[0], !beam->slabs.positive[1],
+                         !beam->slabs.positive[2], rc_slabs_one_octant(&beam->slabs));
     for (;;) {
         if (ref & RC_BVH8_LEAF) {
             tests += rc_packet_leaf_occluded(p, ref, leaves, &active, blocked);
-            if (!any(active)) return tests;
+            if (!rc_packet_any(active)) return tests;
         } else {
             __global const RcBvh8Node* nd = nodes + ref;
             float8 tn = (float8)(0.0f), tf = (float8)(beam->reach);
@@ -660,7 +727,8 @@ static inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* 
                 const int c = popcount((mask & -mask) - 1);
                 const uint child = nd->child[c];
                 /* A leaf costs its triangles: only when a lane reaches its box. */
-                if (!(child & RC_BVH8_LEAF) || any(rc_packet_enters(p, nd, c, active)))
+                if (!(child & RC_BVH8_LEAF) ||
+                    rc_packet_any(rc_packet_enters(p, &planes, nd, c, active)))
                     r[k++] = child;
             }
             if (k > 0) {
@@ -765,8 +833,7 @@ static inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, __globa
         int16 blocked = (int16)(0);
         const uint16 count =
             rc_bvh_trace_packet(&p, anyHit, nodes, leaves, &bt, &bp, &bu, &bv, &blocked);
-        rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, order, hits,
-                                blockedOut);
+        rc_packet_store_answers(anyHit, first, n, bt, bp, bu, bv, blocked, order, hits, blockedOut);
         rc_packet_store_counts(first, n, count, order, tests);
         return;
     }
