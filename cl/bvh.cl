@@ -408,10 +408,6 @@ static inline int16 rc_bvh_packet_triangle(const RcBvhPacket* p, __global const 
            (t > p->tmin) & (t < p->tmax);
 }
 
-/* Whether any lane of the mask is set: LLVM tests the lanes' sign bits together (vptest), where
- * rc_any16's OR tree and PoCL's any() take a chain of shuffles. */
-static inline int rc_packet_any(int16 m) { return __builtin_reduce_or(m < 0) != 0; }
-
 /* Rays as intervals, for one slab test of a node's eight boxes that culls a box only when no
  * ray can enter it: along each axis the points the distances are taken from within [lo, hi] and
  * the inverse directions within [iLo, iHi]. Rounding to nearest is monotonic, so the slab test's
@@ -569,7 +565,7 @@ static inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                 if (anyHit) {
                     *blocked |= hit;
                     active &= ~hit;
-                    if (!rc_packet_any(active)) {
+                    if (!rc_any16(active)) {
                         *btOut = bt, *bpOut = bp, *buOut = bu, *bvOut = bv;
                         return tests;
                     }
@@ -596,7 +592,7 @@ static inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
                 float16 tn, tf;
                 rc_packet_child(p, &planes, nd, c, &tn, &tf);
                 const int16 enters = active & (tn <= rc_min16(tf, reach));
-                if (!rc_packet_any(enters)) continue;
+                if (!rc_any16(enters)) continue;
                 /* The nearest entry over the lanes that enter orders and culls the child. */
                 const float near = rc_hmin16_ordered(select((float16)(INFINITY), tn, enters));
                 int j = k++;
@@ -682,7 +678,7 @@ static inline uint16 rc_packet_leaf_occluded(const RcBvhPacket* p, uint ref,
     const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
     __global const float* leaf = leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN;
     uint16 tests = (uint16)(0);
-    for (uint k = 0; k < count && rc_packet_any(*active); ++k) {
+    for (uint k = 0; k < count && rc_any16(*active); ++k) {
         tests += as_uint16(*active) & (uint16)(1);
         float16 t, u, v;
         const int16 hit = *active & rc_bvh_packet_triangle(p, leaf, count, k, &t, &u, &v);
@@ -710,7 +706,7 @@ static inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* 
     for (;;) {
         if (ref & RC_BVH8_LEAF) {
             tests += rc_packet_leaf_occluded(p, ref, leaves, &active, blocked);
-            if (!rc_packet_any(active)) return tests;
+            if (!rc_any16(active)) return tests;
         } else {
             __global const RcBvh8Node* nd = nodes + ref;
             float8 tn = (float8)(0.0f), tf = (float8)(beam->reach);
@@ -728,7 +724,7 @@ static inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* 
                 const uint child = nd->child[c];
                 /* A leaf costs its triangles: only when a lane reaches its box. */
                 if (!(child & RC_BVH8_LEAF) ||
-                    rc_packet_any(rc_packet_enters(p, &planes, nd, c, active)))
+                    rc_any16(rc_packet_enters(p, &planes, nd, c, active)))
                     r[k++] = child;
             }
             if (k > 0) {

@@ -75,25 +75,30 @@ RC_V16_INLINE float rc_hmax16_ordered(float16 a) {
     return m2.x > m2.y ? m2.x : m2.y;
 }
 
-/* Whether any lane of the mask is set, as one OR reduction: PoCL's any() tests lane by lane,
- * a branch each. */
+/* Clang's reductions of the lanes' signs compile to one mask test (vptest, kortest), where PoCL's
+ * any() and all() test lane by lane or fold the signs with a chain of shuffles; other OpenCL
+ * compilers take the portable forms. */
+#if defined(__clang__) && defined(__has_builtin)
+#if __has_builtin(__builtin_reduce_or) && __has_builtin(__builtin_reduce_and)
+#define RC_HAVE_REDUCE_MASK
+#endif
+#endif
+
+/* Whether any lane of the mask is set. */
 RC_V16_INLINE int rc_any16(int16 m) {
+#ifdef RC_HAVE_REDUCE_MASK
+    return __builtin_reduce_or(m < 0) != 0;
+#else
     const int8 m8 = m.lo | m.hi;
     const int4 m4 = m8.lo | m8.hi;
     const int2 m2 = m4.lo | m4.hi;
     return (m2.x | m2.y) < 0;
+#endif
 }
 
-/* Whether every lane of the mask is set. Clang's reduction of the lanes' signs compiles to one
- * mask test, where PoCL's all() extracts the signs and folds them with a chain of shuffles;
- * other OpenCL compilers keep all(). */
-#if defined(__clang__) && defined(__has_builtin)
-#if __has_builtin(__builtin_reduce_and)
-#define RC_HAVE_REDUCE_AND
-#endif
-#endif
+/* Whether every lane of the mask is set. */
 RC_V16_INLINE int rc_all16(int16 m) {
-#ifdef RC_HAVE_REDUCE_AND
+#ifdef RC_HAVE_REDUCE_MASK
     return __builtin_reduce_and(m < 0) != 0;
 #else
     return all(m);
