@@ -109,6 +109,7 @@ RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const RcRay* rays, __global co
         vstore16((uint16)(a, b), 0, ids);
 #pragma unroll
         for (uint j = 0; j < 8; ++j) v[j] = vload16(0, (__global const float*)(rays + ids[j]));
+        rc_transpose_pairs(v);
     } else {
         if (count == 16) {
             vstore16(id16, 0, ids);
@@ -121,8 +122,8 @@ RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const RcRay* rays, __global co
             v[j] = (float16)(vload8(0, (__global const float*)(rays + ids[j])),
                              vload8(0, (__global const float*)(rays + ids[j + 8])));
         }
+        rc_transpose_pairs(v);
     }
-    rc_transpose_pairs(v);
     RcLanes16 l;
     l.ox = v[0];
     l.oy = v[1];
