@@ -95,8 +95,9 @@ RC_SHADE_INLINE void rc_transpose_pairs(float16* v) {
  * float16, its lanes in the order of the pairs' first rays then of their second ones. Other
  * packets (shadow rays, scattered) read rays j and 8 + j as two 32-byte halves of one float16,
  * the lanes in slot order, unused lanes repeating the first ray (their results are not
- * written). Rays read as float4s and built into lanes element by element cost several times
- * the shuffles: LLVM folds shuffles of float4 loads back into that build. */
+ * written); a full packet's ids come from its one vector load, as ids chosen lane by lane
+ * compile to gathers. Rays read as float4s and built into lanes element by element take
+ * several times the shuffles: LLVM folds shuffles of float4 loads back into that build. */
 RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const RcRay* rays, __global const uint* rayIndex,
                                          RcLeaf leaf, uint first, uint* ids) {
     const uint count = min(16u, leaf.rayCount - first);
