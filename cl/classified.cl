@@ -89,55 +89,51 @@ RC_SHADE_INLINE void rc_transpose_pairs(float16* v) {
 }
 
 /* The rays of a packet as lanes: the leaf's rays [first, first + 16) (RcRay: origin, w: tmin;
- * direction, w: tmax; shadow rays too); ids[k] is lane k's ray. Eye rays come in runs of pixels:
- * a full packet whose rays pair up in consecutive slots (2j, 2j + 1) reads each pair as one
- * float16 and transposes the 8 vectors with shuffles (rc_transpose_pairs), its lanes in the
- * order of the pairs' first rays then of their second ones. Other packets read each ray as two
- * float4s, in order, unused lanes repeating the first ray (their results are not written), and
- * build the lanes element by element (RC_LANES16), which compiles to several times the
- * shuffles: LLVM folds shuffles of such loads back into that. Lanes written one float at a time
- * to private arrays and read back as float16 cost more still on PoCL (the arrays become
- * per-work-item context memory). */
+ * direction, w: tmax; shadow rays too); ids[k] is lane k's ray. Each float16 holds two rays'
+ * whole records and rc_transpose_pairs makes them lanes. Eye rays come in runs of pixels: a
+ * full packet whose rays pair up in consecutive slots (2j, 2j + 1) reads each pair as one
+ * float16, its lanes in the order of the pairs' first rays then of their second ones. Other
+ * packets (shadow rays, scattered) read rays j and 8 + j as two 32-byte halves of one float16,
+ * the lanes in slot order, unused lanes repeating the first ray (their results are not
+ * written); a full packet's ids come from its one vector load, as ids chosen lane by lane
+ * compile to gathers. Rays read as float4s and built into lanes element by element take
+ * several times the shuffles: LLVM folds shuffles of float4 loads back into that build. */
 RC_SHADE_INLINE RcLanes16 rc_load_packet(__global const RcRay* rays, __global const uint* rayIndex,
                                          RcLeaf leaf, uint first, uint* ids) {
     const uint count = min(16u, leaf.rayCount - first);
     __global const uint* index = rayIndex + leaf.rayBegin + first;
-    RcLanes16 l;
     uint16 id16 = (uint16)(0);
     if (count == 16) id16 = vload16(0, index);
     const uint8 a = id16.even, b = id16.odd;
+    float16 v[8];
     if (count == 16 && all(b == a + 1u)) {
         vstore16((uint16)(a, b), 0, ids);
-        float16 v[8];
 #pragma unroll
         for (uint j = 0; j < 8; ++j) v[j] = vload16(0, (__global const float*)(rays + ids[j]));
         rc_transpose_pairs(v);
-        l.ox = v[0];
-        l.oy = v[1];
-        l.oz = v[2];
-        l.tmin = v[3];
-        l.dx = v[4];
-        l.dy = v[5];
-        l.dz = v[6];
-        l.tmax = v[7];
     } else {
-        float4 o[16], d[16];
+        if (count == 16) {
+            vstore16(id16, 0, ids);
+        } else {
 #pragma unroll
-        for (uint k = 0; k < 16; ++k) {
-            const uint id = index[k < count ? k : 0];
-            ids[k] = id;
-            o[k] = rays[id].origin;
-            d[k] = rays[id].direction;
+            for (uint k = 0; k < 16; ++k) ids[k] = index[k < count ? k : 0];
         }
-        l.ox = RC_LANES16(o, x);
-        l.oy = RC_LANES16(o, y);
-        l.oz = RC_LANES16(o, z);
-        l.tmin = RC_LANES16(o, w);
-        l.dx = RC_LANES16(d, x);
-        l.dy = RC_LANES16(d, y);
-        l.dz = RC_LANES16(d, z);
-        l.tmax = RC_LANES16(d, w);
+#pragma unroll
+        for (uint j = 0; j < 8; ++j) {
+            v[j] = (float16)(vload8(0, (__global const float*)(rays + ids[j])),
+                             vload8(0, (__global const float*)(rays + ids[j + 8])));
+        }
+        rc_transpose_pairs(v);
     }
+    RcLanes16 l;
+    l.ox = v[0];
+    l.oy = v[1];
+    l.oz = v[2];
+    l.tmin = v[3];
+    l.dx = v[4];
+    l.dy = v[5];
+    l.dz = v[6];
+    l.tmax = v[7];
     const uint axis = leaf.face >> 1;
     const float sign = (leaf.face & 1) ? -1.0f : 1.0f;
     l.x = sign * (axis == 0 ? l.ox : (axis == 1 ? l.oy : l.oz));
@@ -433,8 +429,10 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
                                   : rc_packet_quadric(&L, q, L.tmax, &t));
         }
     }
-    int h[16];
-    vstore16(hit, 0, h);
-    for (uint k = 0; k < count; ++k) blocked[ids[k]] = h[k] != 0 ? 1 : 0;
+    const uchar16 flags = convert_uchar16(hit & 1);
+#pragma unroll
+    for (uint k = 0; k < 16; ++k) {
+        if (k < count) blocked[ids[k]] = flags[k];
+    }
     tests[p] = c * count;
 }
