@@ -15,7 +15,7 @@
 // faulted in, as a render's later batches see it (a fresh query's scratch pages
 // are faulted in inside the timed stage). CSV on stdout, one row per kind x method:
 //   kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,setup_s,
-//   tests_per_ray,hits,hits_digest
+//   tests_per_ray,hits,hits_digest,uv_digest
 // median_s: wall time of the query stage (host classification + copies + query kernels), the
 // medians of host_s/copy_s/kernel_s split it; shade_s: separate shading kernels the classified
 // styles launch (excluded from median_s; the vertex style's shading is fused into its query
@@ -23,7 +23,9 @@
 // classification's presorted lists); mrays_s = rays / median_s; hits: rays that hit / are
 // blocked; hits_digest: FNV-1a over every ray's answer in ray order (primitive id and the bits of
 // t for a hit, the blocked byte for a shadow ray), equal across methods exactly when every
-// ray's answer is. The rays of the classified query are read back from the device
+// ray's answer is; uv_digest: the same over the bits of each hit's u and v ("-" for shadow
+// rays), which every method computes with the same operations, so it too is equal across them.
+// The rays of the classified query are read back from the device
 // inside the timed stage, as the renderer does, but for eye rays, which it classifies from their
 // camera (Hierarchy::ClassifyPinhole) as the renderer does too. --classify sets a cost-function
 // parameter of the classified methods as `rayclass render --classify` does (classify::SetParam),
@@ -46,6 +48,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -527,14 +530,17 @@ Timings Measure(Bench& b, const Args& a, const std::string& method, const KindRa
 // Rays that hit or are blocked, and the digest of every ray's answer (outside the timing): both
 // equal across methods.
 struct HitSummary {
+    static constexpr uint64_t kBasis = 14695981039346656037ull;  // FNV-1a offset basis
     uint64_t hits = 0;
-    uint64_t digest = 14695981039346656037ull;  // FNV-1a offset basis
+    uint64_t digest = kBasis;
+    std::optional<uint64_t> uvDigest;  // none for shadow rays
 
-    void Add(const void* data, size_t size) {
+    static void Add(uint64_t& to, const void* data, size_t size) {
         for (size_t i = 0; i < size; ++i) {
-            digest = (digest ^ static_cast<const uint8_t*>(data)[i]) * 1099511628211ull;
+            to = (to ^ static_cast<const uint8_t*>(data)[i]) * 1099511628211ull;
         }
     }
+    void Add(const void* data, size_t size) { Add(digest, data, size); }
 };
 
 HitSummary SummarizeHits(clrt::Context& ctx, const KindRays& kr) {
@@ -551,6 +557,7 @@ HitSummary SummarizeHits(clrt::Context& ctx, const KindRays& kr) {
         }
         return s;
     }
+    s.uvDigest = HitSummary::kBasis;
     std::vector<RcHit> h(kr.n);
     clrt::Check("clEnqueueReadBuffer", [&] {
         ctx.queue().enqueueReadBuffer(kr.out, CL_TRUE, 0, kr.n * sizeof(RcHit), h.data());
@@ -560,20 +567,29 @@ HitSummary SummarizeHits(clrt::Context& ctx, const KindRays& kr) {
         if (x.prim == RC_NO_HIT) continue;
         ++s.hits;
         s.Add(&x.t, sizeof(x.t));
+        HitSummary::Add(*s.uvDigest, &x.u, sizeof(x.u));
+        HitSummary::Add(*s.uvDigest, &x.v, sizeof(x.v));
     }
     return s;
+}
+
+std::string UvDigestText(const HitSummary& hits) {
+    if (!hits.uvDigest) return "-";
+    char text[17];
+    std::snprintf(text, sizeof text, "%016llx", (unsigned long long)*hits.uvDigest);
+    return text;
 }
 
 void PrintRow(const KindRays& kr, const std::string& method, const Timings& t,
               const HitSummary& hits) {
     const double med = Median(t.wall);
-    std::printf("%s,%s,%u,%.6g,%.6g,%.6g,%.4g,%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%llu,%016llx\n",
+    std::printf("%s,%s,%u,%.6g,%.6g,%.6g,%.4g,%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%llu,%016llx,%s\n",
                 bench::kKinds[kr.kind], method.c_str(), kr.n, med,
                 *std::min_element(t.wall.begin(), t.wall.end()),
                 *std::max_element(t.wall.begin(), t.wall.end()), kr.n / med * 1e-6, Median(t.host),
                 Median(t.copy), Median(t.kern), Median(t.shade), Median(t.setup),
                 double(t.tests) / kr.n, (unsigned long long)hits.hits,
-                (unsigned long long)hits.digest);
+                (unsigned long long)hits.digest, UvDigestText(hits).c_str());
     std::fflush(stdout);
 }
 
@@ -613,7 +629,7 @@ int main(int argc, char** argv) try {
 
     std::printf(
         "kind,method,rays,median_s,min_s,max_s,mrays_s,host_s,copy_s,kernel_s,shade_s,"
-        "setup_s,tests_per_ray,hits,hits_digest\n");
+        "setup_s,tests_per_ray,hits,hits_digest,uv_digest\n");
     const uint32_t nLights = std::max<uint32_t>(1, uint32_t(sc.lights.size()));
     for (int k = 0; k < bench::kNumKinds; ++k) {
         const auto& set = sets.sets[k];

@@ -109,20 +109,21 @@ with tempfile.TemporaryDirectory(prefix="rayclass-bench-test-") as out:
             if (k, m) not in micro:
                 failures.append("micro.csv has no row for %s %s" % (k, m))
     # Every rayclass query gives every ray the same answer, ray by ray: the digest of the
-    # primitive ids and distances (Embree's watertight triangle test may decide a grazing ray
-    # differently from Moeller-Trumbore, so it is not compared).
-    digests = {}
-    for r in results:
-        if r["method"].startswith("embree"):
-            continue
-        if not r.get("hits_digest"):
-            failures.append("results.csv: no hits_digest for %s %s" % (r["kind"], r["method"]))
-        key = (r["scene"], r["camera"], r["kind"])
-        digests.setdefault(key, {}).setdefault(r.get("hits_digest"), []).append(r["method"])
-    for key, values in digests.items():
-        if len(values) != 1:
-            failures.append("methods disagree on the hits of %s, ray by ray: %s" %
-                            (key, sorted(values.values())))
+    # primitive ids and distances, and that of the hits' u and v (Embree's watertight triangle
+    # test may decide a grazing ray differently from Moeller-Trumbore, so it is not compared).
+    for column, what in (("hits_digest", "hits"), ("uv_digest", "hits' u and v")):
+        digests = {}
+        for r in results:
+            if r["method"].startswith("embree"):
+                continue
+            if not r.get(column):
+                failures.append("results.csv: no %s for %s %s" % (column, r["kind"], r["method"]))
+            key = (r["scene"], r["camera"], r["kind"])
+            digests.setdefault(key, {}).setdefault(r.get(column), []).append(r["method"])
+        for key, values in digests.items():
+            if len(values) != 1:
+                failures.append("methods disagree on the %s of %s, ray by ray: %s" %
+                                (what, key, sorted(values.values())))
     failure = load("failure.csv")
     for case in ("grid: teapot in a stadium", "cones: incoherent rays",
                  "classify: diffuse bounces", "kdtree: build time and memory"):
