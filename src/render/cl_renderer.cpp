@@ -174,6 +174,18 @@ class Preparer {
     std::future<std::unique_ptr<PreparedBatch>> next_;
 };
 
+// Generation 0's pages of `nRays` eye rays, their rays faulted in ahead of rc_generate_eye_rays's
+// first writes: where the program is still being built, the render need not wait for this.
+RayPages EyePages(PagePool& pool, size_t nRays) {
+    RayPages eye;
+    for (size_t first = 0; first < nRays; first += pool.PageRays()) {
+        eye.pages.push_back(pool.Take());
+        const size_t n = std::min(pool.PageRays(), nRays - first);
+        PopulateDeviceBuffer(eye.pages.back().rays, n * sizeof(RcRay));
+    }
+    return eye;
+}
+
 std::unique_ptr<RayQuery> WrapQuery(std::unique_ptr<RayQuery> query, const QueryWrapper& wrap) {
     return wrap ? wrap(std::move(query)) : std::move(query);
 }
@@ -284,6 +296,7 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
                        ctx.info().maxAllocBytes)),
       buffers_(ctx, batch_, params_.nLights),
       pool_(ctx, batch_),
+      rays_(EyePages(pool_, basis_.window.PixelCount())),
       order_(scene.Bounds()),
       readQueue_(clrt::Check("clCreateCommandQueue",
                              [&] { return cl::CommandQueue(ctx.context(), ctx.device()); })),
@@ -330,11 +343,12 @@ GenerationTally Frame::BeginGeneration(uint32_t generation, size_t nRays) {
     return tally;
 }
 
+// Into the pages EyePages took.
 void Frame::GenerateEyeRays(size_t nRays) {
-    for (size_t first = 0; first < nRays; first += batch_) {
+    for (size_t page = 0; page < rays_.pages.size(); ++page) {
+        const size_t first = page * batch_;
         const uint32_t n = uint32_t(std::min(batch_, nRays - first));
-        rays_.pages.push_back(pool_.Take());
-        SetArgs(eyeKernel_, camBuffer_, uint32_t(first), n, rays_.pages.back().rays);
+        SetArgs(eyeKernel_, camBuffer_, uint32_t(first), n, rays_.pages[page].rays);
         Launch(ctx_, eyeKernel_, n, timer_);
     }
 }
