@@ -57,8 +57,8 @@ cl::Buffer UploadVector(clrt::Context& ctx, const std::vector<T>& v) {
 // and which goes with the buffer.
 cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE);
 
-// Faults in the first `bytes` of a DeviceBuffer that lies in host memory of its own, so that
-// the kernel that first writes them need not (nothing for any other buffer).
+// Faults in the first `bytes` of a DeviceBuffer made over host memory of its own, so that the
+// kernel that first writes them need not (nothing where the device allocated the buffer).
 void PopulateDeviceBuffer(const cl::Buffer& buffer, size_t bytes);
 
 // Rays per batch: `requested`, at most the image's rays, and few enough that the largest buffer
