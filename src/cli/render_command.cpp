@@ -77,49 +77,47 @@ class PendingTextFile {
 
 // The OpenCL device and the frames' program, started on a worker thread when the command starts:
 // PoCL's start and its load of the program then overlap the scene load and the choice of eye
-// rays, and every frame of --frames shares the one program.
+// rays, the load of the program also the render's set-up that needs only the device, and every
+// frame of --frames shares the one program.
 class DeviceStart {
   public:
     explicit DeviceStart(const RenderArgs& r)
-        : started_(std::async(std::launch::async, Start, r.device, r.options, &abandoned_)) {}
+        : context_(contextSet_.get_future()),
+          program_(std::async(std::launch::async, &DeviceStart::Start, this, r.device, r.options)) {
+    }
     DeviceStart(const DeviceStart&) = delete;
     DeviceStart& operator=(const DeviceStart&) = delete;
-    ~DeviceStart() { abandoned_ = true; }  // then started_ waits for the worker
+    ~DeviceStart() { abandoned_ = true; }  // then program_ waits for the worker
 
-    // Wait for the start the first time; rethrow the device's error, and the program build's.
-    clrt::Context& Context() { return *Get().ctx; }
+    // Wait for the device the first time; rethrow its error.
+    clrt::Context& Context() { return *context_.get(); }
+    // Wait for the program the first time; rethrow the device's error, and the program build's.
     const render::FrameProgram& Program() {
-        Started& started = Get();
-        if (started.buildError) std::rethrow_exception(started.buildError);
-        return started.program;
+        if (!built_) built_ = program_.get();
+        return *built_;
     }
 
   private:
-    struct Started {
-        std::unique_ptr<clrt::Context> ctx;
-        render::FrameProgram program;
-        std::exception_ptr buildError;  // reported when the render asks for the program
-    };
-    static Started Start(const std::string& spec, const render::RenderOptions& options,
-                         const std::atomic<bool>* abandoned) {
-        Started out{std::make_unique<clrt::Context>(spec), {}, {}};
-        // A command that failed meanwhile (a bad scene) need not wait for a build from source.
-        if (*abandoned) return out;
+    // On the worker: the device, then its program, unless the command failed meanwhile (a bad
+    // scene) and need not wait for a build from source.
+    render::FrameProgram Start(const std::string& spec, const render::RenderOptions& options) {
         try {
-            out.program = render::BuildFrameProgram(*out.ctx, options);
+            ctx_ = std::make_unique<clrt::Context>(spec);
         } catch (...) {
-            out.buildError = std::current_exception();
+            contextSet_.set_exception(std::current_exception());
+            throw;
         }
-        return out;
-    }
-    Started& Get() {
-        if (!done_) done_ = started_.get();
-        return *done_;
+        contextSet_.set_value(ctx_.get());
+        if (abandoned_) return {};
+        return render::BuildFrameProgram(*ctx_, options);
     }
 
     std::atomic<bool> abandoned_{false};
-    std::future<Started> started_;
-    std::optional<Started> done_;
+    std::unique_ptr<clrt::Context> ctx_;  // set by the worker before contextSet_
+    std::promise<clrt::Context*> contextSet_;
+    std::shared_future<clrt::Context*> context_;
+    std::optional<render::FrameProgram> built_;
+    std::future<render::FrameProgram> program_;  // last: destroyed (awaited) first
 };
 
 // The render on the started device, its eye rays' first hits from the path that
@@ -136,7 +134,7 @@ image::Image RenderOnDevice(const RenderArgs& r, const scene::Scene& scene,
     }
     stats.eyeRaysChoice = eyeRays.choice;
     render::ClRenderer renderer(device.Context(), scene, options, eyeRays.hits.get());
-    renderer.UseProgram(device.Program());
+    renderer.AwaitProgram([&device] { return device.Program(); });
     return renderer.Render(stats);
 }
 

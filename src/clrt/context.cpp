@@ -1,9 +1,10 @@
 #include "rayclass/clrt/context.h"
 
+#include <cctype>
 #include <map>
-#include <regex>
 #include <set>
-#include <sstream>
+#include <string>
+#include <string_view>
 
 namespace rayclass::clrt {
 
@@ -55,27 +56,47 @@ std::vector<Found> AllDevices() {
     return found;
 }
 
+// `s` without its leading white space.
+std::string_view TrimFront(std::string_view s) {
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+    return s;
+}
+
+// The file a line `#include "name"` names (white space allowed around its tokens), else empty.
+// Parsed by hand: std::regex over every line was slow enough to show in the device's start.
+std::string_view IncludedFile(std::string_view line) {
+    line = TrimFront(line);
+    if (!line.starts_with('#')) return {};
+    line = TrimFront(line.substr(1));
+    if (!line.starts_with("include")) return {};
+    line = TrimFront(line.substr(std::string_view("include").size()));
+    if (!line.starts_with('"')) return {};
+    line.remove_prefix(1);
+    const size_t close = line.find('"');
+    if (close == std::string_view::npos || !TrimFront(line.substr(close + 1)).empty()) return {};
+    return line.substr(0, close);
+}
+
 void AppendFile(const std::string& name, const std::string& sharedPrefix,
-                std::set<std::string>& included, std::ostringstream& out) {
+                std::set<std::string>& included, std::string& out) {
     const auto& sources = EmbeddedKernelSources();
     auto it = sources.find(name);
     if (it == sources.end()) throw Error("kernel source '" + name + "' is not embedded");
     if (!included.insert(name).second) return;
-    static const std::regex kInclude(R"(^\s*#\s*include\s*"([^"]+)\"\s*$)");
-    std::istringstream in(it->second);
-    std::string line;
-    int lineNo = 0;
-    out << "#line 1 \"" << name << "\"\n";
-    while (std::getline(in, line)) {
-        ++lineNo;
-        std::smatch m;
-        if (std::regex_match(line, m, kInclude)) {
-            std::string target = m[1];
+    out += "#line 1 \"" + name + "\"\n";
+    std::string_view text = it->second;
+    for (int lineNo = 1; !text.empty(); ++lineNo) {
+        const size_t end = text.find('\n');
+        const std::string_view line = text.substr(0, end);
+        text.remove_prefix(end == std::string_view::npos ? text.size() : end + 1);
+        if (const std::string_view file = IncludedFile(line); !file.empty()) {
+            std::string target(file);
             if (!sources.count(target)) target = sharedPrefix + target;
             AppendFile(target, sharedPrefix, included, out);
-            out << "#line " << lineNo + 1 << " \"" << name << "\"\n";
+            out += "#line " + std::to_string(lineNo + 1) + " \"" + name + "\"\n";
         } else {
-            out << line << '\n';
+            out += line;
+            out += '\n';
         }
     }
 }
@@ -134,10 +155,10 @@ Context::Context(const std::string& spec) {
 }
 
 std::string AssembleProgramSource(const std::vector<std::string>& files) {
-    std::ostringstream out;
+    std::string out;
     std::set<std::string> included;
     for (const auto& f : files) AppendFile(f, "shared/", included, out);
-    return out.str();
+    return out;
 }
 
 namespace {

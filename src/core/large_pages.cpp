@@ -1,6 +1,7 @@
 #include "rayclass/core/large_pages.h"
 
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <cstdint>
 #include <new>
@@ -16,6 +17,18 @@ void* AllocateLarge(size_t bytes) {
 
 void FreeLarge(void* p, size_t bytes) noexcept {
     if (p) munmap(p, bytes);
+}
+
+void PopulateLarge(void* p, size_t bytes) noexcept {
+#ifdef MADV_POPULATE_WRITE
+    // madvise takes whole pages: the range's first page from its start.
+    const auto page = uintptr_t(sysconf(_SC_PAGESIZE));
+    const uintptr_t first = uintptr_t(p) & ~(page - 1);
+    // A kernel without it (before Linux 5.14) leaves the pages to their first writes.
+    madvise(reinterpret_cast<void*>(first), uintptr_t(p) + bytes - first, MADV_POPULATE_WRITE);
+#else
+    (void)p, (void)bytes;
+#endif
 }
 
 }  // namespace rayclass

@@ -41,13 +41,15 @@ RcRenderParams MakeRenderParams(const scene::Scene& scene, const RenderOptions& 
     return params;
 }
 
-// The frame's program: `given` (built before the render, its build time kept apart), else the
-// shared one built here, whose build the render waits for.
+// The frame's program: `given`'s (built before or beside the render: its build time is kept
+// apart, the render's wait for it is `program_build`), else the shared one built here, whose
+// build the render waits for.
 cl::Program FrameProgramOf(clrt::Context& ctx, const RenderOptions& options,
-                           const FrameProgram* given, RenderStats& stats) {
-    const FrameProgram program = given ? *given : BuildSharedFrameProgram(ctx, options);
+                           const ProgramSource& given, RenderStats& stats) {
+    const auto t0 = Clock::now();
+    const FrameProgram program = given ? given() : BuildSharedFrameProgram(ctx, options);
     stats.programFromCache = program.fromCache;
-    stats.timeS["program_build"] = given ? 0.0 : program.seconds;
+    stats.timeS["program_build"] = given ? SecondsSince(t0) : program.seconds;
     if (given) stats.timeS["program_build_thread"] = program.seconds;
     return program.program;
 }
@@ -172,6 +174,18 @@ class Preparer {
     std::future<std::unique_ptr<PreparedBatch>> next_;
 };
 
+// Generation 0's pages of `nRays` eye rays, their rays faulted in ahead of rc_generate_eye_rays's
+// first writes: where the program is still being built, the render need not wait for this.
+RayPages EyePages(PagePool& pool, size_t nRays) {
+    RayPages eye;
+    for (size_t first = 0; first < nRays; first += pool.PageRays()) {
+        eye.pages.push_back(pool.Take());
+        const size_t n = std::min(pool.PageRays(), nRays - first);
+        PopulateDeviceBuffer(eye.pages.back().rays, n * sizeof(RcRay));
+    }
+    return eye;
+}
+
 std::unique_ptr<RayQuery> WrapQuery(std::unique_ptr<RayQuery> query, const QueryWrapper& wrap) {
     return wrap ? wrap(std::move(query)) : std::move(query);
 }
@@ -180,7 +194,7 @@ std::unique_ptr<RayQuery> WrapQuery(std::unique_ptr<RayQuery> query, const Query
 class Frame {
   public:
     Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
-          const FrameProgram* program, EyeHitSource* eyeHitSource, const QueryWrapper& wrapQuery,
+          const ProgramSource& program, EyeHitSource* eyeHitSource, const QueryWrapper& wrapQuery,
           RenderStats& stats);
 
     // Every generation, from the eye rays until no ray is spawned.
@@ -233,18 +247,16 @@ class Frame {
     image::Image img_;
     // Started before the program build and the scene upload, which it overlaps.
     const std::shared_ptr<BvhBuild> bvhBuild_;
-    const cl::Program program_;
     const RcRenderParams params_;
+    // What needs no program comes before it: where the program is still being built (on the
+    // thread that started the device), this set-up overlaps the build.
     const SceneBuffers sceneBuffers_;
-    const std::unique_ptr<RayQuery> query_;
     const RcCamera cam_;
     const cl::Buffer camBuffer_;
-    cl::Kernel eyeKernel_, shadeKernel_;
     // Later generations are split into batches of the same size, so no buffer need be larger
     // than the image.
     const size_t batch_;
     BatchBuffers buffers_;
-    cl::Kernel compactKernel_;
     PagePool pool_;
     RayPages rays_, next_;        // the generation in flight, and the one its batches spawn
     std::vector<uint32_t> live_;  // the batch's live secondary slots
@@ -254,6 +266,9 @@ class Frame {
     bool branched_ = false;
     // Prepare's queue: its reads do not wait for the kernels on ctx_.queue().
     cl::CommandQueue readQueue_;
+    const cl::Program program_;
+    const std::unique_ptr<RayQuery> query_;
+    cl::Kernel eyeKernel_, shadeKernel_, compactKernel_;
     KernelTimer timer_;
     double hostSeconds_ = 0;  // the accumulation's and the ray ordering's
     const size_t nEye_;
@@ -264,8 +279,8 @@ class Frame {
 };
 
 Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions& options,
-             const FrameProgram* program, EyeHitSource* eyeHitSource, const QueryWrapper& wrapQuery,
-             RenderStats& stats)
+             const ProgramSource& program, EyeHitSource* eyeHitSource,
+             const QueryWrapper& wrapQuery, RenderStats& stats)
     : ctx_(ctx),
       options_(options),
       eyeHitSource_(eyeHitSource),
@@ -273,23 +288,24 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
       basis_(scene.camera, options.window),
       img_(NewImage(basis_, options.aovs)),
       bvhBuild_(StartBvhBuild(scene, options)),
-      program_(FrameProgramOf(ctx, options, program, stats)),
       params_(MakeRenderParams(scene, options)),
       sceneBuffers_(ctx, scene, params_),
-      query_(WrapQuery(MakeQuery(ctx, program_, sceneBuffers_, scene, options, stats, bvhBuild_),
-                       wrapQuery)),
       cam_(basis_.ToDevice()),
       camBuffer_(UploadVector(ctx, std::vector<RcCamera>{cam_})),
-      eyeKernel_(program_, "rc_generate_eye_rays"),
-      shadeKernel_(program_, "rc_shade16_ids"),
       batch_(BatchRays(options.batchRays, basis_.window.PixelCount(), params_.nLights,
                        ctx.info().maxAllocBytes)),
       buffers_(ctx, batch_, params_.nLights),
-      compactKernel_(program_, "rc_compact_rays"),
       pool_(ctx, batch_),
+      rays_(EyePages(pool_, basis_.window.PixelCount())),
       order_(scene.Bounds()),
       readQueue_(clrt::Check("clCreateCommandQueue",
                              [&] { return cl::CommandQueue(ctx.context(), ctx.device()); })),
+      program_(FrameProgramOf(ctx, options, program, stats)),
+      query_(WrapQuery(MakeQuery(ctx, program_, sceneBuffers_, scene, options, stats, bvhBuild_),
+                       wrapQuery)),
+      eyeKernel_(program_, "rc_generate_eye_rays"),
+      shadeKernel_(program_, "rc_shade16_ids"),
+      compactKernel_(program_, "rc_compact_rays"),
       nEye_(basis_.window.PixelCount()) {
     stats.width = basis_.width;
     stats.height = basis_.height;
@@ -327,11 +343,12 @@ GenerationTally Frame::BeginGeneration(uint32_t generation, size_t nRays) {
     return tally;
 }
 
+// Into the pages EyePages took.
 void Frame::GenerateEyeRays(size_t nRays) {
-    for (size_t first = 0; first < nRays; first += batch_) {
+    for (size_t page = 0; page < rays_.pages.size(); ++page) {
+        const size_t first = page * batch_;
         const uint32_t n = uint32_t(std::min(batch_, nRays - first));
-        rays_.pages.push_back(pool_.Take());
-        SetArgs(eyeKernel_, camBuffer_, uint32_t(first), n, rays_.pages.back().rays);
+        SetArgs(eyeKernel_, camBuffer_, uint32_t(first), n, rays_.pages[page].rays);
         Launch(ctx_, eyeKernel_, n, timer_);
     }
 }
@@ -543,13 +560,22 @@ void ClRenderer::UseProgram(FrameProgram program) {
     if (!ServesFrame(ctx_, program, options_)) {
         throw std::invalid_argument("UseProgram: a program built for other render options");
     }
-    program_ = std::move(program);
+    program_ = [program = std::move(program)] { return program; };
+}
+
+void ClRenderer::AwaitProgram(ProgramSource program) {
+    program_ = [&ctx = ctx_, options = options_, program = std::move(program)] {
+        FrameProgram out = program();
+        if (!ServesFrame(ctx, out, options)) {
+            throw std::invalid_argument("AwaitProgram: a program built for other render options");
+        }
+        return out;
+    };
 }
 
 image::Image ClRenderer::Render(RenderStats& stats) {
     const auto tStart = Clock::now();
-    Frame frame(ctx_, scene_, options_, program_ ? &*program_ : nullptr, eyeHits_, wrapQuery_,
-                stats);
+    Frame frame(ctx_, scene_, options_, program_, eyeHits_, wrapQuery_, stats);
     frame.Trace();
     return frame.Finish(tStart);
 }

@@ -79,6 +79,12 @@ cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags) {
     return buffer;
 }
 
+void PopulateDeviceBuffer(const cl::Buffer& buffer, size_t bytes) {
+    if (!(buffer.getInfo<CL_MEM_FLAGS>() & CL_MEM_USE_HOST_PTR)) return;
+    PopulateLarge(buffer.getInfo<CL_MEM_HOST_PTR>(),
+                  std::min(bytes, buffer.getInfo<CL_MEM_SIZE>()));
+}
+
 size_t BatchRays(size_t requested, size_t imageRays, uint32_t nLights, uint64_t maxAllocBytes) {
     const uint64_t perRay = std::max<uint64_t>(
         {uint64_t(nLights) * sizeof(RcRay), 2 * sizeof(RcRay), 2 * sizeof(RcRayInfo)});

@@ -1,15 +1,17 @@
 // Large host arrays: page-aligned, zeroed, writable to the last byte, not advised for huge
-// pages, and returned to the system when freed; DenseScratchVector takes that path from
-// kLargeAllocationBytes on, ScratchVector never.
+// pages, faulted in ahead on request, and returned to the system when freed;
+// DenseScratchVector takes that path from kLargeAllocationBytes on, ScratchVector never.
 #include "rayclass/core/large_pages.h"
 
 #include <gtest/gtest.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <cstdint>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "core/mapped.h"
 #include "rayclass/core/scratch_vector.h"
@@ -73,6 +75,33 @@ TEST(LargePages, NotAdvisedForHugePages) {
     const size_t bytes = 4 * kLargeAllocationBytes;
     void* p = AllocateLarge(bytes);
     EXPECT_EQ(ThpEligible(p), "0");
+    FreeLarge(p, bytes);
+}
+
+// Which of the pages of [p, p + bytes) (p page-aligned) are in memory, as mincore says.
+std::vector<bool> Resident(void* p, size_t bytes) {
+    const auto page = size_t(sysconf(_SC_PAGESIZE));
+    std::vector<unsigned char> in((bytes + page - 1) / page);
+    EXPECT_EQ(mincore(p, bytes, in.data()), 0);
+    std::vector<bool> out;
+    for (unsigned char c : in) out.push_back(c & 1);
+    return out;
+}
+
+TEST(LargePages, PopulateFaultsInTheRangeItIsGivenAndKeepsItZero) {
+    const auto page = size_t(sysconf(_SC_PAGESIZE));
+    const size_t bytes = 16 * page;
+    auto* p = static_cast<unsigned char*>(AllocateLarge(bytes));
+    EXPECT_EQ(Resident(p, bytes), std::vector<bool>(16, false));
+    // From the middle of page 2 to the middle of page 5: pages 2 to 5.
+    PopulateLarge(p + 2 * page + page / 2, 3 * page);
+    const std::vector<bool> resident = Resident(p, bytes);
+#ifdef MADV_POPULATE_WRITE
+    if (resident[2]) {  // else a kernel before Linux 5.14, which cannot
+        for (size_t k = 0; k < 16; ++k) EXPECT_EQ(resident[k], k >= 2 && k <= 5) << k;
+    }
+#endif
+    for (size_t i = 0; i < bytes; ++i) ASSERT_EQ(p[i], 0) << i;
     FreeLarge(p, bytes);
 }
 

@@ -20,4 +20,8 @@ void* AllocateLarge(size_t bytes);
 // Frees what AllocateLarge(bytes) returned.
 void FreeLarge(void* p, size_t bytes) noexcept;
 
+// Faults in the pages of [p, p + bytes) (within one AllocateLarge allocation) ahead of their
+// first writes, where the system can (MADV_POPULATE_WRITE); their contents stay zero.
+void PopulateLarge(void* p, size_t bytes) noexcept;
+
 }  // namespace rayclass

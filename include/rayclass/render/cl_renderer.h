@@ -9,7 +9,6 @@
 
 #include <functional>
 #include <memory>
-#include <optional>
 
 #include "rayclass/clrt/context.h"
 #include "rayclass/image/image.h"
@@ -25,6 +24,8 @@ namespace rayclass::render {
 // Takes the query a render builds and returns the one it uses: a decorator that sees every
 // generation's rays and answers (the tests' check of every hit against brute force).
 using QueryWrapper = std::function<std::unique_ptr<RayQuery>(std::unique_ptr<RayQuery>)>;
+// Gives the program a render uses, waiting for it where it is still being built.
+using ProgramSource = std::function<FrameProgram()>;
 
 class ClRenderer {
   public:
@@ -38,6 +39,10 @@ class ClRenderer {
     // ahead (e.g. while the scene loads) or shared by several renders; BuildFrameProgram's loads
     // quicker, for a command's one render. Throws std::invalid_argument for any other program.
     void UseProgram(FrameProgram program);
+    // As UseProgram, with a program still being built (e.g. on the thread that started the
+    // device): Render calls `program` once the frame's set-up that needs no program is done, so
+    // that set-up overlaps the build, and throws std::invalid_argument where it does not serve.
+    void AwaitProgram(ProgramSource program);
     image::Image Render(RenderStats& stats);
 
   private:
@@ -46,7 +51,7 @@ class ClRenderer {
     RenderOptions options_;
     EyeHitSource* eyeHits_;
     QueryWrapper wrapQuery_;
-    std::optional<FrameProgram> program_;
+    ProgramSource program_;  // empty: the shared program
 };
 
 }  // namespace rayclass::render

@@ -57,6 +57,10 @@ cl::Buffer UploadVector(clrt::Context& ctx, const std::vector<T>& v) {
 // and which goes with the buffer.
 cl::Buffer DeviceBuffer(clrt::Context& ctx, size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE);
 
+// Faults in the first `bytes` of a DeviceBuffer made over host memory of its own, so that the
+// kernel that first writes them need not (nothing where the device allocated the buffer).
+void PopulateDeviceBuffer(const cl::Buffer& buffer, size_t bytes);
+
 // Rays per batch: `requested`, at most the image's rays, and few enough that the largest buffer
 // a batch needs per ray (its shadow rays, one per light, or its two secondary rays and their
 // records) fits one allocation of the device. At least one.
