@@ -7,6 +7,7 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <numeric>
 
 #include "filter.h"
@@ -76,6 +77,30 @@ int CellBits(uint32_t nRays, uint32_t roots, int lightCells) {
     int bits = kMinCellBits;
     while (bits < kMaxCellBits && uint64_t(roots) * kRaysPerCell << (2 * bits) < nRays) ++bits;
     return bits;
+}
+
+const CellBox kEmptyCell{255, 0, 255, 0, -kInf};
+
+// A root's cells, in key order: each cell's first position (`begin`, the root's size after the
+// last) and its box; each piece's count of a cell becomes its first position there (within a
+// cell, the pieces' rays follow the pieces before). Returns the root's size.
+uint32_t PlaceRoot(uint32_t perRoot, size_t nPieces, uint32_t* const* counts,
+                   const float* const* ends, uint32_t* begin, CellBox* cells) {
+    uint32_t at = 0;
+    for (uint32_t c = 0; c < perRoot; ++c) {
+        begin[c] = at;
+        float e = -kInf;
+        for (size_t p = 0; p < nPieces; ++p) {
+            const uint32_t count = counts[p][c];
+            counts[p][c] = at;
+            at += count;
+            e = std::max(e, ends[p][c]);
+        }
+        const uint8_t u = uint8_t(Compact(c >> 1)), v = uint8_t(Compact(c));
+        cells[c] = at > begin[c] ? CellBox{u, u, v, v, e} : kEmptyCell;
+    }
+    begin[perRoot] = at;
+    return at;
 }
 
 // Starts a run of `key` at ray `first` unless the last run has that key.
@@ -272,9 +297,70 @@ RC_AVX512 void SortRuns16(const CellRun* runs, uint32_t nRuns, int bits2, const 
         }
     }
 }
-#endif
 
-const CellBox kEmptyCell{255, 0, 255, 0, -kInf};
+// Compact of each lane.
+RC_AVX512 __m512i Compact16(__m512i x) {
+    constexpr __mmask16 kAll = 0xFFFF;
+    x = _mm512_and_si512(x, _mm512_set1_epi32(0x5555));
+    x = _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_srli_epi32(kAll, x, 1)),
+                         _mm512_set1_epi32(0x3333));
+    x = _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_srli_epi32(kAll, x, 2)),
+                         _mm512_set1_epi32(0x0F0F));
+    return _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_srli_epi32(kAll, x, 4)),
+                            _mm512_set1_epi32(0x00FF));
+}
+
+// PlaceRoot, 16 cells at a time (a root has at least 16): the cells' positions from a prefix sum
+// over the lanes, their boxes stored two vectors at a time.
+RC_AVX512 uint32_t PlaceRoot16(uint32_t perRoot, size_t nPieces, uint32_t* const* counts,
+                               const float* const* ends, uint32_t* begin, CellBox* cells) {
+    static_assert(sizeof(CellBox) == 8 && offsetof(CellBox, end) == 4);
+    constexpr __mmask16 kAll = 0xFFFF;
+    const __m512i zero = _mm512_setzero_si512();
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    // An empty cell's (u, v) bytes (kEmptyCell), and the order of two cells' halves in memory.
+    const __m512i emptyUv = _mm512_set1_epi32(0x00FF00FF);
+    const __m512i low = _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23);
+    const __m512i high = _mm512_add_epi32(low, _mm512_set1_epi32(8));
+    uint32_t at = 0;
+    for (uint32_t c = 0; c < perRoot; c += 16) {
+        __m512i total = zero;
+        __m512 e = _mm512_set1_ps(-kInf);
+        for (size_t p = 0; p < nPieces; ++p) {
+            total = _mm512_add_epi32(total, _mm512_loadu_si512(counts[p] + c));
+            e = Max16(e, _mm512_loadu_ps(ends[p] + c));
+        }
+        // The totals up to each lane, then the first position of each lane's cell.
+        __m512i sum = total;
+        sum = _mm512_add_epi32(sum, _mm512_maskz_alignr_epi32(kAll, sum, zero, 15));
+        sum = _mm512_add_epi32(sum, _mm512_maskz_alignr_epi32(kAll, sum, zero, 14));
+        sum = _mm512_add_epi32(sum, _mm512_maskz_alignr_epi32(kAll, sum, zero, 12));
+        sum = _mm512_add_epi32(sum, _mm512_maskz_alignr_epi32(kAll, sum, zero, 8));
+        __m512i first = _mm512_add_epi32(_mm512_sub_epi32(sum, total), _mm512_set1_epi32(int(at)));
+        _mm512_storeu_si512(begin + c, first);
+        for (size_t p = 0; p < nPieces; ++p) {
+            const __m512i count = _mm512_loadu_si512(counts[p] + c);
+            _mm512_storeu_si512(counts[p] + c, first);
+            first = _mm512_add_epi32(first, count);
+        }
+        at += uint32_t(_mm_extract_epi32(_mm512_maskz_extracti32x4_epi32(0xF, sum, 3), 3));
+        const __m512i cell = _mm512_add_epi32(lane, _mm512_set1_epi32(int(c)));
+        const __m512i u = Compact16(_mm512_maskz_srli_epi32(kAll, cell, 1)), v = Compact16(cell);
+        // uLo, uHi, vLo, vHi: u twice, then v twice.
+        const __m512i uv = _mm512_mullo_epi32(
+            _mm512_or_si512(u, _mm512_maskz_slli_epi32(kAll, v, 16)), _mm512_set1_epi32(0x0101));
+        const __mmask16 full = _mm512_test_epi32_mask(total, total);
+        const __m512i box = _mm512_mask_blend_epi32(full, emptyUv, uv);
+        const __m512i end =
+            _mm512_castps_si512(_mm512_mask_blend_ps(full, _mm512_set1_ps(-kInf), e));
+        int32_t* to = reinterpret_cast<int32_t*>(cells + c);
+        _mm512_storeu_si512(to, _mm512_permutex2var_epi32(box, low, end));
+        _mm512_storeu_si512(to + 16, _mm512_permutex2var_epi32(box, high, end));
+    }
+    begin[perRoot] = at;
+    return at;
+}
+#endif
 
 CellBox Merge(const CellBox& a, const CellBox& b) {
     return {std::min(a.uLo, b.uLo), std::max(a.uHi, b.uHi), std::min(a.vLo, b.vLo),
@@ -369,8 +455,6 @@ bool LightCellSubdivision::CountCells(const Pieces& pieces, std::vector<rc_uint>
 }
 
 uint32_t LightCellSubdivision::PlaceCells(const Pieces& pieces) {
-    // Within a root, each cell's rays follow the cells before, and within a cell each piece's
-    // the pieces before (so a cell's rays keep their order).
     CellGrid& g = cells_;
     const uint32_t perRoot = 1u << (2 * g.bits);
     const uint32_t stride = perRoot + 1;
@@ -390,20 +474,13 @@ uint32_t LightCellSubdivision::PlaceCells(const Pieces& pieces) {
                 counts[p] = g.count[p].data() + size_t(r) * perRoot;
                 ends[p] = g.end[p].data() + size_t(r) * perRoot;
             }
-            uint32_t at = 0;
-            for (uint32_t c = 0; c < perRoot; ++c) {
-                begin[c] = at;
-                float e = -kInf;
-                for (size_t p = 0; p < pieces.count; ++p) {
-                    const uint32_t count = counts[p][c];
-                    counts[p][c] = at;
-                    at += count;
-                    e = std::max(e, ends[p][c]);
-                }
-                const uint8_t u = uint8_t(Compact(c >> 1)), v = uint8_t(Compact(c));
-                cells[c] = at > begin[c] ? CellBox{u, u, v, v, e} : kEmptyCell;
-            }
-            begin[perRoot] = at;
+#if defined(RC_AVX512_PATHS)
+            const auto place = UseAvx512() ? PlaceRoot16 : PlaceRoot;
+#else
+            const auto place = PlaceRoot;
+#endif
+            const uint32_t at =
+                place(perRoot, pieces.count, counts.data(), ends.data(), begin, cells);
             g.rootBegin[r + 1] = at;  // the root's size, until summed below
             if (at > 0) BuildPyramid(box, g.bits);
         }
