@@ -7,6 +7,8 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <cstddef>
+#include <numeric>
 
 #include "filter.h"
 #include "rays16.h"
@@ -77,6 +79,35 @@ int CellBits(uint32_t nRays, uint32_t roots, int lightCells) {
     return bits;
 }
 
+const CellBox kEmptyCell{255, 0, 255, 0, -kInf};
+
+// A root's cells, in key order: each cell's first position (`begin`, the root's size after the
+// last) and its box; each piece's count of a cell becomes its first position there (within a
+// cell, the pieces' rays follow the pieces before). Returns the root's size.
+uint32_t PlaceRoot(uint32_t perRoot, size_t nPieces, uint32_t* const* counts,
+                   const float* const* ends, uint32_t* begin, CellBox* cells) {
+    uint32_t at = 0;
+    for (uint32_t c = 0; c < perRoot; ++c) {
+        begin[c] = at;
+        float e = -kInf;
+        for (size_t p = 0; p < nPieces; ++p) {
+            const uint32_t count = counts[p][c];
+            counts[p][c] = at;
+            at += count;
+            e = std::max(e, ends[p][c]);
+        }
+        const uint8_t u = uint8_t(Compact(c >> 1)), v = uint8_t(Compact(c));
+        cells[c] = at > begin[c] ? CellBox{u, u, v, v, e} : kEmptyCell;
+    }
+    begin[perRoot] = at;
+    return at;
+}
+
+// Starts a run of `key` at ray `first` unless the last run has that key.
+inline void AddRun(KeyOut& out, uint32_t key, uint32_t first) {
+    if (out.nRuns == 0 || out.runs[out.nRuns - 1].key != key) out.runs[out.nRuns++] = {key, first};
+}
+
 #if defined(RC_AVX512_PATHS)
 // The keys of 16 rays: a ray's root (point * kFaceCount + face) above its (u, v) cell's bits,
 // interleaved, u's first.
@@ -141,12 +172,14 @@ RC_AVX512 unsigned RunStarts16(__m512i k) {
     return unsigned(_mm512_cmpneq_epi32_mask(k, previous)) | 1u;
 }
 
-// Adds the lanes `fast` of keys k with ends e to their cells' counts and largest ends.
-// Neighbouring rays often share a cell, so each run of equal keys in the block updates its cell
+// Adds the runs of equal keys k of the `live` lanes (the first ones) of a block of rays, the
+// first `base`, to out.runs, and the lanes with a key (not kNoNode), ends e, to their cells'
+// counts and largest ends. Neighbouring rays often share a cell, so each run updates its cell
 // once (its length, and the largest end found by a segmented max over the run). The runs' bounds
 // are bit masks in scalar registers: they cost no vector work.
-RC_AVX512 void AddRuns16(__m512i k, __m512 e, __mmask16 fast, uint32_t* count, float* end) {
-    const unsigned starts = RunStarts16(k);
+RC_AVX512 void AddRuns16(__m512i k, __m512 e, __mmask16 live, uint32_t base, KeyOut& out) {
+    const unsigned starts = RunStarts16(k) & live;
+    const int nLive = std::bit_width(unsigned(live));
     // A lane takes the lane `step` below while no run starts in between: `near` holds the lanes
     // with a start among the `step` lanes up to them (lane 0 starts a run, so no lane reaches
     // below it).
@@ -163,20 +196,33 @@ RC_AVX512 void AddRuns16(__m512i k, __m512 e, __mmask16 fast, uint32_t* count, f
     alignas(64) float runMax[16];
     _mm512_store_si512(key, k);
     _mm512_store_ps(runMax, runEnd);
-    for (unsigned rest = ((starts >> 1) | 0x8000u) & fast; rest; rest &= rest - 1) {
-        const int last = std::countr_zero(rest);
-        const int first = std::bit_width(starts & ((2u << last) - 1u)) - 1;
-        float* at = end + key[last];
-        count[key[last]] += uint32_t(last - first + 1);
+    // Locals: a store to a run could alias out.nRuns.
+    CellRun* runs = out.runs;
+    uint32_t* count = out.count;
+    float* end = out.end;
+    uint32_t n = out.nRuns;
+    // Within the block each run's key differs from the one before; only the first may continue
+    // the last block's run.
+    if (n == 0 || runs[n - 1].key != key[0]) runs[n++] = {key[0], base};
+    for (unsigned rest = starts; rest;) {
+        const int first = std::countr_zero(rest);
+        rest &= rest - 1;
+        const int next = rest ? std::countr_zero(rest) : nLive;
+        const uint32_t cell = key[first];
+        if (first != 0) runs[n++] = {cell, base + uint32_t(first)};
+        if (cell == kNoNode) continue;
+        count[cell] += uint32_t(next - first);
+        float* at = end + cell;
         // A max without a branch: a compare and jump around the store mispredicts.
-        _mm_store_ss(at, _mm_max_ss(_mm_load_ss(at), _mm_load_ss(runMax + last)));
+        _mm_store_ss(at, _mm_max_ss(_mm_load_ss(at), _mm_load_ss(runMax + next - 1)));
     }
+    out.nRuns = n;
 }
 
 // CellKeys' blocks of 16 rays: the conversion's fast path of ToRay5, operation for operation, on
 // rays that all start at their point, inside the box. Sets `done` to the rays it took.
 RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f& box, int bits,
-                           uint32_t firstId, const KeyOut& out, std::vector<rc_uint>& missed,
+                           uint32_t firstId, KeyOut& out, std::vector<rc_uint>& missed,
                            uint64_t& fromEnd, size_t& done) {
     const __m512i idx = RayOffsets16(rays);
     const bool packed = rays.Stride() == 8 * sizeof(float);
@@ -213,7 +259,7 @@ RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f&
                                          Mappable16(axes, r.dx, r.dy, r.dz));
         if (matched & ~fast) return false;
         if (!fast) {
-            _mm512_mask_storeu_epi32(out.keys + i, live, _mm512_set1_epi32(-1));
+            AddRun(out, kNoNode, firstId + uint32_t(i));
             continue;
         }
         // (tMin is 0 once oriented, so the start is the origin.)
@@ -223,43 +269,98 @@ RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f&
         // Rays that miss keep no key.
         const __m512i k =
             _mm512_mask_blend_epi32(fast, _mm512_set1_epi32(-1), keyer.Key(which, axes, p.u, p.v));
-        _mm512_mask_storeu_epi32(out.keys + i, live, k);
-        AddRuns16(k, p.end, fast, out.count, out.end);
+        AddRuns16(k, p.end, live, firstId + uint32_t(i), out);
         fromEnd += uint64_t(std::popcount(unsigned(fast)));
     }
     done = i;
     return true;
 }
 
-// SortRays' loop over rays [i, end) of a piece: each run of equal keys within a block of 16 takes
-// its positions with one update of its cell's next position and one store of its ids, which are
-// consecutive (neighbouring rays often share a cell). Returns the rays done.
-RC_AVX512 uint32_t SortBlocks16(const uint32_t* key, uint32_t i, uint32_t end, int bits2,
-                                const uint32_t* rootBegin, uint32_t* next, rc_uint* to) {
+// SortRays' loop over a piece's runs: a run takes its positions with one update of its cell's
+// next position and stores of its ids, which are consecutive, 16 at a time.
+RC_AVX512 void SortRuns16(const CellRun* runs, uint32_t nRuns, int bits2, const uint32_t* rootBegin,
+                          uint32_t* next, rc_uint* to) {
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-    for (; i + 16 <= end; i += 16) {
-        const __m512i k = _mm512_loadu_si512(key + i);
-        const unsigned starts = RunStarts16(k);
-        const __m512i ids = _mm512_add_epi32(lane, _mm512_set1_epi32(int(i)));
-        for (unsigned rest = starts; rest;) {
-            const int first = std::countr_zero(rest);
-            rest &= rest - 1;
-            const int len = (rest ? std::countr_zero(rest) : 16) - first;
-            const uint32_t cell = key[i + uint32_t(first)];
-            if (cell == kNoNode) continue;
-            uint32_t& at = next[cell];
-            const uint32_t pos = rootBegin[cell >> bits2] + at;
-            at += uint32_t(len);
-            // Lanes first .. first + len - 1 to positions pos ..: the ids moved down to lane 0.
-            const __m512i run = _mm512_maskz_add_epi32(0xFFFF, ids, _mm512_set1_epi32(first));
-            _mm512_mask_storeu_epi32(to + pos, __mmask16((1u << len) - 1u), run);
+    for (uint32_t r = 0; r < nRuns; ++r) {
+        const uint32_t cell = runs[r].key;
+        if (cell == kNoNode) continue;
+        const uint32_t first = runs[r].first, len = runs[r + 1].first - first;
+        uint32_t& at = next[cell];
+        rc_uint* out = to + rootBegin[cell >> bits2] + at;
+        at += len;
+        __m512i ids = _mm512_add_epi32(lane, _mm512_set1_epi32(int(first)));
+        for (uint32_t j = 0; j < len; j += 16) {
+            const uint32_t rest = len - j;
+            const __mmask16 m = rest >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << rest) - 1u);
+            _mm512_mask_storeu_epi32(out + j, m, ids);
+            ids = _mm512_add_epi32(ids, _mm512_set1_epi32(16));
         }
     }
-    return i;
+}
+
+// Compact of each lane.
+RC_AVX512 __m512i Compact16(__m512i x) {
+    constexpr __mmask16 kAll = 0xFFFF;
+    x = _mm512_and_si512(x, _mm512_set1_epi32(0x5555));
+    x = _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_srli_epi32(kAll, x, 1)),
+                         _mm512_set1_epi32(0x3333));
+    x = _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_srli_epi32(kAll, x, 2)),
+                         _mm512_set1_epi32(0x0F0F));
+    return _mm512_and_si512(_mm512_or_si512(x, _mm512_maskz_srli_epi32(kAll, x, 4)),
+                            _mm512_set1_epi32(0x00FF));
+}
+
+// PlaceRoot, 16 cells at a time (a root has at least 16): the cells' positions from a prefix sum
+// over the lanes, their boxes stored two vectors at a time.
+RC_AVX512 uint32_t PlaceRoot16(uint32_t perRoot, size_t nPieces, uint32_t* const* counts,
+                               const float* const* ends, uint32_t* begin, CellBox* cells) {
+    static_assert(sizeof(CellBox) == 8 && offsetof(CellBox, end) == 4);
+    constexpr __mmask16 kAll = 0xFFFF;
+    const __m512i zero = _mm512_setzero_si512();
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    // An empty cell's (u, v) bytes (kEmptyCell), and the order of two cells' halves in memory.
+    const __m512i emptyUv = _mm512_set1_epi32(0x00FF00FF);
+    const __m512i low = _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23);
+    const __m512i high = _mm512_add_epi32(low, _mm512_set1_epi32(8));
+    uint32_t at = 0;
+    for (uint32_t c = 0; c < perRoot; c += 16) {
+        __m512i total = zero;
+        __m512 e = _mm512_set1_ps(-kInf);
+        for (size_t p = 0; p < nPieces; ++p) {
+            total = _mm512_add_epi32(total, _mm512_loadu_si512(counts[p] + c));
+            e = Max16(e, _mm512_loadu_ps(ends[p] + c));
+        }
+        // The totals up to each lane, then the first position of each lane's cell.
+        __m512i sum = total;
+        sum = _mm512_add_epi32(sum, _mm512_maskz_alignr_epi32(kAll, sum, zero, 15));
+        sum = _mm512_add_epi32(sum, _mm512_maskz_alignr_epi32(kAll, sum, zero, 14));
+        sum = _mm512_add_epi32(sum, _mm512_maskz_alignr_epi32(kAll, sum, zero, 12));
+        sum = _mm512_add_epi32(sum, _mm512_maskz_alignr_epi32(kAll, sum, zero, 8));
+        __m512i first = _mm512_add_epi32(_mm512_sub_epi32(sum, total), _mm512_set1_epi32(int(at)));
+        _mm512_storeu_si512(begin + c, first);
+        for (size_t p = 0; p < nPieces; ++p) {
+            const __m512i count = _mm512_loadu_si512(counts[p] + c);
+            _mm512_storeu_si512(counts[p] + c, first);
+            first = _mm512_add_epi32(first, count);
+        }
+        at += uint32_t(_mm_extract_epi32(_mm512_maskz_extracti32x4_epi32(0xF, sum, 3), 3));
+        const __m512i cell = _mm512_add_epi32(lane, _mm512_set1_epi32(int(c)));
+        const __m512i u = Compact16(_mm512_maskz_srli_epi32(kAll, cell, 1)), v = Compact16(cell);
+        // uLo, uHi, vLo, vHi: u twice, then v twice.
+        const __m512i uv = _mm512_mullo_epi32(
+            _mm512_or_si512(u, _mm512_maskz_slli_epi32(kAll, v, 16)), _mm512_set1_epi32(0x0101));
+        const __mmask16 full = _mm512_test_epi32_mask(total, total);
+        const __m512i box = _mm512_mask_blend_epi32(full, emptyUv, uv);
+        const __m512i end =
+            _mm512_castps_si512(_mm512_mask_blend_ps(full, _mm512_set1_ps(-kInf), e));
+        int32_t* to = reinterpret_cast<int32_t*>(cells + c);
+        _mm512_storeu_si512(to, _mm512_permutex2var_epi32(box, low, end));
+        _mm512_storeu_si512(to + 16, _mm512_permutex2var_epi32(box, high, end));
+    }
+    begin[perRoot] = at;
+    return at;
 }
 #endif
-
-const CellBox kEmptyCell{255, 0, 255, 0, -kInf};
 
 CellBox Merge(const CellBox& a, const CellBox& b) {
     return {std::min(a.uLo, b.uLo), std::max(a.uHi, b.uHi), std::min(a.vLo, b.vLo),
@@ -323,7 +424,8 @@ bool LightCellSubdivision::CountCells(const Pieces& pieces, std::vector<rc_uint>
         g.count.resize(pieces.count);
         g.end.resize(pieces.count);
     }
-    Regrow(g.key, n);
+    if (g.runs.size() < pieces.count) g.runs.resize(pieces.count);
+    g.nRuns.assign(pieces.count, 0);
     std::vector<std::vector<rc_uint>> pieceMissed(pieces.count);
     std::vector<uint64_t> pieceFromEnd(pieces.count, 0);
     std::atomic<bool> other{false};
@@ -334,11 +436,14 @@ bool LightCellSubdivision::CountCells(const Pieces& pieces, std::vector<rc_uint>
             std::fill_n(g.count[p].data(), nKeys, 0u);
             std::fill_n(g.end[p].data(), nKeys, -kInf);
             const size_t at = p * pieces.step, len = std::min(pieces.step, size_t(n) - at);
-            const KeyOut keyOut{g.key.data() + at, g.count[p].data(), g.end[p].data()};
+            Regrow(g.runs[p], len + 1);
+            KeyOut keyOut{g.runs[p].data(), g.count[p].data(), g.end[p].data()};
             if (!CellKeys(g.rays.Sub(at, len), g.ends, uint32_t(at), keyOut, pieceMissed[p],
                           pieceFromEnd[p])) {
                 other = true;
             }
+            g.nRuns[p] = keyOut.nRuns;
+            keyOut.runs[keyOut.nRuns] = {kNoNode, uint32_t(at + len)};
         }
     });
     if (other) return false;
@@ -350,8 +455,6 @@ bool LightCellSubdivision::CountCells(const Pieces& pieces, std::vector<rc_uint>
 }
 
 uint32_t LightCellSubdivision::PlaceCells(const Pieces& pieces) {
-    // Within a root, each cell's rays follow the cells before, and within a cell each piece's
-    // the pieces before (so a cell's rays keep their order).
     CellGrid& g = cells_;
     const uint32_t perRoot = 1u << (2 * g.bits);
     const uint32_t stride = perRoot + 1;
@@ -371,20 +474,13 @@ uint32_t LightCellSubdivision::PlaceCells(const Pieces& pieces) {
                 counts[p] = g.count[p].data() + size_t(r) * perRoot;
                 ends[p] = g.end[p].data() + size_t(r) * perRoot;
             }
-            uint32_t at = 0;
-            for (uint32_t c = 0; c < perRoot; ++c) {
-                begin[c] = at;
-                float e = -kInf;
-                for (size_t p = 0; p < pieces.count; ++p) {
-                    const uint32_t count = counts[p][c];
-                    counts[p][c] = at;
-                    at += count;
-                    e = std::max(e, ends[p][c]);
-                }
-                const uint8_t u = uint8_t(Compact(c >> 1)), v = uint8_t(Compact(c));
-                cells[c] = at > begin[c] ? CellBox{u, u, v, v, e} : kEmptyCell;
-            }
-            begin[perRoot] = at;
+#if defined(RC_AVX512_PATHS)
+            const auto place = UseAvx512() ? PlaceRoot16 : PlaceRoot;
+#else
+            const auto place = PlaceRoot;
+#endif
+            const uint32_t at =
+                place(perRoot, pieces.count, counts.data(), ends.data(), begin, cells);
             g.rootBegin[r + 1] = at;  // the root's size, until summed below
             if (at > 0) BuildPyramid(box, g.bits);
         }
@@ -395,22 +491,27 @@ uint32_t LightCellSubdivision::PlaceCells(const Pieces& pieces) {
 
 void LightCellSubdivision::SortRays(const Pieces& pieces) {
     CellGrid& g = cells_;
-    const uint32_t n = uint32_t(g.rays.size());
     const int bits2 = 2 * g.bits;
     OnThreads(pieces.threads, [&](int t) {
         for (size_t p = size_t(t); p < pieces.count; p += size_t(pieces.threads)) {
             uint32_t* next = g.count[p].data();
-            const uint32_t* key = g.key.data();
+            const CellRun* runs = g.runs[p].data();
+            const uint32_t nRuns = g.nRuns[p];
             const uint32_t* rootBegin = g.rootBegin.data();
-            rc_uint* to = rayOut_;
-            const uint32_t end = uint32_t(std::min(size_t(n), (p + 1) * pieces.step));
-            uint32_t i = uint32_t(p * pieces.step);
 #if defined(RC_AVX512_PATHS)
-            if (UseAvx512()) i = SortBlocks16(key, i, end, bits2, rootBegin, next, to);
+            if (UseAvx512()) {
+                SortRuns16(runs, nRuns, bits2, rootBegin, next, rayOut_);
+                continue;
+            }
 #endif
-            for (; i < end; ++i) {
-                const uint32_t k = key[i];
-                if (k != kNoNode) to[rootBegin[k >> bits2] + next[k]++] = i;
+            for (uint32_t r = 0; r < nRuns; ++r) {
+                const uint32_t cell = runs[r].key;
+                if (cell == kNoNode) continue;
+                const uint32_t first = runs[r].first, len = runs[r + 1].first - first;
+                uint32_t& at = next[cell];
+                std::iota(rayOut_ + rootBegin[cell >> bits2] + at,
+                          rayOut_ + rootBegin[cell >> bits2] + at + len, first);
+                at += len;
             }
         }
     });
@@ -442,16 +543,16 @@ void LightCellSubdivision::BuildRoots(uint32_t nLeafRays, LeafBatch& out) {
 
 size_t LightCellSubdivision::ScratchBytes() const {
     const CellGrid& g = cells_;
-    size_t bytes = (g.key.capacity() + g.begin.capacity()) * 4 +
-                   g.box.capacity() * sizeof(CellBox) + cones_.Bytes();
+    size_t bytes = g.begin.capacity() * 4 + g.box.capacity() * sizeof(CellBox) + cones_.Bytes();
     for (size_t p = 0; p < g.count.size(); ++p) {
         bytes += (g.count[p].capacity() + g.end[p].capacity()) * 4;
     }
+    for (const auto& runs : g.runs) bytes += runs.capacity() * sizeof(CellRun);
     return bytes;
 }
 
 bool LightCellSubdivision::CellKeys(RayView rays, const CommonEnds& endsIn, uint32_t firstId,
-                                    const KeyOut& out, std::vector<rc_uint>& missed,
+                                    KeyOut& out, std::vector<rc_uint>& missed,
                                     uint64_t& fromEndOut) const {
     // Locals: the pieces' counters of rays taken from an end share a cache line, which updating
     // them in place a block at a time bounces between the cores; the copied points need no
@@ -476,7 +577,7 @@ bool LightCellSubdivision::CellKeys(RayView rays, const CommonEnds& endsIn, uint
         const int match = ends.Match(ray);
         if (match < 0) {
             if (!Dead(ray)) return false;
-            out.keys[i] = kNoNode;
+            AddRun(out, kNoNode, firstId + uint32_t(i));
             missed.push_back(firstId + uint32_t(i));
             continue;
         }
@@ -485,7 +586,7 @@ bool LightCellSubdivision::CellKeys(RayView rays, const CommonEnds& endsIn, uint
         if (!PointFromEnd(ends, match, ray, core_.sceneBox, r5, e)) return false;
         const uint32_t key = (uint32_t(match * kFaceCount + r5.face) << (2 * bits)) |
                              Spread(cellOf(r5.p[3])) << 1 | Spread(cellOf(r5.p[4]));
-        out.keys[i] = key;
+        AddRun(out, key, firstId + uint32_t(i));
         ++out.count[key];
         out.end[key] = std::max(out.end[key], e);
         ++fromEnd;

@@ -29,11 +29,20 @@ struct CellBox {
     float end;
 };
 
-// Where pass 1 writes a piece's keys, and its cells' counts and largest ends.
+// Consecutive rays of a piece (by id) that share a key (kNoNode: rays that miss). A piece's runs
+// cover its rays in order, each up to where the next starts, so that pass 2 reads a run, not
+// every ray's key.
+struct CellRun {
+    uint32_t key, first;
+};
+
+// Where pass 1 writes a piece's runs (room for one a ray and one more, `nRuns` of them written),
+// and its cells' counts and largest ends.
 struct KeyOut {
-    uint32_t* keys;
+    CellRun* runs;
     uint32_t* count;
     float* end;
+    uint32_t nRuns = 0;
 };
 
 class LightCellSubdivision {
@@ -67,7 +76,8 @@ class LightCellSubdivision {
         RayView rays;                                    // the generation's
         CommonEnds ends;                                 // and their points
         float origin[CommonEnds::kMax * kFaceCount][3];  // each root's point in its face's frame
-        ScratchVector<uint32_t> key;                     // per ray
+        std::vector<ScratchVector<CellRun>> runs;        // per piece: its runs, then an end
+        std::vector<uint32_t> nRuns;                     // per piece
         std::vector<ScratchVector<uint32_t>> count;      // per piece and cell, then positions
         std::vector<ScratchVector<float>> end;           // per piece and cell: the largest end
         // Per root, each cell's first position in the root, then the root's size.
@@ -81,13 +91,13 @@ class LightCellSubdivision {
         size_t step, count;
     };
 
-    // Pass 1: each ray's key, and per piece each cell's count and largest end; the rays that
+    // Pass 1: per piece its runs of keys, and each cell's count and largest end; the rays that
     // miss to `missed`, the number taken from their end to `fromEnd`. False when a ray neither
     // ends at a point nor misses.
     bool CountCells(const Pieces& pieces, std::vector<rc_uint>& missed, uint64_t& fromEnd);
-    // The keys of `rays` (kNoNode for a ray that misses), and each cell's count and largest end
-    // added to out.count and out.end. False as CountCells.
-    bool CellKeys(RayView rays, const CommonEnds& ends, uint32_t firstId, const KeyOut& out,
+    // The runs of keys of `rays` (kNoNode for a ray that misses) to out.runs, and each
+    // cell's count and largest end added to out.count and out.end. False as CountCells.
+    bool CellKeys(RayView rays, const CommonEnds& ends, uint32_t firstId, KeyOut& out,
                   std::vector<rc_uint>& missed, uint64_t& fromEnd) const;
     // Each cell's first position and each root's pyramid; the counts become each piece's next
     // position. Returns the rays that got a cell.
