@@ -185,6 +185,22 @@ RC_SHADE_INLINE void rc_prefetch_hits(__global RcHit* hits, __global const uint*
 #endif
 }
 
+/* How many candidates ahead of the one tested the triangle loop fetches a triangle. */
+#define RC_TRIANGLE_PREFETCH 4
+
+/* Candidate c + RC_TRIANGLE_PREFETCH's triangle of `leaf`, fetched while candidate c is tested:
+ * a leaf's candidates lie scattered over the scene's triangles, and the test waits on each
+ * triangle's load otherwise. */
+RC_SHADE_INLINE void rc_prefetch_triangle(__global const RcCandidate* candidates,
+                                          __global const RcTriangle* triangles, RcLeaf leaf,
+                                          uint c) {
+#if defined(__x86_64__)
+    if (c + RC_TRIANGLE_PREFETCH < leaf.candCount) {
+        __builtin_prefetch(triangles + candidates[leaf.candBegin + c + RC_TRIANGLE_PREFETCH].prim);
+    }
+#endif
+}
+
 /* rc_intersect_triangle for 16 rays against one triangle, the same operations lane by lane:
  * the lanes that hit inside (tmin, tmax), with t, u and v. */
 RC_SHADE_INLINE int16 rc_packet_triangle(const RcLanes16* L, RcTriangle tri, float16* t,
@@ -297,6 +313,7 @@ RC_SHADE_INLINE uint rc_fragment_nearest(const RcLanes16* L, RcLeaf leaf,
         const uint prim = cand.prim;
         float16 t, u = 0.0f, v = 0.0f;
         int16 inside;
+        if (trianglesOnly) rc_prefetch_triangle(candidates, triangles, leaf, c);
         if (trianglesOnly || prim < nT) {
             inside = rc_packet_triangle(L, triangles[prim], &t, &u, &v);
         } else {
