@@ -28,45 +28,96 @@ RC_AVX512 inline __m512 Widen16(__m256i steps) {
                                     _mm512_maskz_cvtepu16_epi32(__mmask16(0xFFFF), steps));
 }
 
+// A beam's test, broadcast to 16 lanes.
+struct BeamLanes {
+    __m512 x0, x1, y0, y1, z0, z1, ru1, ru0, rv1, rv0, reach;
+};
+RC_AVX512 inline BeamLanes Lanes(const BeamTest& t) {
+    return {_mm512_set1_ps(t.x0),  _mm512_set1_ps(t.x1),   _mm512_set1_ps(t.y0),
+            _mm512_set1_ps(t.y1),  _mm512_set1_ps(t.z0),   _mm512_set1_ps(t.z1),
+            _mm512_set1_ps(t.ru1), _mm512_set1_ps(t.ru0),  _mm512_set1_ps(t.rv1),
+            _mm512_set1_ps(t.rv0), _mm512_set1_ps(t.reach)};
+}
+// The live ones of 16 boxes (bounds b, widened) that the beam may reach (BeamMayReach).
+template <int kSigns>
+RC_AVX512 inline __mmask16 Keep16(const BeamLanes& t, const __m512 b[6], __mmask16 live) {
+    __m512 lo = Max16(_mm512_sub_ps(b[0], t.x1), _mm512_setzero_ps());
+    __m512 hi = Min16(_mm512_sub_ps(b[1], t.x0), t.reach);
+    const __m512 c0 = _mm512_mul_ps(_mm512_sub_ps(b[2], t.y1), t.ru1);
+    const __m512 c1 = _mm512_mul_ps(_mm512_sub_ps(b[3], t.y0), t.ru0);
+    const __m512 e0 = _mm512_mul_ps(_mm512_sub_ps(b[4], t.z1), t.rv1);
+    const __m512 e1 = _mm512_mul_ps(_mm512_sub_ps(b[5], t.z0), t.rv0);
+    if constexpr (kSigns & 1)
+        lo = Max16(lo, c0);
+    else
+        hi = Min16(hi, c0);
+    if constexpr (kSigns & 2)
+        hi = Min16(hi, c1);
+    else
+        lo = Max16(lo, c1);
+    if constexpr (kSigns & 4)
+        lo = Max16(lo, e0);
+    else
+        hi = Min16(hi, e0);
+    if constexpr (kSigns & 8)
+        hi = Min16(hi, e1);
+    else
+        lo = Max16(lo, e1);
+    return _mm512_mask_cmp_ps_mask(live, lo, hi, _CMP_LE_OQ);
+}
+// The `keep` lanes of 16 entries (bounds q, primitives from `prim`) appended to out at k;
+// returns the new k. Compresses in registers and stores with a mask: compress-to-memory is
+// microcoded on Zen 4.
+RC_AVX512 inline size_t Append16(const __m256i q[6], const uint32_t* prim, __mmask16 live,
+                                 __mmask16 keep, const ListOut& out, size_t k) {
+    if (!keep) return k;
+    uint16_t* const dst[6] = {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1};
+    const __mmask16 kept = __mmask16((1u << std::popcount(unsigned(keep))) - 1u);
+    for (int a = 0; a < 6; ++a)
+        _mm256_mask_storeu_epi16(dst[a] + k, kept, _mm256_maskz_compress_epi16(keep, q[a]));
+    const __m512i p = _mm512_maskz_loadu_epi32(live, prim);
+    _mm512_mask_storeu_epi32(out.prim + k, kept, _mm512_maskz_compress_epi32(keep, p));
+    return k + size_t(std::popcount(unsigned(keep)));
+}
+// Entries i .. i + 15 of `in` (the live ones): their bounds in steps, and widened to floats.
+RC_AVX512 inline void Load16(const ListView& in, size_t i, __mmask16 live, __m256i q[6],
+                             __m512 b[6]) {
+    const uint16_t* const src[6] = {in.x0, in.x1, in.y0, in.y1, in.z0, in.z1};
+    for (int a = 0; a < 6; ++a) {
+        q[a] = _mm256_maskz_loadu_epi16(live, src[a] + i);
+        b[a] = Widen16(q[a]);
+    }
+}
 template <int kSigns>
 RC_AVX512 size_t FilterAvx512(const BeamTest& t, const ListView& in, const ListOut& out) {
-    const __m512 x0 = _mm512_set1_ps(t.x0), x1 = _mm512_set1_ps(t.x1);
-    const __m512 y0 = _mm512_set1_ps(t.y0), y1 = _mm512_set1_ps(t.y1);
-    const __m512 z0 = _mm512_set1_ps(t.z0), z1 = _mm512_set1_ps(t.z1);
-    const __m512 ru1 = _mm512_set1_ps(t.ru1), ru0 = _mm512_set1_ps(t.ru0);
-    const __m512 rv1 = _mm512_set1_ps(t.rv1), rv0 = _mm512_set1_ps(t.rv0);
-    const __m512 reach = _mm512_set1_ps(t.reach);
-    const __m512 zero = _mm512_setzero_ps();
-    const uint16_t* const src[6] = {in.x0, in.x1, in.y0, in.y1, in.z0, in.z1};
-    uint16_t* const dst[6] = {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1};
+    const BeamLanes beam = Lanes(t);
     size_t k = 0;
     for (size_t i = 0; i < in.n; i += 16) {
         const __mmask16 live = LiveLanes16(in.n, i);
         __m256i q[6];
-        for (int a = 0; a < 6; ++a) q[a] = _mm256_maskz_loadu_epi16(live, src[a] + i);
-        __m512 lo = Max16(_mm512_sub_ps(Widen16(q[0]), x1), zero);
-        __m512 hi = Min16(_mm512_sub_ps(Widen16(q[1]), x0), reach);
-        const __m512 c0 = _mm512_mul_ps(_mm512_sub_ps(Widen16(q[2]), y1), ru1);
-        const __m512 c1 = _mm512_mul_ps(_mm512_sub_ps(Widen16(q[3]), y0), ru0);
-        const __m512 e0 = _mm512_mul_ps(_mm512_sub_ps(Widen16(q[4]), z1), rv1);
-        const __m512 e1 = _mm512_mul_ps(_mm512_sub_ps(Widen16(q[5]), z0), rv0);
-        if constexpr (kSigns & 1) lo = Max16(lo, c0); else hi = Min16(hi, c0);
-        if constexpr (kSigns & 2) hi = Min16(hi, c1); else lo = Max16(lo, c1);
-        if constexpr (kSigns & 4) lo = Max16(lo, e0); else hi = Min16(hi, e0);
-        if constexpr (kSigns & 8) hi = Min16(hi, e1); else lo = Max16(lo, e1);
-        const __mmask16 keep = _mm512_mask_cmp_ps_mask(live, lo, hi, _CMP_LE_OQ);
-        if (!keep) continue;
-        // Compress in registers and store with a mask: compress-to-memory is microcoded on Zen 4.
-        const __mmask16 kept = __mmask16((1u << std::popcount(unsigned(keep))) - 1u);
-        for (int a = 0; a < 6; ++a)
-            _mm256_mask_storeu_epi16(dst[a] + k, kept, _mm256_maskz_compress_epi16(keep, q[a]));
-        const __m512i p = _mm512_maskz_loadu_epi32(live, in.prim + i);
-        _mm512_mask_storeu_epi32(out.prim + k, kept, _mm512_maskz_compress_epi32(keep, p));
-        k += size_t(std::popcount(unsigned(keep)));
+        __m512 b[6];
+        Load16(in, i, live, q, b);
+        k = Append16(q, in.prim + i, live, Keep16<kSigns>(beam, b, live), out, k);
     }
     return k;
 }
-
+// FilterAvx512 for two beams of the same signs in one pass over the list.
+template <int kSigns>
+RC_AVX512 void FilterPairAvx512(const BeamTest t[2], const ListView& in, const ListOut out[2],
+                                size_t kept[2]) {
+    const BeamLanes beam[2] = {Lanes(t[0]), Lanes(t[1])};
+    size_t k[2] = {0, 0};
+    for (size_t i = 0; i < in.n; i += 16) {
+        const __mmask16 live = LiveLanes16(in.n, i);
+        __m256i q[6];
+        __m512 b[6];
+        Load16(in, i, live, q, b);
+        for (int j = 0; j < 2; ++j)
+            k[j] = Append16(q, in.prim + i, live, Keep16<kSigns>(beam[j], b, live), out[j], k[j]);
+    }
+    kept[0] = k[0];
+    kept[1] = k[1];
+}
 template <int kSigns = 0>
 RC_AVX512 size_t Dispatch(const BeamTest& t, const ListView& in, const ListOut& out) {
     if constexpr (kSigns == 16) {
@@ -74,6 +125,14 @@ RC_AVX512 size_t Dispatch(const BeamTest& t, const ListView& in, const ListOut& 
     } else {
         if (t.signs == kSigns) return FilterAvx512<kSigns>(t, in, out);
         return Dispatch<kSigns + 1>(t, in, out);
+    }
+}
+template <int kSigns = 0>
+RC_AVX512 void DispatchPair(const BeamTest t[2], const ListView& in, const ListOut out[2],
+                            size_t kept[2]) {
+    if constexpr (kSigns < 16) {
+        if (t[0].signs == kSigns) return FilterPairAvx512<kSigns>(t, in, out, kept);
+        DispatchPair<kSigns + 1>(t, in, out, kept);
     }
 }
 
@@ -321,6 +380,13 @@ size_t FilterList(const BeamTest& t, const ListView& in, const ListOut& out) {
         k += BeamMayReach(t, in.x0[i], in.x1[i], in.y0[i], in.y1[i], in.z0[i], in.z1[i]) ? 1 : 0;
     }
     return k;
+}
+
+void FilterPair(const BeamTest t[2], const ListView& in, const ListOut out[2], size_t kept[2]) {
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512() && t[0].signs == t[1].signs) return DispatchPair(t, in, out, kept);
+#endif
+    for (int j = 0; j < 2; ++j) kept[j] = FilterList(t[j], in, out[j]);
 }
 
 }  // namespace rayclass::classify

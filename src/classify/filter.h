@@ -82,5 +82,8 @@ bool BeamMayReach(const BeamTest& t, float bx0, float bx1, float by0, float by1,
 // Keeps the boxes of `in` that `t` may reach, in order, in out[0, result). `out` must have room
 // for in.n entries.
 size_t FilterList(const BeamTest& t, const ListView& in, const ListOut& out);
+// FilterList of `in` for two beams into out[0] and out[1], kept[j] entries each: one pass over
+// the list where the vector filter runs and the beams' signs agree (a node's two halves).
+void FilterPair(const BeamTest t[2], const ListView& in, const ListOut out[2], size_t kept[2]);
 
 }  // namespace rayclass::classify

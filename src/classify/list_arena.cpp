@@ -47,4 +47,28 @@ ListView FilterOnto(ListArena& arena, const Bounds6& tight, const ListView& list
     return {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1, out.prim, kept, list.frame};
 }
 
+bool FilterPairOnto(ListArena& arena, const Bounds6 tight[2], const ListView& list,
+                    uint64_t& boxTests, ListView own[2]) {
+    const float endHi = tight[0].hi[kDims];
+    if (tight[1].hi[kDims] != endHi) return false;
+    ListView in = list;
+    in.n = CountUpTo(list, endHi);
+    // Room for the whole list for the first beam's entries, then the second's.
+    ListOut out[2];
+    out[0] = Take(arena, in.n);
+    arena.used += in.n;
+    out[1] = Take(arena, in.n);
+    BeamTest t[2];
+    for (int j = 0; j < 2; ++j)
+        t[j] = MakeBeamTest(*list.frame, tight[j].ToBox5(), endHi - tight[j].lo[0]);
+    size_t kept[2];
+    FilterPair(t, in, out, kept);
+    boxTests += 2 * in.n;
+    arena.used += kept[1];
+    for (int j = 0; j < 2; ++j)
+        own[j] = {out[j].x0, out[j].x1,   out[j].y0, out[j].y1, out[j].z0,
+                  out[j].z1, out[j].prim, kept[j],   list.frame};
+    return true;
+}
+
 }  // namespace rayclass::classify

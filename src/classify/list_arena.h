@@ -43,5 +43,9 @@ class ArenaMark {
 // tested to `boxTests`.
 ListView FilterOnto(ListArena& arena, const Bounds6& tight, const ListView& list,
                     uint64_t& boxTests);
+// FilterOnto for the two beams of a node's halves, in one pass over the list: own[j] for
+// tight[j]. False, doing nothing, when their rays end at different X (the list is cut there).
+bool FilterPairOnto(ListArena& arena, const Bounds6 tight[2], const ListView& list,
+                    uint64_t& boxTests, ListView own[2]);
 
 }  // namespace rayclass::classify

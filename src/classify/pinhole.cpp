@@ -300,23 +300,18 @@ void PinholeSubdivision::ClassifyBands(const Camera& cam, LeafBatch& out) {
 
 void PinholeSubdivision::ProcessRect(Worker& w, const Camera& cam, const PixelRect& rect, int face,
                                      int depth, const ListView* list, RectOut& out) {
-    const uint32_t nRays = cam.Count(rect);
-    if (nRays == 0) return;
+    RectBeam beam;
+    beam.nRays = cam.Count(rect);
+    if (beam.nRays == 0) return;
     const ArenaMark release(w.stack);
-    auto halves = [&](int childFace, const ListView* childList) {
-        PixelRect half[2];
-        Camera::Halve(rect, half);
-        for (const PixelRect& h : half) {
-            ProcessRect(w, cam, h, childFace, depth + 1, childList, out);
-        }
-    };
-    Bounds6 tight;
     ListView faceList;
     if (face < 0) {
         const int centre = cam.CentreFace(rect);
-        if (!cam.Bounds(rect, centre, true, tight)) {
+        if (!cam.Bounds(rect, centre, true, beam.tight)) {
             // Too wide for one frame: its halves look again. (A single pixel fits its own face.)
-            halves(-1, nullptr);
+            PixelRect half[2];
+            Camera::Halve(rect, half);
+            for (const PixelRect& h : half) ProcessRect(w, cam, h, -1, depth + 1, nullptr, out);
             return;
         }
         face = centre;
@@ -324,32 +319,69 @@ void PinholeSubdivision::ProcessRect(Worker& w, const Camera& cam, const PixelRe
         list = &faceList;
     } else {
         // Within its parent's frame: its corners' slopes lie within the parent's.
-        cam.Bounds(rect, face, false, tight);
+        cam.Bounds(rect, face, false, beam.tight);
     }
-    const bool filtered = !KeepsMost(tight, *list);
-    ListView own = filtered ? w.Filter(tight, *list, false) : CutAtEnd(tight, *list);
+    beam.filtered = !KeepsMost(beam.tight, *list);
+    beam.own = beam.filtered ? w.Filter(beam.tight, *list, false) : CutAtEnd(beam.tight, *list);
+    ProcessNode(w, cam, rect, face, depth, *list, beam, out);
+}
+
+void PinholeSubdivision::ProcessNode(Worker& w, const Camera& cam, const PixelRect& rect, int face,
+                                     int depth, const ListView& list, const RectBeam& beam,
+                                     RectOut& out) {
     Node node;
-    node.box = tight.ToBox5();
+    node.box = beam.tight.ToBox5();
     node.face = uint8_t(face);
     node.depth = uint8_t(depth);
     int dim = 0;
-    if (core_.cost.ChooseSplit(node, tight, nRays, own, dim)) {
-        halves(face, &own);
+    if (core_.cost.ChooseSplit(node, beam.tight, beam.nRays, beam.own, dim)) {
+        SplitRect(w, cam, rect, face, depth, beam.own, out);
         return;
     }
-    if (!filtered) own = w.Filter(tight, *list, false);
+    const ListView own = beam.filtered ? beam.own : w.Filter(beam.tight, list, false);
     // Rays that cannot reach a primitive get no leaf and are answered "no hit": all of a leaf
     // whose list is empty and, from a camera outside the scene box, those of a leaf on the
     // box's outline that miss it.
-    const Reach reach = CountUpTo(own, tight.hi[kDims]) == 0
+    const Reach reach = CountUpTo(own, beam.tight.hi[kDims]) == 0
                             ? Reach::kNone
                             : (cam.outside && !cam.AllReach(rect) ? Reach::kSome : Reach::kAll);
     if (reach == Reach::kSome && uint64_t(rect.x1 - rect.x0) * (rect.y1 - rect.y0) > kClipPixels) {
         // On the outline: halves, so that only pixels near it are tested one by one.
-        halves(face, &own);
+        SplitRect(w, cam, rect, face, depth, own, out);
         return;
     }
-    EmitRect(w, cam, rect, node, own, tight.hi[kDims], reach, out);
+    EmitRect(w, cam, rect, node, own, beam.tight.hi[kDims], reach, out);
+}
+
+void PinholeSubdivision::SplitRect(Worker& w, const Camera& cam, const PixelRect& rect, int face,
+                                   int depth, const ListView& list, RectOut& out) {
+    PixelRect half[2];
+    Camera::Halve(rect, half);
+    const ArenaMark release(w.stack);
+    RectBeam beam[2];
+    bool both = true;
+    for (int j = 0; j < 2; ++j) {
+        beam[j].nRays = cam.Count(half[j]);
+        // Within its parent's frame: its corners' slopes lie within the parent's.
+        cam.Bounds(half[j], face, false, beam[j].tight);
+        beam[j].filtered = !KeepsMost(beam[j].tight, list);
+        both = both && beam[j].nRays > 0 && beam[j].filtered;
+    }
+    // Both halves' lists in one pass over the parent's, which is read once instead of twice.
+    ListView own[2];
+    const Bounds6 tight[2] = {beam[0].tight, beam[1].tight};
+    const bool paired = both && FilterPairOnto(w.stack, tight, list, w.counters.boxTests, own);
+    for (int j = 0; j < 2; ++j) {
+        if (beam[j].nRays == 0) continue;
+        const ArenaMark releaseHalf(w.stack);
+        if (paired) {
+            beam[j].own = own[j];
+        } else {
+            beam[j].own = beam[j].filtered ? w.Filter(beam[j].tight, list, false)
+                                           : CutAtEnd(beam[j].tight, list);
+        }
+        ProcessNode(w, cam, half[j], face, depth + 1, list, beam[j], out);
+    }
 }
 
 void PinholeSubdivision::EmitRect(Worker& w, const Camera& cam, const PixelRect& rect,

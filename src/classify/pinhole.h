@@ -39,10 +39,26 @@ class PinholeSubdivision {
 
     // Classifies the rays of the camera's batch in bands of rows on the worker pool.
     void ClassifyBands(const Camera& cam, LeafBatch& out);
+    // A rectangle's rays and beam, and its list: the entries the beam may reach or, when the
+    // beam would keep most of it (not filtered), its parent's list cut at the rays' end.
+    struct RectBeam {
+        uint32_t nRays;
+        Bounds6 tight;
+        ListView own;
+        bool filtered;
+    };
+
     // The subdivision of `rect` within the frame of `face` and `list`, or of no face yet
     // (face < 0).
     void ProcessRect(Worker& w, const Camera& cam, const PixelRect& rect, int face, int depth,
                      const ListView* list, RectOut& out);
+    // The node of `rect` (of `face`, its parent's list `list`) with its beam and list: halves or
+    // a leaf.
+    void ProcessNode(Worker& w, const Camera& cam, const PixelRect& rect, int face, int depth,
+                     const ListView& list, const RectBeam& beam, RectOut& out);
+    // The halves of `rect` (of `face`, list `list`): where both filter the list, in one pass.
+    void SplitRect(Worker& w, const Camera& cam, const PixelRect& rect, int face, int depth,
+                   const ListView& list, RectOut& out);
     // A leaf of node `node`, `rect`'s rays that can reach a primitive with list `own`.
     void EmitRect(Worker& w, const Camera& cam, const PixelRect& rect, const Node& node,
                   const ListView& own, float endHi, Reach reach, RectOut& out);

@@ -178,6 +178,61 @@ TEST(Filter, KeepsEveryBoxTheBeamMeetsAndMatchesTheScalarTest) {
     EXPECT_LT(kept, 3 * met);
 }
 
+TEST(Filter, PairKeepsForEachBeamWhatTheScalarTestKeeps) {
+    std::mt19937 rng(23);
+    size_t sameSigns = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+        const size_t n = size_t(1 + trial % 53) * (trial % 4 == 0 ? 37 : 1);
+        const QuantizedList q = RandomList(rng, n);
+        // A beam and, on most trials, a sibling of the same origins and slopes' signs (the
+        // halves of a node); else an unrelated beam.
+        Box5 beam[2] = {RandomBeam(rng), RandomBeam(rng)};
+        if (trial % 3 != 0) {
+            beam[1] = beam[0];
+            for (int k = 3; k < 5; ++k) {
+                beam[1].lo[k] = beam[0].lo[k] * 0.5f;
+                beam[1].hi[k] = beam[0].hi[k] * 0.75f;
+            }
+        }
+        const float reach = std::uniform_real_distribution<float>(0.01f, 12.0f)(rng);
+        BeamTest t[2];
+        FaceList outs[2];
+        ListOut out[2];
+        for (int j = 0; j < 2; ++j) {
+            t[j] = MakeBeamTest(q.frame, beam[j], reach);
+            outs[j].Resize(n);
+            out[j] = Out(outs[j], 0);
+        }
+        sameSigns += t[0].signs == t[1].signs ? 1 : 0;
+        size_t kept[2];
+        FilterPair(t, View(q.list, n, &q.frame), out, kept);
+        for (int j = 0; j < 2; ++j) {
+            std::vector<uint32_t> scalar;
+            for (size_t i = 0; i < n; ++i) {
+                if (BeamMayReach(t[j], q.list.x0[i], q.list.x1[i], q.list.y0[i], q.list.y1[i],
+                                 q.list.z0[i], q.list.z1[i]))
+                    scalar.push_back(uint32_t(i));
+            }
+            ASSERT_EQ(
+                std::vector<uint32_t>(outs[j].prim.begin(), outs[j].prim.begin() + long(kept[j])),
+                scalar)
+                << "trial " << trial << ", beam " << j;
+            for (size_t k = 0; k < kept[j]; ++k) {
+                const uint32_t i = outs[j].prim[k];
+                ASSERT_EQ(outs[j].x0[k], q.list.x0[i]);
+                ASSERT_EQ(outs[j].x1[k], q.list.x1[i]);
+                ASSERT_EQ(outs[j].y0[k], q.list.y0[i]);
+                ASSERT_EQ(outs[j].y1[k], q.list.y1[i]);
+                ASSERT_EQ(outs[j].z0[k], q.list.z0[i]);
+                ASSERT_EQ(outs[j].z1[k], q.list.z1[i]);
+            }
+        }
+    }
+    // Both the one-pass path (same signs) and the fallback run.
+    EXPECT_GT(sameSigns, 50u);
+    EXPECT_LT(sameSigns, 200u);
+}
+
 TEST(Filter, StepsRoundOutwardsAndTheNearXOfACandidateNeverExceedsItsBox) {
     std::mt19937 rng(12);
     const QuantizedList q = RandomList(rng, 5000);
