@@ -9,16 +9,41 @@ namespace rayclass::render {
 
 namespace {
 
-// Grid cells per axis: 2^kCellBits. Finer cells sort longer and gained nothing more.
-constexpr int kCellBits = 7;
-constexpr int kKeyBits = 3 + 3 * kCellBits;
+// Grid cells per axis: 2^kCellBits. A packet walks as one when its origins lie within a 32nd of
+// the scene's box (rc_bvh_max_spread2), so finer cells only spend key bits.
+constexpr int kCellBits = 5;
+// Direction cells per axis of an octant's octahedral map: 2^kDirBits, about 11 degrees wide,
+// inside the 18 degrees a packet's directions may spread.
+constexpr int kDirBits = 3;
+constexpr int kKeyBits = 3 + 3 * kCellBits + 2 * kDirBits;
 
-// The bits of v (below 2^kCellBits) spread to every third position.
+// The bits of v (below 2^10) spread to every third position.
 uint32_t Spread(uint32_t x) {
     x = (x | x << 8) & 0x0000F00Fu;
     x = (x | x << 4) & 0x000C30C3u;
     x = (x | x << 2) & 0x00249249u;
     return x;
+}
+
+// The bits of v (below 2^4) spread to every second position.
+uint32_t Spread2(uint32_t x) {
+    x = (x | x << 2) & 0x33u;
+    x = (x | x << 1) & 0x55u;
+    return x;
+}
+
+// x in [0, 1] as a cell below 2^bits; NaN in cell 0.
+uint32_t Cell(float x, int bits) {
+    const float c = std::clamp(x * float(1 << bits), 0.0f, float((1 << bits) - 1));
+    return c >= 0.0f ? uint32_t(c) : 0u;
+}
+
+// The cell of d on its octant's face of the octahedral map (|x| and |y| over the L1 norm),
+// the two coordinates' bits interleaved; a zero direction in cell 0.
+uint32_t DirectionCell(const float d[3]) {
+    const float ax = std::fabs(d[0]), ay = std::fabs(d[1]), az = std::fabs(d[2]);
+    const float sum = ax + ay + az;
+    return Spread2(Cell(ax / sum, kDirBits)) << 1 | Spread2(Cell(ay / sum, kDirBits));
 }
 
 // Rays below this many have their keys computed on one thread.
@@ -44,7 +69,7 @@ uint32_t RayOrder::Key(const RcRay& ray) const {
         morton |= Spread(c >= 0.0f ? uint32_t(c) : 0u) << a;
         octant |= uint32_t(std::signbit(d[a])) << a;
     }
-    return octant << (3 * kCellBits) | morton;
+    return (octant << (3 * kCellBits) | morton) << (2 * kDirBits) | DirectionCell(d);
 }
 
 void RayOrder::Sort(std::span<const RcRay> rays, std::span<uint32_t> slots,

@@ -1,5 +1,6 @@
 // RayOrder: the order of a generation's rays, checked against what the rays themselves say
-// (their directions' signs, their origins' positions) and against the order they came in.
+// (their directions' signs and cells, their origins' positions) and against the order they came
+// in.
 #include "ray_order.h"
 
 #include <gtest/gtest.h>
@@ -10,6 +11,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <tuple>
 #include <vector>
 
 namespace rayclass::render {
@@ -70,7 +72,7 @@ TEST(RayOrder, GroupsRaysByTheOctantOfTheirDirection) {
 }
 
 TEST(RayOrder, OrdersRaysOfOneOctantAlongALineByTheirOrigins) {
-    // Origins far enough apart to lie in different cells of any grid of up to 2^10 per axis.
+    // Origins far enough apart to lie in different cells of any grid of 2^4 to 2^10 per axis.
     const std::vector<float> xs = {0.9f, 0.1f, 0.5f, 0.3f, 0.7f, 0.2f};
     std::vector<RcRay> rays(2 * xs.size());
     for (size_t i = 0; i < xs.size(); ++i) rays[2 * i] = MakeRay(xs[i], 0.5f, 0.5f, 1, 1, 1);
@@ -80,6 +82,55 @@ TEST(RayOrder, OrdersRaysOfOneOctantAlongALineByTheirOrigins) {
     live.ExpectTied();
     for (size_t i = 1; i < xs.size(); ++i)
         EXPECT_LT(rays[live.slots[i - 1]].origin.x, rays[live.slots[i]].origin.x);
+}
+
+// The cell of x in [0, 1) on a grid of `cells`, the last cell taking 1.
+uint32_t GridCell(float x, int cells) {
+    return std::min(uint32_t(x * float(cells)), uint32_t(cells - 1));
+}
+
+// Bits of the given coordinates interleaved from the most significant down, the first
+// coordinate's bit above the others' at each level: a Morton code built bit by bit.
+uint64_t Interleave(const std::vector<uint32_t>& coords, int bits) {
+    uint64_t code = 0;
+    for (int b = bits - 1; b >= 0; --b)
+        for (uint32_t c : coords) code = code << 1 | (c >> b & 1u);
+    return code;
+}
+
+// The documented order: octant, then the origin's cell on a 32^3 grid (z's bit above y's above
+// x's), then the direction's cell on an 8 x 8 grid over its octant's octahedral face (|x| / L1
+// above |y| / L1).
+std::tuple<int, uint64_t, uint64_t> ExpectedKey(const RcRay& r) {
+    const float a[3] = {std::fabs(r.direction.x), std::fabs(r.direction.y),
+                        std::fabs(r.direction.z)};
+    const float l1 = a[0] + a[1] + a[2];
+    const uint64_t origin = Interleave(
+        {GridCell(r.origin.z, 32), GridCell(r.origin.y, 32), GridCell(r.origin.x, 32)}, 5);
+    const uint64_t direction = Interleave({GridCell(a[0] / l1, 8), GridCell(a[1] / l1, 8)}, 3);
+    return {Octant(r), origin, direction};
+}
+
+TEST(RayOrder, OrdersRaysByOctantThenOriginCellThenDirectionCell) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f), p(0.0f, 1.0f);
+    // Few origin cells (coordinates on a 4-step lattice), so that many rays share one and
+    // their directions decide.
+    std::uniform_int_distribution<int> lattice(0, 3);
+    const size_t n = 4000;
+    std::vector<RcRay> rays(2 * n);
+    for (RcRay& r : rays)
+        r = MakeRay(0.25f * float(lattice(rng)) + 0.01f, 0.25f * float(lattice(rng)) + 0.01f,
+                    p(rng), u(rng), u(rng), u(rng));
+    Live live(n);
+    std::vector<uint32_t> expected = live.slots;
+    std::stable_sort(expected.begin(), expected.end(), [&](uint32_t a, uint32_t b) {
+        return ExpectedKey(rays[a]) < ExpectedKey(rays[b]);
+    });
+    RayOrder order(UnitBox());
+    order.Sort(rays, live.slots, live.pixels);
+    live.ExpectTied();
+    EXPECT_EQ(live.slots, expected);
 }
 
 TEST(RayOrder, KeepsTheOrderOfRaysThatStartTogetherAndHeadTheSameWay) {
