@@ -14,6 +14,7 @@
 #include "ray_order.h"
 #include "ray_pages.h"
 #include "rayclass/clrt/mapped.h"
+#include "rayclass/core/two_halves.h"
 #include "rayclass/render/launch.h"
 #include "rayclass/render/newton_stats.h"
 #include "rayclass/render/query_factory.h"
@@ -114,6 +115,20 @@ struct ShadowSlots {
     clrt::MappedRead<rc_float4> contribution;
 };
 
+// The secondary rays the batch's shading spawned and their flags, read in place: which rays
+// live on, and their order, follow from these alone, before the shadow query answers.
+struct SpawnedRays {
+    SpawnedRays(const cl::CommandQueue& q, const ShadeBuffers& shade, size_t n)
+        : flags(q, shade.spawned, 2 * n), rays(q, shade.secondary.rays, 2 * n) {}
+    // Before compaction reads the rays and the next batch's shading writes them.
+    void Unmap() {
+        flags.Unmap();
+        rays.Unmap();
+    }
+    clrt::MappedRead<uint8_t> flags;
+    clrt::MappedRead<RcRay> rays;
+};
+
 // The batch's other outputs, read in place once the shadow query has answered: copies into host
 // arrays would fault in their pages again in every one-frame render. Hits and normals only for
 // the first-hit layers.
@@ -122,25 +137,27 @@ struct BatchOutputs {
                  bool aovs)
         : radiance(q, b.shade.radiance, n),
           blocked(q, b.blocked, size_t(n) * nLights),
-          spawned(q, b.shade.spawned, 2 * size_t(n)),
           hits(q, b.hits, aovs ? n : 0),
           normals(q, b.shade.normals, aovs ? n : 0) {}
     // Before the next batch's shading writes the buffers.
     void Unmap() {
         radiance.Unmap();
         blocked.Unmap();
-        spawned.Unmap();
         hits.Unmap();
         normals.Unmap();
     }
     clrt::MappedRead<rc_float4> radiance;
-    clrt::MappedRead<uint8_t> blocked, spawned;
+    clrt::MappedRead<uint8_t> blocked;
     clrt::MappedRead<RcHit> hits;
     clrt::MappedRead<rc_float4> normals;
 };
 
 // How many rays ahead the accumulation fetches its pixels.
 constexpr uint32_t kPixelsAhead = 16;
+
+// Batches below this many rays are accumulated on one thread: a second one's start costs more
+// than it saves.
+constexpr size_t kParallelAccumulate = 16384;
 
 // What a generation counts as its batches go by.
 struct GenerationTally {
@@ -233,8 +250,14 @@ class Frame {
     QueryResult Intersect(const Batch& b, std::unique_ptr<PreparedBatch> prepared);
     void Shade(const Batch& b);
     void Occlude(const ShadowSlots& shadow);
+    uint32_t PixelOf(const Batch& b, size_t i) const {
+        return b.generation == 0 ? uint32_t(b.first + i) : rays_.pixels[b.first + i];
+    }
+    void ListLive(const Batch& b, const SpawnedRays& spawned, GenerationTally& tally);
     void Accumulate(const Batch& b, const ShadowSlots& shadow, const BatchOutputs& out,
                     GenerationTally& tally);
+    uint64_t AccumulateRange(const Batch& b, const ShadowSlots& shadow, const BatchOutputs& out,
+                             size_t begin, size_t end);
     void Compact(const Batch& b);
     void ReportProgress(const Batch& b, size_t nRays);
     void EndGeneration(uint32_t generation, GenerationTally& tally);
@@ -264,13 +287,16 @@ class Frame {
     // Some ray has spawned both a reflection and a refraction: a pixel may then have several
     // rays in a generation, whose contributions must reach it in the order they always did.
     bool branched_ = false;
+    // No ray spawned both before the generation in flight began: its rays' pixels all differ.
+    bool pixelsDiffer_ = true;
     // Prepare's queue: its reads do not wait for the kernels on ctx_.queue().
     cl::CommandQueue readQueue_;
     const cl::Program program_;
     const std::unique_ptr<RayQuery> query_;
     cl::Kernel eyeKernel_, shadeKernel_, compactKernel_;
     KernelTimer timer_;
-    double hostSeconds_ = 0;  // the accumulation's and the ray ordering's
+    double hostSeconds_ = 0;  // the accumulation's
+    double listSeconds_ = 0;  // the live slots' listing and ordering (on a worker)
     const size_t nEye_;
     std::vector<RcHit> eyeHits_;           // generation 0's, when the eye-hit source finds them
     std::optional<NewtonSampler> newton_;  // options.newtonStats on a scene with patches
@@ -330,6 +356,7 @@ Frame::Frame(clrt::Context& ctx, const scene::Scene& scene, const RenderOptions&
 GenerationTally Frame::BeginGeneration(uint32_t generation, size_t nRays) {
     pool_.Give(next_.pages);
     next_.pixels.clear();
+    pixelsDiffer_ = !branched_;
     if (generation == 0) GenerateEyeRays(nRays);
     clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
     GenerationTally tally;
@@ -371,12 +398,18 @@ void Frame::TraceBatch(const Batch& b, std::unique_ptr<PreparedBatch> prepared,
                        GenerationTally& tally) {
     if (!Intersect(b, std::move(prepared)).shaded) Shade(b);
     ShadowSlots shadow(ctx_.queue(), buffers_.shade.shadow, size_t(b.n) * params_.nLights);
+    SpawnedRays spawned(ctx_.queue(), buffers_.shade, b.n);
+    // The live slots and their order need none of the shadow query's answers: a worker finds
+    // them while this thread classifies and queries the shadow rays.
+    auto listed = std::async(std::launch::async, [&] { ListLive(b, spawned, tally); });
     Occlude(shadow);
     BatchOutputs out(ctx_.queue(), buffers_, b.n, params_.nLights,
                      b.generation == 0 && options_.aovs);
+    listed.get();
     Accumulate(b, shadow, out, tally);
     shadow.Unmap();
     out.Unmap();
+    spawned.Unmap();
     Compact(b);
     tally.stats.rays += b.n;
 }
@@ -422,39 +455,70 @@ void Frame::Occlude(const ShadowSlots& shadow) {
         query_->Occluded(buffers_.shade.shadow.rays, shadow.rays.span(), buffers_.blocked, timer_);
 }
 
+// Lists the batch's live secondary slots, whose rays carry their pixel into the next generation,
+// and orders them by RayOrder while every pixel has at most one ray in a generation (a pixel's
+// contributions then arrive in generation order whatever the order of the rays).
+void Frame::ListLive(const Batch& b, const SpawnedRays& spawned, GenerationTally& tally) {
+    const auto t0 = Clock::now();
+    const uint8_t* flags = spawned.flags.data();
+    const size_t count = next_.pixels.size();  // rays listed before this batch's
+    live_.clear();
+    for (uint32_t i = 0; i < b.n; ++i) {
+        branched_ |= flags[2 * size_t(i)] && flags[2 * size_t(i) + 1];
+        for (uint32_t k = 0; k < 2; ++k) {
+            if (!flags[2 * size_t(i) + k]) continue;
+            live_.push_back(2 * i + k);
+            next_.pixels.push_back(PixelOf(b, i));
+            ++(k == 0 ? tally.reflection : tally.refraction);
+        }
+    }
+    if (!branched_ && live_.size() > 1) {
+        order_.Sort(spawned.rays.span(), live_, std::span(next_.pixels).subspan(count));
+    }
+    listSeconds_ += SecondsSince(t0);
+}
+
 // Adds the batch's radiance and unblocked shadow contributions to its pixels, in ray order (so a
-// render is reproducible bit for bit), writes the first-hit layers, and lists the live secondary
-// slots, whose rays carry their pixel into the next generation.
+// render is reproducible bit for bit), and writes the first-hit layers. While the generation's
+// pixels all differ, two threads add a half of the rays each: no pixel gets sums from both.
 void Frame::Accumulate(const Batch& b, const ShadowSlots& shadow, const BatchOutputs& out,
                        GenerationTally& tally) {
     const auto t0 = Clock::now();
+    uint64_t shadowRays[2] = {0, 0};
+    auto add = [&](size_t begin, size_t end) {
+        shadowRays[begin == 0 ? 0 : 1] = AccumulateRange(b, shadow, out, begin, end);
+    };
+    if (pixelsDiffer_) {
+        InTwoHalves(b.n, kParallelAccumulate, add);
+    } else {
+        add(0, b.n);
+    }
+    tally.stats.shadowRays += shadowRays[0] + shadowRays[1];
+    hostSeconds_ += SecondsSince(t0);
+}
+
+// Accumulate's work on rays [begin, end); returns the shadow rays counted.
+uint64_t Frame::AccumulateRange(const Batch& b, const ShadowSlots& shadow, const BatchOutputs& out,
+                                size_t begin, size_t end) {
     const uint32_t nLights = params_.nLights;
     const rc_float4 *radiance = out.radiance.data(), *contribution = shadow.contribution.data();
-    const uint8_t *blocked = out.blocked.data(), *spawned = out.spawned.data();
+    const uint8_t* blocked = out.blocked.data();
     const RcHit* hits = out.hits.data();  // null: no first-hit layers from this batch
-    live_.clear();
-    for (uint32_t i = 0; i < b.n; ++i) {
-        const uint32_t pixel =
-            b.generation == 0 ? uint32_t(b.first + i) : rays_.pixels[b.first + i];
+    uint64_t shadowRays = 0;
+    for (size_t i = begin; i < end; ++i) {
+        const uint32_t pixel = PixelOf(b, i);
         // Once ordered, a generation's rays visit their pixels at random: the pixel a few rays
         // ahead is fetched while this one is added.
-        if (b.generation > 0 && i + kPixelsAhead < b.n) {
+        if (b.generation > 0 && i + kPixelsAhead < end) {
             __builtin_prefetch(&img_.rgb[rays_.pixels[b.first + i + kPixelsAhead]], 1);
         }
         glm::vec3& px = img_.rgb[pixel];
         px += glm::vec3(radiance[i].x, radiance[i].y, radiance[i].z);
         for (uint32_t l = 0; l < nLights; ++l) {
-            const rc_float4& c = contribution[size_t(i) * nLights + l];
+            const rc_float4& c = contribution[i * nLights + l];
             if (c.w == 0.0f) continue;
-            ++tally.stats.shadowRays;
-            if (!blocked[size_t(i) * nLights + l]) px += glm::vec3(c.x, c.y, c.z);
-        }
-        branched_ |= spawned[2 * size_t(i)] && spawned[2 * size_t(i) + 1];
-        for (uint32_t k = 0; k < 2; ++k) {
-            if (!spawned[2 * size_t(i) + k]) continue;
-            live_.push_back(2 * i + k);
-            next_.pixels.push_back(pixel);
-            ++(k == 0 ? tally.reflection : tally.refraction);
+            ++shadowRays;
+            if (!blocked[i * nLights + l]) px += glm::vec3(c.x, c.y, c.z);
         }
         if (hits) {
             img_.id[pixel] = hits[i].prim;
@@ -463,24 +527,16 @@ void Frame::Accumulate(const Batch& b, const ShadowSlots& shadow, const BatchOut
             img_.normal[pixel] = glm::vec3(n.x, n.y, n.z);
         }
     }
-    hostSeconds_ += SecondsSince(t0);
+    return shadowRays;
 }
 
-// Copies the batch's live secondary rays to the end of the next generation's pages (new pages
-// from the pool), in RayOrder's order while every pixel has at most one ray in a generation (a
-// pixel's contributions then arrive in generation order whatever the order of the rays); the
-// batch's own page goes back to the pool, answered and shaded.
+// Copies the batch's live secondary rays, in ListLive's order, to the end of the next
+// generation's pages (new pages from the pool); the batch's own page goes back to the pool,
+// answered and shaded.
 void Frame::Compact(const Batch& b) {
     const size_t pageRays = pool_.PageRays();
     const size_t count = next_.pixels.size() - live_.size();  // rays on the pages before these
     const RayBuffers& secondary = buffers_.shade.secondary;
-    if (!branched_ && live_.size() > 1) {
-        const auto t0 = Clock::now();
-        clrt::MappedRead<RcRay> rays(ctx_.queue(), secondary.rays, 2 * size_t(b.n));
-        order_.Sort(rays.span(), live_, std::span(next_.pixels).subspan(count));
-        rays.Unmap();
-        hostSeconds_ += SecondsSince(t0);
-    }
     if (!live_.empty()) {
         clrt::Check("clEnqueueWriteBuffer", [&] {
             ctx_.queue().enqueueWriteBuffer(buffers_.liveSlots, CL_FALSE, 0,
@@ -533,6 +589,7 @@ image::Image Frame::Finish(Clock::time_point tStart) {
     stats_.eyeRaysFromCamera = q.eyeRaysFromCamera;
     stats_.accelStats = q.accel;
     stats_.timeS["host"] = hostSeconds_;
+    stats_.timeS["host_live_thread"] = listSeconds_;
     if (options_.accel == Accel::kClassify || options_.accel == Accel::kAuto) {
         stats_.timeS["host_classify"] = q.hostSeconds;
     }

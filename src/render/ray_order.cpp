@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "rayclass/core/two_halves.h"
-
 namespace rayclass::render {
 
 namespace {
@@ -46,9 +44,6 @@ uint32_t DirectionCell(const float d[3]) {
     return Spread2(Cell(ax / sum, kDirBits)) << 1 | Spread2(Cell(ay / sum, kDirBits));
 }
 
-// Rays below this many have their keys computed on one thread.
-constexpr size_t kParallelKeys = 65536;
-
 }  // namespace
 
 RayOrder::RayOrder(const Bounds3f& box) {
@@ -78,15 +73,12 @@ void RayOrder::Sort(std::span<const RcRay> rays, std::span<uint32_t> slots,
     std::vector<uint32_t>& keys = radix_.bits;
     keys.resize(n);
     order_.resize(n);
-    // The keys read every ray once, from memory the shading kernel has just written: the
-    // render thread is alone on the host then, so two threads read them.
-    auto keysOf = [&](size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) {
-            keys[i] = Key(rays[slots[i]]);
-            order_[i] = uint32_t(i);
-        }
-    };
-    InTwoHalves(n, kParallelKeys, keysOf);
+    // One thread: the renderer orders a batch on a worker beside its shadow query, whose
+    // classification holds the other core.
+    for (size_t i = 0; i < n; ++i) {
+        keys[i] = Key(rays[slots[i]]);
+        order_[i] = uint32_t(i);
+    }
     // Stable: equal keys keep their order.
     RadixSortByBits<12>(keys, order_, kKeyBits, radix_);
     scratch_.assign(slots.begin(), slots.end());

@@ -157,5 +157,31 @@ TEST(RayOrder, TakesOriginsOutsideItsBoxAndAnEmptyBox) {
     }
 }
 
+TEST(RayOrder, OrdersALargeBatchAsAStableSortByOctantThenCell) {
+    // Many rays and few distinct keys, so that most keys are shared and the radix passes must
+    // keep their order: origins on one line along x (cells of 1/32 of the box, whose Morton
+    // order along one axis is their order), directions in two octants with the same direction
+    // cell (|x|, |y| and |z| alike).
+    std::mt19937 rng(11);
+    std::uniform_int_distribution<int> cell(0, 31), octant(0, 1);
+    const size_t n = 150000;
+    std::vector<RcRay> rays(2 * n);
+    std::vector<std::pair<int, int>> key(n);  // (octant, cell) of slot 2i's ray
+    for (size_t i = 0; i < n; ++i) {
+        const int c = cell(rng), o = octant(rng);
+        rays[2 * i] = MakeRay((float(c) + 0.5f) / 32.0f, 0.5f, 0.5f, o ? -1.0f : 1.0f, 1, 1);
+        key[i] = {o, c};
+    }
+    std::vector<uint32_t> expected(n);
+    std::iota(expected.begin(), expected.end(), 0u);
+    std::stable_sort(expected.begin(), expected.end(),
+                     [&](uint32_t a, uint32_t b) { return key[a] < key[b]; });
+    Live live(n);
+    RayOrder order(UnitBox());
+    order.Sort(rays, live.slots, live.pixels);
+    live.ExpectTied();
+    for (size_t i = 0; i < n; ++i) ASSERT_EQ(live.slots[i], 2 * expected[i]) << i;
+}
+
 }  // namespace
 }  // namespace rayclass::render
