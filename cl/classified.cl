@@ -185,7 +185,7 @@ RC_SHADE_INLINE void rc_prefetch_hits(__global RcHit* hits, __global const uint*
 #endif
 }
 
-/* How many candidates ahead of the one tested the triangle loop fetches a triangle. */
+/* How many candidates ahead of the one tested the triangle loops fetch a triangle. */
 #define RC_TRIANGLE_PREFETCH 4
 
 /* Candidate c + RC_TRIANGLE_PREFETCH's triangle of `leaf`, fetched while candidate c is tested:
@@ -421,6 +421,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const float16 endX = L.x + select(L.tmin, L.tmax, L.dX > 0.0f) * L.dX;
     int16 hit = (int16)(0);
     const uint nT = params->nTriangles, nS = params->nSpheres;
+    /* Only a scene of triangles alone: a candidate c + RC_TRIANGLE_PREFETCH may be another
+     * primitive, whose id does not index the triangles. */
+    const bool trianglesOnly = nS == 0 && params->nQuadrics == 0;
     uint c = 0;
     for (; c < leaf.candCount; ++c) {
         const RcCandidate cand = candidates[leaf.candBegin + c];
@@ -428,6 +431,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
         const int16 beyond = cand.nearX > endX;
         if (all(hit | beyond)) break;
         const uint prim = cand.prim;
+        if (trianglesOnly) rc_prefetch_triangle(candidates, triangles, leaf, c);
         if (prim < nT) {
             float16 t, u, v;
             const int16 inside = rc_packet_triangle(&L,
