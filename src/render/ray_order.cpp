@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "key_bits.h"
+
 namespace rayclass::render {
 
 namespace {
@@ -23,25 +25,14 @@ uint32_t Spread(uint32_t x) {
     return x;
 }
 
-// The bits of v (below 2^4) spread to every second position.
-uint32_t Spread2(uint32_t x) {
-    x = (x | x << 2) & 0x33u;
-    x = (x | x << 1) & 0x55u;
-    return x;
-}
-
-// x in [0, 1] as a cell below 2^bits; NaN in cell 0.
-uint32_t Cell(float x, int bits) {
-    const float c = std::clamp(x * float(1 << bits), 0.0f, float((1 << bits) - 1));
-    return c >= 0.0f ? uint32_t(c) : 0u;
-}
-
 // The cell of d on its octant's face of the octahedral map (|x| and |y| over the L1 norm),
 // the two coordinates' bits interleaved; a zero direction in cell 0.
 uint32_t DirectionCell(const float d[3]) {
     const float ax = std::fabs(d[0]), ay = std::fabs(d[1]), az = std::fabs(d[2]);
     const float sum = ax + ay + az;
-    return Spread2(Cell(ax / sum, kDirBits)) << 1 | Spread2(Cell(ay / sum, kDirBits));
+    constexpr int kCells = 1 << kDirBits;
+    return Spread2(Cell(ax / sum, 0.0f, float(kCells), kCells)) << 1 |
+           Spread2(Cell(ay / sum, 0.0f, float(kCells), kCells));
 }
 
 }  // namespace
@@ -59,9 +50,7 @@ uint32_t RayOrder::Key(const RcRay& ray) const {
     const float d[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
     uint32_t morton = 0, octant = 0;
     for (int a = 0; a < 3; ++a) {
-        // NaN-safe: a NaN coordinate lands in cell 0.
-        const float c = std::clamp((o[a] - lo_[a]) * scale_[a], 0.0f, float((1 << kCellBits) - 1));
-        morton |= Spread(c >= 0.0f ? uint32_t(c) : 0u) << a;
+        morton |= Spread(Cell(o[a], lo_[a], scale_[a], 1 << kCellBits)) << a;
         octant |= uint32_t(std::signbit(d[a])) << a;
     }
     return (octant << (3 * kCellBits) | morton) << (2 * kDirBits) | DirectionCell(d);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "key_bits.h"
 #include "rayclass/core/two_halves.h"
 
 namespace rayclass::render {
@@ -15,19 +16,6 @@ constexpr int kEndBits = 3, kLightBits = 3, kDirBits = 6;
 constexpr int kKeyBits = kLightBits + 2 * kDirBits;
 constexpr uint32_t kEmptyKey = 1u << kKeyBits;  // after every ray's key
 static_assert(kEmptyKey <= 0xFFFFu);
-
-// The bits of x (below 2^kDirBits) spread to every second position.
-uint32_t Spread2(uint32_t x) {
-    x = (x | x << 4) & 0x0F0Fu;
-    x = (x | x << 2) & 0x3333u;
-    return (x | x << 1) & 0x5555u;
-}
-
-// A coordinate in [lo, lo + cells / scale) as a cell below `cells`, NaN in cell 0.
-uint32_t Cell(float x, float lo, float scale, int cells) {
-    const float c = std::clamp((x - lo) * scale, 0.0f, float(cells - 1));
-    return c >= 0.0f ? uint32_t(c) : 0u;
-}
 
 // Packets sampled to judge the rays' own order.
 constexpr size_t kSamplePackets = 1024;
