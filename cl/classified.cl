@@ -400,9 +400,46 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     tests[p] = c * count;
 }
 
-/* Any hit before each lane's tmax (the light), 16 shadow rays of one leaf in lockstep: a lane is
- * done once blocked or once the candidates start beyond its end X; the packet stops when every
- * lane is done. The triangle, sphere and quadric tests are those of intersect.cl, lane by
+/* Whether each lane of L hits any of `leaf`'s candidates before its tmax, ORed into *hit; returns
+ * the candidates tested. A lane is done once blocked or once the candidates start beyond its end
+ * X (`endX`); the packet stops when every lane is done. `trianglesOnly` is a constant at both
+ * call sites, as in rc_fragment_nearest: the compiler otherwise hoists the sphere, quadric and
+ * patch set-up out of the loop, a square root and divisions per packet. */
+RC_SHADE_INLINE uint rc_fragment_any(const RcLanes16* L, RcLeaf leaf,
+                                     __global const RcCandidate* candidates,
+                                     __global const RcTriangle* triangles,
+                                     __global const RcSphere* spheres,
+                                     __global const RcQuadric* quadrics, uint nT, uint nS,
+                                     const bool trianglesOnly, float16 endX, int16* hit) {
+    uint c = 0;
+    for (; c < leaf.candCount; ++c) {
+        const RcCandidate cand = candidates[leaf.candBegin + c];
+        /* Lists are sorted by nearX: a lane that has passed its end stays past it. */
+        const int16 beyond = cand.nearX > endX;
+        if (all(*hit | beyond)) break;
+        const uint prim = cand.prim;
+        if (trianglesOnly) rc_prefetch_triangle(candidates, triangles, leaf, c);
+        if (trianglesOnly || prim < nT) {
+            float16 t, u, v;
+            *hit |= ~beyond & rc_packet_triangle(L, triangles[prim], &t, &u, &v);
+        } else if (prim < nT + nS) {
+            float16 t;
+            *hit |= ~beyond & rc_packet_sphere(L, spheres[prim - nT].centerRadius, L->tmax, &t);
+        } else {
+            __global const RcQuadric* q = quadrics + (prim - nT - nS);
+            float16 t, u, v;
+            *hit |= ~beyond & (q->kind == RC_ANALYTIC_PATCH_BOX
+                                   ? rc_packet_patch(L, (__global const float4*)quadrics,
+                                                     (__global const RcPatchBox*)q, L->tmax, &t,
+                                                     &u, &v)
+                                   : rc_packet_quadric(L, q, L->tmax, &t));
+        }
+    }
+    return c;
+}
+
+/* Any hit before each lane's tmax (the light), 16 shadow rays of one leaf in lockstep
+ * (rc_fragment_any). The triangle, sphere and quadric tests are those of intersect.cl, lane by
  * lane. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occluded_fragment(
     __global const RcRay* rays, __global const uint* rayIndex, __global const uint* packetLeaf,
@@ -423,33 +460,11 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     const uint nT = params->nTriangles, nS = params->nSpheres;
     /* Only a scene of triangles alone: a candidate c + RC_TRIANGLE_PREFETCH may be another
      * primitive, whose id does not index the triangles. */
-    const bool trianglesOnly = nS == 0 && params->nQuadrics == 0;
-    uint c = 0;
-    for (; c < leaf.candCount; ++c) {
-        const RcCandidate cand = candidates[leaf.candBegin + c];
-        /* Lists are sorted by nearX: a lane that has passed its end stays past it. */
-        const int16 beyond = cand.nearX > endX;
-        if (all(hit | beyond)) break;
-        const uint prim = cand.prim;
-        if (trianglesOnly) rc_prefetch_triangle(candidates, triangles, leaf, c);
-        if (prim < nT) {
-            float16 t, u, v;
-            const int16 inside = rc_packet_triangle(&L,
-                                                    triangles[prim], &t, &u, &v);
-            hit |= ~beyond & inside;
-        } else if (prim < nT + nS) {
-            float16 t;
-            hit |= ~beyond & rc_packet_sphere(&L, spheres[prim - nT].centerRadius, L.tmax, &t);
-        } else {
-            __global const RcQuadric* q = quadrics + (prim - nT - nS);
-            float16 t, u, v;
-            hit |= ~beyond & (q->kind == RC_ANALYTIC_PATCH_BOX
-                                  ? rc_packet_patch(&L, (__global const float4*)quadrics,
-                                                    (__global const RcPatchBox*)q, L.tmax, &t,
-                                                    &u, &v)
-                                  : rc_packet_quadric(&L, q, L.tmax, &t));
-        }
-    }
+    const uint c = nS == 0 && params->nQuadrics == 0
+                       ? rc_fragment_any(&L, leaf, candidates, triangles, spheres, quadrics, nT,
+                                         nS, true, endX, &hit)
+                       : rc_fragment_any(&L, leaf, candidates, triangles, spheres, quadrics, nT,
+                                         nS, false, endX, &hit);
     const uchar16 flags = convert_uchar16(hit & 1);
 #pragma unroll
     for (uint k = 0; k < 16; ++k) {
