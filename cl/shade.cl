@@ -1,7 +1,7 @@
 /* Whitted shading of one hit: emission + ambient, one shadow ray per point light carrying the
  * light's contribution (shading happens before the shadow query; the host adds it only when the
- * ray is unblocked), and the reflection and refraction rays with their weights into slots 2i and
- * 2i + 1 (spawned[] says which slots hold a ray). The reference
+ * ray is unblocked), and the reflection and refraction rays with their weights into their
+ * secondary slots (RC_SECONDARY_SLOT; spawned[] says which hold a ray). The reference
  * renderer (src/render/reference.cpp) implements the same model in double. */
 #include "rc_types.h"
 #include "intersect.cl"
@@ -176,10 +176,11 @@ RC_SHADE_INLINE void rc_shade_light(uint i, uint l, const RcRay* ray, const RcRa
     shadowContribution[slot] = (float4)(c, 1.0f);
 }
 
-/* Writes a secondary ray into slot `slot` (direction dir, not yet unit) and flags it. */
+/* Writes ray i's secondary ray k (direction dir, not yet unit) into its slot and flags it. */
 RC_SHADE_INLINE void rc_spawn(__global RcRay* secondary, __global RcRayInfo* secondaryInfo,
-                              __global uchar* spawned, uint slot, float3 origin, float3 dir,
+                              __global uchar* spawned, uint i, uint k, float3 origin, float3 dir,
                               float3 weight, uint depth, uint kind) {
+    const uint slot = RC_SECONDARY_SLOT(i, k);
     RcRay out;
     out.origin = (float4)(origin, 0.0f);
     out.direction = (float4)(rc_encode_direction(normalize(dir)), INFINITY);
@@ -190,7 +191,7 @@ RC_SHADE_INLINE void rc_spawn(__global RcRay* secondary, __global RcRayInfo* sec
     outInfo.kind = kind;
     outInfo.pad0 = outInfo.pad1 = 0;
     secondaryInfo[slot] = outInfo;
-    spawned[slot] = 1;
+    spawned[2 * i + k] = 1;
 }
 
 /* Shades the hit of ray i: radiance, normal (unless `normals` is null), every light's shadow
@@ -238,14 +239,14 @@ RC_SHADE_INLINE void rc_shade_ray(uint i, const RcRay* ray, const RcRayInfo* inf
         float3 rdir = d + 2.0f * cosi * s.ns;
         /* A shading normal can tilt the mirror direction below the surface: fall back to ng. */
         if (dot(rdir, s.ng) <= 0.0f) rdir = d - 2.0f * dot(d, s.ng) * s.ng;
-        rc_spawn(secondary, secondaryInfo, spawned, 2 * i, rc_offset_ray_origin(s.p, s.ng), rdir,
+        rc_spawn(secondary, secondaryInfo, spawned, i, 0, rc_offset_ray_origin(s.p, s.ng), rdir,
                  wr, depth, RC_RAY_REFLECTION);
     }
     const float3 wt = weight * ktEff;
     if (!tir && rc_worth_spawning(wt, depth, params)) {
         const float3 tdir = eta * d + (eta * cosi - sqrt(1.0f - sin2t)) * s.ns;
         if (dot(tdir, s.ng) < 0.0f) {
-            rc_spawn(secondary, secondaryInfo, spawned, 2 * i + 1, rc_offset_ray_origin(s.p, -s.ng),
+            rc_spawn(secondary, secondaryInfo, spawned, i, 1, rc_offset_ray_origin(s.p, -s.ng),
                      tdir, wt, depth, RC_RAY_REFRACTION);
         }
     }

@@ -489,9 +489,10 @@ RC_SHADE_INLINE void rc_shade16_rays(__global const RcRay* rays, __global const 
                                 rc_v16_dot(dir, L.ng) <= 0.0f);
             const RcVec16 rDir = rc_normalize16(dir);
             const RcVec16 rOrigin = rc_offset_ray_origin16(L.p, L.ng);
-#define RC_STORE_REFLECTED(k, s)                                                    \
-    if (first + k < nIds && reflect.s) {                                            \
-        RC_SPAWN_LANE(2 * ray[k], rOrigin, rDir, wr, depth1, RC_RAY_REFLECTION, s); \
+#define RC_STORE_REFLECTED(k, s)                                              \
+    if (first + k < nIds && reflect.s) {                                      \
+        const uint slot = RC_SECONDARY_SLOT(ray[k], 0);                       \
+        RC_SPAWN_LANE(slot, rOrigin, rDir, wr, depth1, RC_RAY_REFLECTION, s); \
     }
             RC_FOR_LANES(RC_STORE_REFLECTED)
 #undef RC_STORE_REFLECTED
@@ -504,9 +505,10 @@ RC_SHADE_INLINE void rc_shade16_rays(__global const RcRay* rays, __global const 
         if (any(refract)) {
             const RcVec16 tDir = rc_normalize16(dir);
             const RcVec16 tOrigin = rc_offset_ray_origin16(L.p, rc_v16_neg(L.ng));
-#define RC_STORE_REFRACTED(k, s)                                                        \
-    if (first + k < nIds && refract.s) {                                                \
-        RC_SPAWN_LANE(2 * ray[k] + 1, tOrigin, tDir, wt, depth1, RC_RAY_REFRACTION, s); \
+#define RC_STORE_REFRACTED(k, s)                                              \
+    if (first + k < nIds && refract.s) {                                      \
+        const uint slot = RC_SECONDARY_SLOT(ray[k], 1);                       \
+        RC_SPAWN_LANE(slot, tOrigin, tDir, wt, depth1, RC_RAY_REFRACTION, s); \
     }
             RC_FOR_LANES(RC_STORE_REFRACTED)
 #undef RC_STORE_REFRACTED

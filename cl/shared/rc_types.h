@@ -136,6 +136,16 @@ typedef struct RcCamera {
  * for a whole 64-byte cache line (the host classification streams through the rays, and reads
  * them measurably slower at a 64-byte stride than at 32). */
 
+/* Where shading writes ray i's secondary ray k (0 reflection, 1 refraction) of a batch: runs of
+ * RC_SECONDARY_RUN rays' reflections, each followed by the same rays' refractions (128 RcRay or
+ * RcRayInfo records fill a 4 KiB page), so that where nothing refracts half of the secondary
+ * arrays is never written and its pages never faulted in. spawned[2i + k] flags the slot. A
+ * batch of n rays takes 2 * RC_SECONDARY_RUN * ceil(n / RC_SECONDARY_RUN) slots. */
+#define RC_SECONDARY_RUN 128u
+#define RC_SECONDARY_SLOT(i, k)                                                  \
+    ((i) / RC_SECONDARY_RUN * (2u * RC_SECONDARY_RUN) + RC_SECONDARY_RUN * (k) + \
+     (i) % RC_SECONDARY_RUN)
+
 /* origin.w = tmin (0 for spawned rays: their origin is already offset), direction.w = tmax (unit
  * direction). The layout of classify::Ray. 32 bytes. */
 typedef struct RcRay {

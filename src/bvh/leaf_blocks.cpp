@@ -23,12 +23,29 @@ void SetLane(uint32_t* run, uint32_t count, uint32_t lane, uint32_t prim,
         run[a * count + lane] = std::bit_cast<uint32_t>(values[a]);
 }
 
+// Words of the leaf arrays of `nodes`: each leaf's run rounded up to RC_BVH_LEAF_ALIGN, and the
+// tail.
+size_t LeafWords(const std::vector<RcBvh8Node>& nodes) {
+    size_t words = RC_BVH_LEAF_TAIL;
+    for (const RcBvh8Node& node : nodes) {
+        for (uint32_t c = 0; c < node.nChildren; ++c) {
+            const uint32_t ref = node.child[c];
+            if (!(ref & RC_BVH8_LEAF)) continue;
+            const uint32_t count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
+            words += (RC_BVH_LEAF_ARRAYS * count + RC_BVH_LEAF_ALIGN - 1) / RC_BVH_LEAF_ALIGN *
+                     RC_BVH_LEAF_ALIGN;
+        }
+    }
+    return words;
+}
+
 }  // namespace
 
 BlockedBvh BlockLeaves(std::vector<RcBvh8Node> nodes, std::span<const uint32_t> primIndex,
                        const scene::Scene& scene) {
     BlockedBvh out;
-    out.leaves.reserve(RC_BVH_LEAF_ARRAYS * primIndex.size() + RC_BVH_LEAF_TAIL);
+    // Reserved exactly: growing the array on the way would copy it into fresh pages.
+    out.leaves.reserve(LeafWords(nodes));
     for (RcBvh8Node& node : nodes) {
         for (uint32_t c = 0; c < node.nChildren; ++c) {
             const uint32_t ref = node.child[c];

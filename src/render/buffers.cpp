@@ -57,8 +57,8 @@ ShadeBuffers MakeShadeBuffers(clrt::Context& ctx, size_t rays, uint32_t nLights)
     shade.normals = DeviceBuffer(ctx, rays * sizeof(rc_float4));
     shade.shadow = {DeviceBuffer(ctx, rays * nLights * sizeof(RcRay)),
                     DeviceBuffer(ctx, rays * nLights * sizeof(rc_float4))};
-    shade.secondary = {DeviceBuffer(ctx, 2 * rays * sizeof(RcRay)),
-                       DeviceBuffer(ctx, 2 * rays * sizeof(RcRayInfo))};
+    shade.secondary = {DeviceBuffer(ctx, SecondarySlots(rays) * sizeof(RcRay)),
+                       DeviceBuffer(ctx, SecondarySlots(rays) * sizeof(RcRayInfo))};
     shade.spawned = DeviceBuffer(ctx, 2 * rays);
     return shade;
 }

@@ -1,6 +1,7 @@
 #include "rayclass/render/bvh_query.h"
 
 #include <chrono>
+#include <utility>
 
 #include "rayclass/bvh/leaf_blocks.h"
 #include "rayclass/render/launch.h"
@@ -29,16 +30,17 @@ Bounds3f RootBox(const bvh::BlockedBvh& tree) {
 class BvhQuery final : public RayQuery {
   public:
     BvhQuery(clrt::Context& ctx, const cl::Program& program, const SceneBuffers& scene,
-             const bvh::BlockedBvh& tree)
+             bvh::BlockedBvh tree)
         : ctx_(ctx),
           scene_(scene),
-          nodes_(UploadVector(ctx, tree.nodes)),
-          leaves_(UploadVector(ctx, tree.leaves)),
-          bytes_(double(tree.nodes.size() * sizeof(RcBvh8Node) +
-                        tree.leaves.size() * sizeof(uint32_t))),
+          tree_(std::move(tree)),
+          nodes_(ReadOnlyView(ctx, tree_.nodes)),
+          leaves_(ReadOnlyView(ctx, tree_.leaves)),
+          bytes_(double(tree_.nodes.size() * sizeof(RcBvh8Node) +
+                        tree_.leaves.size() * sizeof(uint32_t))),
           intersect_(program, "rc_intersect_bvh"),
           occluded_(program, "rc_occluded_bvh"),
-          shadowOrder_(RootBox(tree)) {}
+          shadowOrder_(RootBox(tree_)) {}
 
     std::string Name() const override { return "bvh"; }
 
@@ -86,6 +88,7 @@ class BvhQuery final : public RayQuery {
 
     clrt::Context& ctx_;
     const SceneBuffers& scene_;
+    const bvh::BlockedBvh tree_;  // what nodes_ and leaves_ may read in place
     cl::Buffer nodes_, leaves_;
     double bytes_;
     cl::Kernel intersect_, occluded_;
@@ -108,8 +111,8 @@ std::unique_ptr<RayQuery> MakeBvhQuery(clrt::Context& ctx, const cl::Program& pr
 }
 
 std::unique_ptr<RayQuery> MakeBvhQuery(clrt::Context& ctx, const cl::Program& program,
-                                       const SceneBuffers& buffers, const bvh::BlockedBvh& tree) {
-    return std::make_unique<BvhQuery>(ctx, program, buffers, tree);
+                                       const SceneBuffers& buffers, bvh::BlockedBvh tree) {
+    return std::make_unique<BvhQuery>(ctx, program, buffers, std::move(tree));
 }
 
 BvhBuild::BvhBuild(const scene::Scene& scene, const bvh::BuildParams& params)

@@ -119,7 +119,7 @@ struct ShadowSlots {
 // live on, and their order, follow from these alone, before the shadow query answers.
 struct SpawnedRays {
     SpawnedRays(const cl::CommandQueue& q, const ShadeBuffers& shade, size_t n)
-        : flags(q, shade.spawned, 2 * n), rays(q, shade.secondary.rays, 2 * n) {}
+        : flags(q, shade.spawned, 2 * n), rays(q, shade.secondary.rays, SecondarySlots(n)) {}
     // Before compaction reads the rays and the next batch's shading writes them.
     void Unmap() {
         flags.Unmap();
@@ -467,7 +467,7 @@ void Frame::ListLive(const Batch& b, const SpawnedRays& spawned, GenerationTally
         branched_ |= flags[2 * size_t(i)] && flags[2 * size_t(i) + 1];
         for (uint32_t k = 0; k < 2; ++k) {
             if (!flags[2 * size_t(i) + k]) continue;
-            live_.push_back(2 * i + k);
+            live_.push_back(RC_SECONDARY_SLOT(i, k));
             next_.pixels.push_back(PixelOf(b, i));
             ++(k == 0 ? tally.reflection : tally.refraction);
         }

@@ -88,7 +88,9 @@ void PopulateDeviceBuffer(const cl::Buffer& buffer, size_t bytes) {
 size_t BatchRays(size_t requested, size_t imageRays, uint32_t nLights, uint64_t maxAllocBytes) {
     const uint64_t perRay = std::max<uint64_t>(
         {uint64_t(nLights) * sizeof(RcRay), 2 * sizeof(RcRay), 2 * sizeof(RcRayInfo)});
-    const uint64_t fits = maxAllocBytes / perRay;
+    // Whole runs of secondary slots (RC_SECONDARY_SLOT), so that they too fit.
+    uint64_t fits = maxAllocBytes / perRay;
+    if (fits >= RC_SECONDARY_RUN) fits -= fits % RC_SECONDARY_RUN;
     return size_t(std::max<uint64_t>(1, std::min<uint64_t>({requested, imageRays, fits})));
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <utility>
 
 #include "rayclass/classify/params.h"
 #include "rayclass/render/auto_query.h"
@@ -46,7 +47,7 @@ std::unique_ptr<RayQuery> MakeQuery(clrt::Context& ctx, const cl::Program& progr
     auto makeBvh = [&ctx, &program, &buffers, &scene, &stats, bvhBuild] {
         const auto t0 = Clock::now();
         BvhBuild::Result built = bvhBuild ? bvhBuild->Take() : BvhBuild(scene).Take();
-        auto query = MakeBvhQuery(ctx, program, buffers, built.tree);
+        auto query = MakeBvhQuery(ctx, program, buffers, std::move(built.tree));
         stats.timeS["bvh_build"] = SecondsSince(t0);
         stats.timeS["bvh_build_thread"] = built.seconds;
         return query;

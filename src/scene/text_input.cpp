@@ -58,8 +58,10 @@ FileText ReadFile(const std::filesystem::path& file) {
                          std::to_string(kMaxInputBytes) + ")";
         return result;
     }
-    // st_size is where reading starts; a file that grows meanwhile is read up to the limit.
-    result.text.resize(size_t(info.st_size));
+    // st_size is where reading starts; a file that grows meanwhile is read up to the limit. The
+    // byte beyond it takes the read that finds the end: without it that read would first grow
+    // the string, copying the whole file into fresh pages.
+    result.text.resize(size_t(info.st_size) + 1);
     size_t used = 0;
     for (;;) {
         if (used == result.text.size()) {

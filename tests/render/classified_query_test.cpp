@@ -254,8 +254,8 @@ ShadeOutputs ShadeEyeRays(const cl::Program& program, const SceneBuffers& scene,
     out.normals = ReadAll<rc_float4>(shade.normals, n);
     out.shadow = ReadAll<RcRay>(shade.shadow.rays, size_t(n) * nLights);
     out.contribution = ReadAll<rc_float4>(shade.shadow.contribution, size_t(n) * nLights);
-    out.secondary = ReadAll<RcRay>(shade.secondary.rays, 2 * size_t(n));
-    out.secondaryInfo = ReadAll<RcRayInfo>(shade.secondary.info, 2 * size_t(n));
+    out.secondary = ReadAll<RcRay>(shade.secondary.rays, SecondarySlots(n));
+    out.secondaryInfo = ReadAll<RcRayInfo>(shade.secondary.info, SecondarySlots(n));
     out.spawned = ReadAll<uint8_t>(shade.spawned, 2 * size_t(n));
     return out;
 }

@@ -8,10 +8,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "rayclass/clrt/context.h"
 #include "rayclass/image/compare.h"
 #include "rayclass/render/auto_query.h"
+#include "rayclass/render/buffers.h"
 #include "rayclass/render/cl_renderer.h"
 #include "rayclass/render/launch.h"
 #include "rayclass/render/reference.h"
@@ -224,6 +226,23 @@ TEST(BatchRays, TheRequestBoundedByTheImageAndOneDeviceAllocation) {
     // No light: the two secondary rays' records bound it.
     EXPECT_EQ(BatchRays(1u << 20, 1920 * 1080, 0, 64 << 20), (64u << 20) / (2 * sizeof(RcRayInfo)));
     EXPECT_EQ(BatchRays(1u << 20, 1920 * 1080, 1u << 20, 1024), 1u);  // never none
+    // Whole runs of secondary slots: 2^20 + 100 rays' records would not fit.
+    const uint64_t secondary = 2 * sizeof(RcRayInfo) * ((1u << 20) + 100);
+    EXPECT_EQ(BatchRays(1u << 21, 1920 * 1080, 0, secondary), 1u << 20);
+}
+
+TEST(SecondarySlots, EachRaysTwoSlotsApartAndWithinTheBatchsSlots) {
+    for (uint32_t n : {1u, 127u, 128u, 129u, 1000u}) {
+        std::vector<int> used(SecondarySlots(n), 0);
+        for (uint32_t i = 0; i < n; ++i) {
+            for (uint32_t k = 0; k < 2; ++k) {
+                const size_t slot = RC_SECONDARY_SLOT(i, k);
+                ASSERT_LT(slot, used.size()) << n << " " << i << " " << k;
+                ++used[slot];
+            }
+        }
+        for (size_t s = 0; s < used.size(); ++s) EXPECT_LE(used[s], 1) << n << " " << s;
+    }
 }
 
 TEST(ClRenderer, DepthLimitStopsMirrorsFacingEachOther) {

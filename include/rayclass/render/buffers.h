@@ -2,6 +2,7 @@
 // shading outputs (layouts: cl/shared/rc_types.h).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include "rayclass/clrt/context.h"
@@ -51,6 +52,11 @@ struct ShadeBuffers {
     RayBuffers secondary;
     cl::Buffer spawned;
 };
+
+// The secondary slots of a batch of n rays (RC_SECONDARY_SLOT): two a ray, in whole runs.
+constexpr size_t SecondarySlots(size_t n) {
+    return (n + RC_SECONDARY_RUN - 1) / RC_SECONDARY_RUN * (2 * RC_SECONDARY_RUN);
+}
 
 // ShadeBuffers for batches of up to `rays` rays and `nLights` lights (rayInfo left unset: it is
 // the batch's own).

@@ -37,8 +37,9 @@ class BvhBuild {
     std::future<Result> result_;
 };
 
-// Uploads `tree`, built over the primitives `buffers` holds.
+// The query over `tree`, built over the primitives `buffers` holds (kept by the query, whose
+// kernels may read it in place).
 std::unique_ptr<RayQuery> MakeBvhQuery(clrt::Context& ctx, const cl::Program& program,
-                                       const SceneBuffers& buffers, const bvh::BlockedBvh& tree);
+                                       const SceneBuffers& buffers, bvh::BlockedBvh tree);
 
 }  // namespace rayclass::render

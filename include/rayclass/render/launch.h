@@ -52,6 +52,18 @@ cl::Buffer UploadVector(clrt::Context& ctx, const std::vector<T>& v) {
     });
 }
 
+// A read-only buffer of `v`, which must outlive it unchanged: on a CPU device a buffer over `v`'s
+// own memory, which PoCL reads in place (a copy would fault in the pages of a second one),
+// elsewhere UploadVector's copy.
+template <typename T>
+cl::Buffer ReadOnlyView(clrt::Context& ctx, const std::vector<T>& v) {
+    if (ctx.info().type != "cpu" || v.empty()) return UploadVector(ctx, v);
+    return clrt::Check("clCreateBuffer", [&] {
+        return cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR,
+                          v.size() * sizeof(T), const_cast<T*>(v.data()));
+    });
+}
+
 // A buffer of at least one byte (read-write unless `flags` say otherwise). On a CPU device a
 // large one lies in host memory of its own (core/large_pages.h), which the device uses in place
 // and which goes with the buffer.
