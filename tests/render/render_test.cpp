@@ -7,6 +7,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <set>
 #include <string>
 
 #include "rayclass/clrt/context.h"
@@ -170,6 +171,45 @@ TEST(AutoQueryCosts, TheClassificationIsPredictedToGrowAsItDidLastTime) {
     EXPECT_DOUBLE_EQ((QueryCosts{1e-7, 2e-7, 0}.PredictedClassified()), 1e-7);
     // So a sample dearer than the last measurement can still win on a growing trend.
     EXPECT_TRUE((QueryCosts{3e-7, 2e-7, 4e-7}.PreferBvh()));
+}
+
+// Rays numbered by their origin's x, and the numbers of a sample's rays group by group.
+std::vector<std::vector<int>> SampledRayNumbers(size_t nRays) {
+    std::vector<RcRay> rays(nRays);
+    for (size_t i = 0; i < nRays; ++i) rays[i].origin.x = float(i);
+    std::vector<std::vector<int>> numbers;
+    for (const auto& group : PickBvhSample(rays)) {
+        numbers.emplace_back();
+        for (const RcRay& r : group) numbers.back().push_back(int(r.origin.x));
+    }
+    return numbers;
+}
+
+TEST(AutoQuerySample, DisjointGroupsOfRunsSpreadEvenlyOverTheBatch) {
+    const size_t nRays = 786432, runs = kSampleGroups * kSampleRuns, spacing = nRays / runs;
+    const auto groups = SampledRayNumbers(nRays);
+    ASSERT_EQ(groups.size(), kSampleGroups);
+    std::set<int> seen;
+    for (size_t g = 0; g < groups.size(); ++g) {
+        ASSERT_EQ(groups[g].size(), kSampleRuns * kSampleRunRays) << g;
+        for (size_t i = 0; i < groups[g].size(); ++i) {
+            // Run r of group g is the (r * kSampleGroups + g)th of the batch's runs.
+            const size_t run = i / kSampleRunRays * kSampleGroups + g;
+            EXPECT_EQ(size_t(groups[g][i]), run * spacing + i % kSampleRunRays) << g << " " << i;
+            EXPECT_TRUE(seen.insert(groups[g][i]).second) << "ray " << groups[g][i] << " twice";
+        }
+    }
+}
+
+TEST(AutoQuerySample, ShorterRunsOrOneGroupWhereTheBatchIsSmall) {
+    const auto groups = SampledRayNumbers(100);  // 48 runs of 2 rays, 2 apart
+    ASSERT_EQ(groups.size(), kSampleGroups);
+    EXPECT_THAT(groups[1], testing::ElementsAreArray({2,  3,  8,  9,  14, 15, 20, 21, 26, 27, 32,
+                                                      33, 38, 39, 44, 45, 50, 51, 56, 57, 62, 63,
+                                                      68, 69, 74, 75, 80, 81, 86, 87, 92, 93}));
+    EXPECT_THAT(SampledRayNumbers(10),
+                testing::ElementsAre(testing::ElementsAre(0, 1, 2, 3, 4, 5, 6, 7, 8, 9)));
+    EXPECT_THAT(SampledRayNumbers(0), testing::ElementsAre(testing::IsEmpty()));
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, RenderMatchesReference, testing::ValuesIn(kCases),
