@@ -164,7 +164,7 @@ class AutoQuery final : public RayQuery {
 
 std::vector<std::vector<RcRay>> PickBvhSample(std::span<const RcRay> rays) {
     const size_t runs = kSampleGroups * kSampleRuns;
-    const size_t runRays = std::min(kSampleRunRays, rays.size() / runs);
+    const size_t runRays = std::min(kSampleRunRays, rays.size() / (runs * kSampleShare));
     if (runRays == 0) return {std::vector<RcRay>(rays.begin(), rays.end())};
     std::vector<std::vector<RcRay>> groups(kSampleGroups);
     const size_t spacing = rays.size() / runs;

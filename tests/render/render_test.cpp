@@ -202,13 +202,19 @@ TEST(AutoQuerySample, DisjointGroupsOfRunsSpreadEvenlyOverTheBatch) {
 }
 
 TEST(AutoQuerySample, ShorterRunsOrOneGroupWhereTheBatchIsSmall) {
-    const auto groups = SampledRayNumbers(100);  // 48 runs of 2 rays, 2 apart
+    // 48 runs 20 apart, of 5 rays: at most a quarter of the batch.
+    const auto groups = SampledRayNumbers(1000);
     ASSERT_EQ(groups.size(), kSampleGroups);
-    EXPECT_THAT(groups[1], testing::ElementsAreArray({2,  3,  8,  9,  14, 15, 20, 21, 26, 27, 32,
-                                                      33, 38, 39, 44, 45, 50, 51, 56, 57, 62, 63,
-                                                      68, 69, 74, 75, 80, 81, 86, 87, 92, 93}));
-    EXPECT_THAT(SampledRayNumbers(10),
-                testing::ElementsAre(testing::ElementsAre(0, 1, 2, 3, 4, 5, 6, 7, 8, 9)));
+    for (const auto& group : groups) EXPECT_EQ(group.size(), kSampleRuns * 5);
+    EXPECT_THAT(std::vector<int>(groups[1].begin(), groups[1].begin() + 10),
+                testing::ElementsAre(20, 21, 22, 23, 24, 80, 81, 82, 83, 84));
+    EXPECT_EQ(groups[1].back(), 924);
+    const auto all = [](int n) {
+        std::vector<int> numbers(size_t(n), 0);
+        for (int i = 0; i < n; ++i) numbers[size_t(i)] = i;
+        return numbers;
+    };
+    EXPECT_THAT(SampledRayNumbers(150), testing::ElementsAre(all(150)));
     EXPECT_THAT(SampledRayNumbers(0), testing::ElementsAre(testing::IsEmpty()));
 }
 
