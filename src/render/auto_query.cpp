@@ -1,6 +1,8 @@
 #include "rayclass/render/auto_query.h"
 
+#include <algorithm>
 #include <chrono>
+#include <limits>
 #include <vector>
 
 #include "rayclass/clrt/mapped.h"
@@ -15,11 +17,6 @@ using Clock = std::chrono::steady_clock;
 double SecondsSince(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
-
-// The BVH's sample: runs of consecutive rays spread evenly over the batch, a small fraction of a
-// generation's rays. Runs, because neighbouring rays share the tree's paths through the cache: a
-// sample of single rays spread as evenly came out dearer per ray than whole generations.
-constexpr size_t kSampleRuns = 16, kSampleRunRays = 1024;
 
 // Seconds the classified query's shading kernel has run on `timer`. The BVH leaves shading to
 // the renderer, after its query returns, so this is not the classification's cost.
@@ -113,31 +110,35 @@ class AutoQuery final : public RayQuery {
         Bvh();
         {
             clrt::MappedRead<RcRay> mapped(ctx_.queue(), rays, n);
-            Pick(mapped.span());
+            samples_ = PickBvhSample(mapped.span());
             mapped.Unmap();
         }
-        const cl::Buffer& sample = sampleRays_.Upload(ctx_, sample_);
-        const uint32_t m = uint32_t(sample_.size());
-        const cl::Buffer& hits = sampleHits_.Reserve(ctx_, m * sizeof(RcHit));
-        costs_.bvhSample = TimeSample([&] {
-            bvh_->Intersect(sample, m, nullptr, hits, ShadeBuffers{}, timer);
-            clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
-        });
+        costs_.bvhSample = TimeSamples(timer);
         onBvh_ = costs_.PreferBvh();
     }
 
-    // Seconds per sample_ ray that run() (the BVH on the uploaded sample, to completion)
-    // takes on the otherwise idle device, timed on a run after one that brings the tree back
-    // into the caches the classification used, and the first sample after two: its first run
-    // also compiles the kernel and faults in the tree.
-    template <typename Run>
-    double TimeSample(const Run& run) {
-        clrt::Check("clFinish", [&] { ctx_.queue().finish(); });  // the upload, and nothing else
-        for (int warmUp = sampled_ ? 1 : 2; warmUp > 0; --warmUp) run();
-        sampled_ = true;
-        const auto t0 = Clock::now();
-        run();
-        return SecondsSince(t0) / double(sample_.size());
+    // Seconds per ray of the BVH on its cheapest sample group, each answered once on the otherwise
+    // idle device, the first sample's after one run that compiles the kernel and faults in the
+    // tree. The cheapest, because the machine's other work only ever adds to a group's time.
+    double TimeSamples(KernelTimer& timer) {
+        double best = std::numeric_limits<double>::infinity();
+        for (const std::vector<RcRay>& group : samples_) {
+            const cl::Buffer& rays = sampleRays_.Upload(ctx_, group);
+            const uint32_t m = uint32_t(group.size());
+            const cl::Buffer& hits = sampleHits_.Reserve(ctx_, m * sizeof(RcHit));
+            const auto run = [&] {
+                bvh_->Intersect(rays, m, nullptr, hits, ShadeBuffers{}, timer);
+                clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
+            };
+            // The upload, and nothing else.
+            clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
+            if (!sampled_) run();
+            sampled_ = true;
+            const auto t0 = Clock::now();
+            run();
+            best = std::min(best, SecondsSince(t0) / double(m));
+        }
+        return best;
     }
 
     RayQuery& Bvh() {
@@ -145,36 +146,35 @@ class AutoQuery final : public RayQuery {
         return *bvh_;
     }
 
-    // sample_ = kSampleRuns runs of kSampleRunRays rays spread evenly over `rays` (all of them
-    // when they are fewer).
-    void Pick(std::span<const RcRay> rays) {
-        sample_.clear();
-        if (rays.size() <= kSampleRuns * kSampleRunRays) {
-            sample_.assign(rays.begin(), rays.end());
-            return;
-        }
-        const size_t spacing = rays.size() / kSampleRuns;
-        for (size_t r = 0; r < kSampleRuns; ++r) {
-            const auto first = rays.begin() + std::ptrdiff_t(r * spacing);
-            sample_.insert(sample_.end(), first, first + kSampleRunRays);
-        }
-    }
-
     clrt::Context& ctx_;
     std::unique_ptr<RayQuery> classified_, bvh_;
     std::function<std::unique_ptr<RayQuery>()> makeBvh_;
     Clock::time_point lastReturn_;  // when the render thread last returned from this query
     bool onBvh_ = false;            // the BVH answers this generation's nearest hits, and the rest
-    bool sampled_ = false;          // a sample has run (see TimeSample)
+    bool sampled_ = false;          // a sample has run (see TimeSamples)
     QueryCosts costs_;              // what this generation's choice compared
     // The classification's cost on this generation to the render thread: seconds and rays.
     double seconds_ = 0;
     uint64_t rays_ = 0;
-    std::vector<RcRay> sample_;
+    std::vector<std::vector<RcRay>> samples_;
     GrowingBuffer sampleRays_, sampleHits_;
 };
 
 }  // namespace
+
+std::vector<std::vector<RcRay>> PickBvhSample(std::span<const RcRay> rays) {
+    const size_t runs = kSampleGroups * kSampleRuns;
+    const size_t runRays = std::min(kSampleRunRays, rays.size() / (runs * kSampleShare));
+    if (runRays == 0) return {std::vector<RcRay>(rays.begin(), rays.end())};
+    std::vector<std::vector<RcRay>> groups(kSampleGroups);
+    const size_t spacing = rays.size() / runs;
+    for (size_t r = 0; r < runs; ++r) {
+        const auto first = rays.begin() + std::ptrdiff_t(r * spacing);
+        groups[r % kSampleGroups].insert(groups[r % kSampleGroups].end(), first,
+                                         first + std::ptrdiff_t(runRays));
+    }
+    return groups;
+}
 
 std::unique_ptr<RayQuery> MakeAutoQuery(clrt::Context& ctx, std::unique_ptr<RayQuery> classified,
                                         std::function<std::unique_ptr<RayQuery>()> makeBvh) {

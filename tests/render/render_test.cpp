@@ -7,6 +7,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -172,6 +173,51 @@ TEST(AutoQueryCosts, TheClassificationIsPredictedToGrowAsItDidLastTime) {
     EXPECT_DOUBLE_EQ((QueryCosts{1e-7, 2e-7, 0}.PredictedClassified()), 1e-7);
     // So a sample dearer than the last measurement can still win on a growing trend.
     EXPECT_TRUE((QueryCosts{3e-7, 2e-7, 4e-7}.PreferBvh()));
+}
+
+// Rays numbered by their origin's x, and the numbers of a sample's rays group by group.
+std::vector<std::vector<int>> SampledRayNumbers(size_t nRays) {
+    std::vector<RcRay> rays(nRays);
+    for (size_t i = 0; i < nRays; ++i) rays[i].origin.x = float(i);
+    std::vector<std::vector<int>> numbers;
+    for (const auto& group : PickBvhSample(rays)) {
+        numbers.emplace_back();
+        for (const RcRay& r : group) numbers.back().push_back(int(r.origin.x));
+    }
+    return numbers;
+}
+
+TEST(AutoQuerySample, DisjointGroupsOfRunsSpreadEvenlyOverTheBatch) {
+    const size_t nRays = 786432, runs = kSampleGroups * kSampleRuns, spacing = nRays / runs;
+    const auto groups = SampledRayNumbers(nRays);
+    ASSERT_EQ(groups.size(), kSampleGroups);
+    std::set<int> seen;
+    for (size_t g = 0; g < groups.size(); ++g) {
+        ASSERT_EQ(groups[g].size(), kSampleRuns * kSampleRunRays) << g;
+        for (size_t i = 0; i < groups[g].size(); ++i) {
+            // Run r of group g is the (r * kSampleGroups + g)th of the batch's runs.
+            const size_t run = i / kSampleRunRays * kSampleGroups + g;
+            EXPECT_EQ(size_t(groups[g][i]), run * spacing + i % kSampleRunRays) << g << " " << i;
+            EXPECT_TRUE(seen.insert(groups[g][i]).second) << "ray " << groups[g][i] << " twice";
+        }
+    }
+}
+
+TEST(AutoQuerySample, ShorterRunsOrOneGroupWhereTheBatchIsSmall) {
+    // 48 runs 20 apart, of 5 rays: at most a quarter of the batch.
+    const auto groups = SampledRayNumbers(1000);
+    ASSERT_EQ(groups.size(), kSampleGroups);
+    for (const auto& group : groups) EXPECT_EQ(group.size(), kSampleRuns * 5);
+    EXPECT_THAT(std::vector<int>(groups[1].begin(), groups[1].begin() + 10),
+                testing::ElementsAre(20, 21, 22, 23, 24, 80, 81, 82, 83, 84));
+    EXPECT_EQ(groups[1].back(), 924);
+    const auto all = [](int n) {
+        std::vector<int> numbers(size_t(n), 0);
+        for (int i = 0; i < n; ++i) numbers[size_t(i)] = i;
+        return numbers;
+    };
+    EXPECT_THAT(SampledRayNumbers(150), testing::ElementsAre(all(150)));
+    EXPECT_THAT(SampledRayNumbers(0), testing::ElementsAre(testing::IsEmpty()));
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, RenderMatchesReference, testing::ValuesIn(kCases),

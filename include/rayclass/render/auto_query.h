@@ -15,6 +15,8 @@
 #include <algorithm>
 #include <functional>
 #include <memory>
+#include <span>
+#include <vector>
 
 #include "rayclass/render/ray_query.h"
 
@@ -40,6 +42,17 @@ struct QueryCosts {
         return classified > 0 && bvhSample > 0 && bvhSample < PredictedClassified();
     }
 };
+
+// The BVH's sample of a generation's first batch `rays`: kSampleGroups groups of kSampleRuns runs
+// of kSampleRunRays consecutive rays, the runs spread evenly over `rays` and dealt to the groups
+// in turn; shorter runs where the sample would be more than a kSampleShare-th of `rays` (it is
+// paid on top of the generation), and one group of all of them where runs would be empty. Runs,
+// because neighbouring rays share the tree's paths through the cache: a sample of single rays
+// spread as evenly came out dearer per ray than whole generations. Disjoint groups, each answered
+// once, because a group answered again finds exactly the nodes it needs in the cache, which a
+// generation's rays do not: the auto query takes the cheapest group.
+constexpr size_t kSampleGroups = 3, kSampleRuns = 16, kSampleRunRays = 1024, kSampleShare = 4;
+std::vector<std::vector<RcRay>> PickBvhSample(std::span<const RcRay> rays);
 
 // `classified` and the query `makeBvh` makes answer the same scene; the BVH is made when the
 // first sample needs it, so a render without secondary rays never builds it.
