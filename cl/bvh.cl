@@ -779,12 +779,23 @@ static inline void rc_ray_store_answer(int anyHit, uint i, RcHit best, __global 
     }
 }
 
+/* The active lanes heading within 30 degrees of the lane before them, the first lane among them
+ * (their squared lengths len2). */
+static inline int16 rc_packet_smooth(const RcBvhPacket* p, float16 len2) {
+    const uint16 before = (uint16)(0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14);
+    const float16 dd = p->dx * shuffle(p->dx, before) + p->dy * shuffle(p->dy, before) +
+                       p->dz * shuffle(p->dz, before);
+    return p->active & (dd > 0.0f) & (dd * dd > 0.75f * len2 * shuffle(len2, before));
+}
+
 /* Whether the nearest-hit packet of rays [first, first + 16) below n walks the tree as one: at
- * least 12 of its lanes head within 30 degrees of its first or its last ray. A row of mirror
- * rays across an edge, or refracted rays through a curved surface, leave in one or two such
- * bundles, which still share most of their nodes; diffuse bounces scatter too widely, and their
- * lanes would add up the nodes of 16 walks. Their origins' spread is not limited: a walk of 16
- * lanes that share few nodes still waits on fewer loads than 16 single-ray walks. */
+ * least 12 of its lanes head within 30 degrees of its first or its last ray, or at least 8
+ * within 30 degrees of the lane before them. A row of mirror rays across an edge, or refracted
+ * rays through a curved surface, leave in one or two such bundles, or turn a little from lane to
+ * lane (curved mirrors, several edges), and still share most of their nodes; diffuse bounces
+ * scatter too widely, from lane to lane too, and their lanes would add up the nodes of 16
+ * walks. Their origins' spread is not limited: a walk of 16 lanes that share few nodes still
+ * waits on fewer loads than 16 single-ray walks. */
 static inline int rc_bvh_packet_bundled(const RcBvhPacket* p, __global const RcRay* rays,
                                         uint first, uint n) {
     const float16 len2 = p->dx * p->dx + p->dy * p->dy + p->dz * p->dz;
@@ -792,7 +803,8 @@ static inline int rc_bvh_packet_bundled(const RcBvhPacket* p, __global const RcR
     const int16 near =
         rc_packet_within(p, len2, rays[first].direction.xyz, 0.75f) |
         rc_packet_within(p, len2, rays[min(first + RC_PACKET, n) - 1].direction.xyz, 0.75f);
-    return rc_count16(near) >= min(12u, n - first);
+    return rc_count16(near) >= min(12u, n - first) ||
+           rc_count16(rc_packet_smooth(p, len2)) >= min(8u, n - first);
 }
 
 /* The answers of rays [first, first + 16) (rays order[first + k] where order is given): nearest

@@ -213,6 +213,28 @@ std::vector<RcRay> ScatteredRaysOfMixedReach(bool emptySlots) {
     return rays;
 }
 
+// Packets of 16 rays from random points of the grid, each lane's direction turned 20 degrees
+// from the lane before it about a random axis: no 12 lanes lie within 30 degrees of the packet's
+// first or last ray, but every lane within 30 degrees of the one before it, so the nearest-hit
+// kernel walks each packet as one (rc_bvh_packet_bundled, cl/bvh.cl) over rays in every octant.
+std::vector<RcRay> TurningPackets() {
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<float> pos(-0.5f, 3.5f), dir(-1.0f, 1.0f);
+    std::vector<RcRay> rays;
+    for (int packet = 0; packet < 300; ++packet) {
+        const glm::vec3 o(pos(rng), pos(rng), pos(rng));
+        const glm::vec3 axis = glm::normalize(glm::vec3(dir(rng), dir(rng), dir(rng)));
+        glm::vec3 d = glm::normalize(glm::cross(axis, glm::vec3(dir(rng), dir(rng), dir(rng))));
+        const glm::vec3 side = glm::cross(axis, d);
+        for (int k = 0; k < 16; ++k) {
+            const float a = glm::radians(20.0f) * float(k);
+            const glm::vec3 dk = std::cos(a) * d + std::sin(a) * side;
+            rays.push_back({{o.x, o.y, o.z, 1e-4f}, {dk.x, dk.y, dk.z, INFINITY}});
+        }
+    }
+    return rays;
+}
+
 struct Queries {
     scene::Scene scene = GridOfSquares();
     cl::Program program = BuildRenderProgram(TestContext());
@@ -272,6 +294,11 @@ TEST(BvhQuery, AxisParallelRaysAndRaysInFacePlanesHitWhatBruteForceHits) {
 TEST(BvhQuery, PacketsOfCoherentRaysHitWhatBruteForceHits) {
     Queries q;
     ExpectBruteForcesHits(q, CoherentRays(INFINITY, false));
+}
+
+TEST(BvhQuery, PacketsOfRaysTurningLaneByLaneHitWhatBruteForceHits) {
+    Queries q;
+    ExpectBruteForcesHits(q, TurningPackets());
 }
 
 TEST(BvhQuery, PacketsOfCoherentRaysAreBlockedAsByBruteForce) {
