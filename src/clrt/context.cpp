@@ -1,6 +1,7 @@
 #include "rayclass/clrt/context.h"
 
 #include <cctype>
+#include <cstdlib>
 #include <map>
 #include <set>
 #include <string>
@@ -24,7 +25,19 @@ struct Found {
     DeviceInfo info;
 };
 
+// PoCL's pthread device wakes its sleeping workers where the kernel's scheduler places them,
+// often all on the core the host thread holds, while the other cores wait for the load balancer
+// (milliseconds: a short kernel's whole run). POCL_AFFINITY keeps worker i on core i. A single
+// worker stays free to run on any core, and a setting of the caller's is kept. Must run before
+// PoCL starts its workers (the first platform query).
+void PinPoclWorkers() {
+    const char* count = std::getenv("POCL_MAX_PTHREAD_COUNT");
+    if (count != nullptr && std::atoi(count) == 1) return;
+    setenv("POCL_AFFINITY", "1", 0);
+}
+
 std::vector<Found> AllDevices() {
+    PinPoclWorkers();
     std::vector<cl::Platform> platforms;
     // An ICD loader with no platform reports CL_PLATFORM_NOT_FOUND_KHR: that is "no devices".
     try {
