@@ -1,6 +1,7 @@
 #include <malloc.h>
 
 #include "rayclass/cli/cli.h"
+#include "rayclass/clrt/context.h"
 
 int main(int argc, char** argv) {
     // glibc gives each block above a threshold (128 KiB, rising to the largest such block freed,
@@ -11,5 +12,7 @@ int main(int argc, char** argv) {
     // next stage; a render is one process that ends with its frames.
     mallopt(M_MMAP_THRESHOLD, 32 << 20);
     mallopt(M_TRIM_THRESHOLD, 1 << 30);
+    // Before the device thread starts: the scene loads beside it, and setenv there would race.
+    rayclass::clrt::PinPoclWorkers();
     return rayclass::cli::Main(argc, argv);
 }

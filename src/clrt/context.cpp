@@ -1,5 +1,8 @@
 #include "rayclass/clrt/context.h"
 
+#include <sched.h>
+#include <unistd.h>
+
 #include <cctype>
 #include <cstdlib>
 #include <map>
@@ -24,17 +27,6 @@ struct Found {
     cl::Device device;
     DeviceInfo info;
 };
-
-// PoCL's pthread device wakes its sleeping workers where the kernel's scheduler places them,
-// often all on the core the host thread holds, while the other cores wait for the load balancer
-// (milliseconds: a short kernel's whole run). POCL_AFFINITY keeps worker i on core i. A single
-// worker stays free to run on any core, and a setting of the caller's is kept. Must run before
-// PoCL starts its workers (the first platform query).
-void PinPoclWorkers() {
-    const char* count = std::getenv("POCL_MAX_PTHREAD_COUNT");
-    if (count != nullptr && std::atoi(count) == 1) return;
-    setenv("POCL_AFFINITY", "1", 0);
-}
 
 std::vector<Found> AllDevices() {
     PinPoclWorkers();
@@ -115,6 +107,27 @@ void AppendFile(const std::string& name, const std::string& sharedPrefix,
 }
 
 }  // namespace
+
+// PoCL's pthread device wakes its sleeping workers where the kernel's scheduler places them,
+// often all on the core the host thread holds, while the other cores wait for the load balancer
+// (milliseconds: a short kernel's whole run). POCL_AFFINITY keeps worker i on core i, which
+// fails where the process may not use core i (a cpuset, taskset, a batch system's share): newer
+// PoCL releases abort there, so the workers stay free unless cores 0..n-1 are all the process's.
+void PinPoclWorkers() {
+#ifdef __linux__
+    if (std::getenv("POCL_AFFINITY") != nullptr) return;
+    const char* count = std::getenv("POCL_MAX_PTHREAD_COUNT");
+    const long online = sysconf(_SC_NPROCESSORS_ONLN);
+    const long workers = count != nullptr ? std::atol(count) : online;
+    if (workers <= 1 || workers > CPU_SETSIZE) return;
+    cpu_set_t allowed;
+    if (sched_getaffinity(0, sizeof(allowed), &allowed) != 0) return;
+    for (long core = 0; core < workers; ++core) {
+        if (!CPU_ISSET(core, &allowed)) return;
+    }
+    setenv("POCL_AFFINITY", "1", 0);
+#endif
+}
 
 std::vector<DeviceInfo> ListDevices() {
     std::vector<DeviceInfo> infos;

@@ -4,10 +4,13 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sched.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -22,6 +25,70 @@ namespace {
 using ::testing::HasSubstr;
 using testing::kProbeOptions;
 using testing::TestContext;
+
+// PinPoclWorkers' inputs for one test: POCL_AFFINITY unset, POCL_MAX_PTHREAD_COUNT and the
+// process's cores as given; the environment and the cores as they were afterwards.
+class PinInputs {
+  public:
+    PinInputs(const char* workers, std::vector<int> cores) {
+        for (const char* name : {"POCL_AFFINITY", "POCL_MAX_PTHREAD_COUNT"}) {
+            if (const char* v = std::getenv(name)) saved_[name] = v;
+            unsetenv(name);
+        }
+        if (workers != nullptr) setenv("POCL_MAX_PTHREAD_COUNT", workers, 1);
+        sched_getaffinity(0, sizeof(cores_), &cores_);
+        cpu_set_t set;
+        CPU_ZERO(&set);
+        for (int c : cores) CPU_SET(c, &set);
+        restricted_ = sched_setaffinity(0, sizeof(set), &set) == 0;
+    }
+    ~PinInputs() {
+        sched_setaffinity(0, sizeof(cores_), &cores_);
+        for (const char* name : {"POCL_AFFINITY", "POCL_MAX_PTHREAD_COUNT"}) {
+            unsetenv(name);
+            if (saved_.count(name)) setenv(name, saved_[name].c_str(), 1);
+        }
+    }
+    bool Applied() const { return restricted_; }
+    static std::optional<std::string> Affinity() {
+        const char* v = std::getenv("POCL_AFFINITY");
+        return v ? std::optional<std::string>(v) : std::nullopt;
+    }
+
+  private:
+    std::map<std::string, std::string> saved_;
+    cpu_set_t cores_;
+    bool restricted_ = false;
+};
+
+TEST(PinPoclWorkers, PinsTwoWorkersOnTheProcesssFirstTwoCores) {
+    if (sysconf(_SC_NPROCESSORS_ONLN) < 2) GTEST_SKIP() << "needs two cores";
+    PinInputs in("2", {0, 1});
+    ASSERT_TRUE(in.Applied());
+    PinPoclWorkers();
+    EXPECT_EQ(PinInputs::Affinity(), "1");
+}
+
+TEST(PinPoclWorkers, LeavesWorkersFreeWhereACoreIsNotTheProcesss) {
+    if (sysconf(_SC_NPROCESSORS_ONLN) < 2) GTEST_SKIP() << "needs two cores";
+    PinInputs in("2", {1});
+    ASSERT_TRUE(in.Applied());
+    PinPoclWorkers();
+    EXPECT_EQ(PinInputs::Affinity(), std::nullopt);
+}
+
+TEST(PinPoclWorkers, LeavesOneWorkerAndTheCallersSettingAlone) {
+    if (sysconf(_SC_NPROCESSORS_ONLN) < 2) GTEST_SKIP() << "needs two cores";
+    {
+        PinInputs in("1", {0, 1});
+        PinPoclWorkers();
+        EXPECT_EQ(PinInputs::Affinity(), std::nullopt);
+    }
+    PinInputs in("2", {0, 1});
+    setenv("POCL_AFFINITY", "0", 1);
+    PinPoclWorkers();
+    EXPECT_EQ(PinInputs::Affinity(), "0");
+}
 
 // The message of the rayclass::Error that `f` throws ("" if it throws none).
 template <typename F>

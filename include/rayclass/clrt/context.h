@@ -30,6 +30,12 @@ struct DeviceInfo {
 // Every device of every platform; empty when no ICD is installed.
 std::vector<DeviceInfo> ListDevices();
 
+// Sets POCL_AFFINITY=1 (PoCL's CPU workers each kept on its own core) unless the caller set it,
+// one worker runs, or the process may not use cores 0..n-1 for its n workers. It changes the
+// environment: call it before other threads start. Every context calls it too, before PoCL
+// starts its workers, where it changes nothing once the variable is set.
+void PinPoclWorkers();
+
 class Context {
   public:
     // spec: "" or "auto" (the first GPU, else the first CPU), "gpu", "cpu", or an index into
