@@ -64,7 +64,7 @@ class PinInputs {
 TEST(PinPoclWorkers, PinsTwoWorkersOnTheProcesssFirstTwoCores) {
     if (sysconf(_SC_NPROCESSORS_ONLN) < 2) GTEST_SKIP() << "needs two cores";
     PinInputs in("2", {0, 1});
-    ASSERT_TRUE(in.Applied());
+    if (!in.Applied()) GTEST_SKIP() << "cores 0 and 1 are not this process's";
     PinPoclWorkers();
     EXPECT_EQ(PinInputs::Affinity(), "1");
 }
@@ -72,7 +72,7 @@ TEST(PinPoclWorkers, PinsTwoWorkersOnTheProcesssFirstTwoCores) {
 TEST(PinPoclWorkers, LeavesWorkersFreeWhereACoreIsNotTheProcesss) {
     if (sysconf(_SC_NPROCESSORS_ONLN) < 2) GTEST_SKIP() << "needs two cores";
     PinInputs in("2", {1});
-    ASSERT_TRUE(in.Applied());
+    if (!in.Applied()) GTEST_SKIP() << "core 1 is not this process's";
     PinPoclWorkers();
     EXPECT_EQ(PinInputs::Affinity(), std::nullopt);
 }
