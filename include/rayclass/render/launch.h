@@ -41,6 +41,15 @@ class KernelTimer {
     std::map<std::string, double> seconds_;
 };
 
+// A read-only buffer over `bytes` of host memory at `data`, which must outlive it unchanged: the
+// device may use that memory in place (PoCL on a CPU does) rather than a copy.
+inline cl::Buffer HostMemoryBuffer(clrt::Context& ctx, const void* data, size_t bytes) {
+    return clrt::Check("clCreateBuffer", [&] {
+        return cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, bytes,
+                          const_cast<void*>(data));
+    });
+}
+
 // A read-only buffer holding a copy of `v` (one zeroed element when `v` is empty).
 template <typename T>
 cl::Buffer UploadVector(clrt::Context& ctx, const std::vector<T>& v) {
@@ -58,10 +67,7 @@ cl::Buffer UploadVector(clrt::Context& ctx, const std::vector<T>& v) {
 template <typename T>
 cl::Buffer ReadOnlyView(clrt::Context& ctx, const std::vector<T>& v) {
     if (ctx.info().type != "cpu" || v.empty()) return UploadVector(ctx, v);
-    return clrt::Check("clCreateBuffer", [&] {
-        return cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR,
-                          v.size() * sizeof(T), const_cast<T*>(v.data()));
-    });
+    return HostMemoryBuffer(ctx, v.data(), v.size() * sizeof(T));
 }
 
 // A buffer of at least one byte (read-write unless `flags` say otherwise). On a CPU device a
@@ -123,10 +129,7 @@ class GrowingBuffer {
     template <typename T, typename Allocator>
     const cl::Buffer& Share(clrt::Context& ctx, const std::vector<T, Allocator>& data) {
         if (ctx.info().type != "cpu" || data.empty()) return Upload(ctx, data);
-        buffer_ = clrt::Check("clCreateBuffer", [&] {
-            return cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR,
-                              data.size() * sizeof(T), const_cast<T*>(data.data()));
-        });
+        buffer_ = HostMemoryBuffer(ctx, data.data(), data.size() * sizeof(T));
         capacity_ = 0;  // not ours to write: Reserve makes a buffer again
         return buffer_;
     }
