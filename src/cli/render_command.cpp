@@ -121,13 +121,15 @@ class DeviceStart {
 };
 
 // The render on the started device, its eye rays' first hits from the path that
-// raster::ChooseEyeRays picks (while the device may still be starting).
+// raster::ChooseEyeRays picks while the device may still be starting: an OpenGL context waits
+// for the device, whose start and the driver's may share one libLLVM.
 image::Image RenderOnDevice(const RenderArgs& r, const scene::Scene& scene,
                             const render::RenderOptions& options, DeviceStart& device,
                             render::RenderStats& stats, std::ostream& err) {
     raster::EyeRays eyeRays;
     try {
-        eyeRays = raster::ChooseEyeRays(r.eyeRays, options.rayEncoding, scene, err);
+        eyeRays = raster::ChooseEyeRays(r.eyeRays, options.rayEncoding, scene, err,
+                                        [&device] { device.Context(); });
     } catch (...) {
         device.Context();  // a bad device is reported first, as when it was awaited first
         throw;

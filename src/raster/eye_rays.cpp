@@ -19,7 +19,8 @@ std::string RasterChoice(const EyeRayRequest& request, const GlContext& gl) {
 }  // namespace
 
 EyeRays ChooseEyeRays(const EyeRayRequest& request, render::RayEncoding encoding,
-                      const scene::Scene& scene, std::ostream& err) {
+                      const scene::Scene& scene, std::ostream& err,
+                      const std::function<void()>& beforeOpenGl) {
     if (request.path == EyeRayPath::kKernel) return {nullptr, "--eye-rays kernel"};
     if (encoding == render::RayEncoding::kPolar16) {
         return {nullptr, "auto: kernel for --ray-encoding polar16"};
@@ -28,6 +29,7 @@ EyeRays ChooseEyeRays(const EyeRayRequest& request, render::RayEncoding encoding
     if (!asked && OnlySoftwareEglDevices()) {
         return {nullptr, "auto: kernel, software OpenGL only (EGL_MESA_device_software)"};
     }
+    beforeOpenGl();
     std::string why;
     GlContext* gl = GlContext::Shared(&why);
     if (!gl) {

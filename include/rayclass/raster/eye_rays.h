@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <string>
@@ -41,8 +42,12 @@ struct EyeRays {
 // directions (the raster pass traces exact ones) and on a software OpenGL renderer (slower
 // there), the raster pass on a hardware one or when a raster option asks for it. Depth-buffer
 // warnings and the notice of a missing OpenGL context go to `err`; throws GlError when the raster
-// pass is asked for and no context can be made.
+// pass is asked for and no context can be made. `beforeOpenGl` runs before the OpenGL context
+// is made, and only then: OpenGL drivers built on LLVM (llvmpipe, radeonsi) start the same libLLVM
+// as PoCL, and LLVM's start (its global target registry and options) is not thread-safe, so a
+// caller starting an OpenCL device on another thread waits for it there.
 EyeRays ChooseEyeRays(const EyeRayRequest& request, render::RayEncoding encoding,
-                      const scene::Scene& scene, std::ostream& err);
+                      const scene::Scene& scene, std::ostream& err,
+                      const std::function<void()>& beforeOpenGl);
 
 }  // namespace rayclass::raster
