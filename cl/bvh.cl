@@ -28,6 +28,25 @@ static inline float3 rc_bvh_inverse(float3 d) {
     return select(inv, copysign((float3)(1e30f), inv), isinf(inv));
 }
 
+/* A node's boxes as one array of planes (RcBvh8Node's loX, loY, loZ, hiX, hiY, hiZ, eight floats
+ * each): axis a's lower planes from 8 a on, its upper ones RC_BVH8_UPPER further. */
+#define RC_BVH8_UPPER 24
+static inline __global const float* rc_bvh_planes(__global const RcBvh8Node* nd) {
+    return (__global const float*)nd;
+}
+
+/* Where in rc_bvh_planes the planes of axis a start through which rays enter the boxes: the
+ * lower ones for rays that head up the axis (`up`, a positive inverse direction). Boxes hold
+ * lo <= hi and rounding is monotonic, so their distance is the min of the two planes' distances
+ * (equal ones at most differ in the sign of a zero, which no comparison sees): the side is
+ * chosen once per ray or packet, instead of a min and a max per node or a choice per child. */
+static inline int rc_bvh_near_planes(int up, int a) { return 8 * a + (up ? 0 : RC_BVH8_UPPER); }
+
+/* The other planes of the axis, where the ray leaves the boxes. */
+static inline int rc_bvh_far_planes(int nearPlanes) {
+    return nearPlanes < RC_BVH8_UPPER ? nearPlanes + RC_BVH8_UPPER : nearPlanes - RC_BVH8_UPPER;
+}
+
 /* Eight lanes of array `a` of a leaf run of `stride` primitives from `lane0` on, zero in the
  * lanes beyond the run (live clear): those hold the next array's words, ids among them, which as
  * floats are denormals, slow to compute with. */
@@ -177,6 +196,11 @@ static inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int 
     const float8 ox = (float8)(o.x), oy = (float8)(o.y), oz = (float8)(o.z);
     const float3 inv = rc_bvh_inverse(d);
     const float8 ix = (float8)(inv.x), iy = (float8)(inv.y), iz = (float8)(inv.z);
+    const int nearX = rc_bvh_near_planes(!signbit(inv.x), 0);
+    const int nearY = rc_bvh_near_planes(!signbit(inv.y), 1);
+    const int nearZ = rc_bvh_near_planes(!signbit(inv.z), 2);
+    const int farX = rc_bvh_far_planes(nearX), farY = rc_bvh_far_planes(nearY),
+              farZ = rc_bvh_far_planes(nearZ);
     const int8 laneBit = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
     /* Entries wait with the distance at which the ray enters them: one beyond the nearest hit
      * found since is dropped when popped. */
@@ -192,13 +216,15 @@ static inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int 
                 return tests;
         } else {
             __global const RcBvh8Node* nd = nodes + ref;
-            const float8 ax = (vload8(0, nd->loX) - ox) * ix, bx = (vload8(0, nd->hiX) - ox) * ix;
-            const float8 ay = (vload8(0, nd->loY) - oy) * iy, by = (vload8(0, nd->hiY) - oy) * iy;
-            const float8 az = (vload8(0, nd->loZ) - oz) * iz, bz = (vload8(0, nd->hiZ) - oz) * iz;
-            const float8 tn = rc_max8(rc_max8(rc_min8(ax, bx), rc_min8(ay, by)),
-                                      rc_max8(rc_min8(az, bz), (float8)(tmin)));
-            const float8 tf =
-                rc_min8(rc_min8(rc_max8(ax, bx), rc_max8(ay, by)), rc_max8(az, bz)) * 1.0000004f;
+            __global const float* planes = rc_bvh_planes(nd);
+            const float8 nx = (vload8(0, planes + nearX) - ox) * ix;
+            const float8 ny = (vload8(0, planes + nearY) - oy) * iy;
+            const float8 nz = (vload8(0, planes + nearZ) - oz) * iz;
+            const float8 fx = (vload8(0, planes + farX) - ox) * ix;
+            const float8 fy = (vload8(0, planes + farY) - oy) * iy;
+            const float8 fz = (vload8(0, planes + farZ) - oz) * iz;
+            const float8 tn = rc_max8(rc_max8(nx, ny), rc_max8(nz, (float8)(tmin)));
+            const float8 tf = rc_min8(rc_min8(fx, fy), fz) * 1.0000004f;
             /* A box entered exactly at best->t may still hold a lower id at that distance. */
             const int8 enters = (tn <= rc_min8(tf, (float8)(fmin(tmax, best->t)))) &
                                 (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
@@ -457,8 +483,8 @@ static inline RcBvhSlabs rc_packet_slabs(const RcBvhPacket* p) {
     return s;
 }
 
-/* The per-lane slab test of a packet whose active lanes share an octant (positive[a]: their
- * inverse directions along axis a are positive), one multiply-add a plane: a box's entry
+/* The per-lane slab test of a packet whose active lanes share an octant (along each axis their
+ * inverse directions have one sign), one multiply-add a plane: a box's entry
  * distance along axis a is fma(near side, inv, nearOff) with nearOff = -o * inv - m, its exit
  * fma(far side, inv, farOff) with farOff = -o * inv + m. The sign tells the near side, so no
  * min or max of the two planes is needed. The margin m = |o * inv| 2^-22 outweighs the rounding
@@ -468,7 +494,7 @@ static inline RcBvhSlabs rc_packet_slabs(const RcBvhPacket* p) {
  * in several octants, or with an offset that overflows (a huge inverse), are not `usable`. */
 typedef struct RcPacketPlanes {
     float16 nearOff[3], farOff[3];
-    int positive[3];
+    int nearPlanes[3], farPlanes[3]; /* the near and far sides in rc_bvh_planes */
     int usable;
 } RcPacketPlanes;
 
@@ -478,7 +504,8 @@ static inline int16 rc_planes_axis(float16 o, float16 inv, int positive, int a, 
     const float16 m = fabs(oi) * 0x1p-22f;
     q->nearOff[a] = -oi - m;
     q->farOff[a] = -oi + m;
-    q->positive[a] = positive;
+    q->nearPlanes[a] = rc_bvh_near_planes(positive, a);
+    q->farPlanes[a] = rc_bvh_far_planes(q->nearPlanes[a]);
     return isfinite(q->nearOff[a]) & isfinite(q->farOff[a]);
 }
 
@@ -499,18 +526,13 @@ static inline void rc_packet_child(const RcBvhPacket* p, const RcPacketPlanes* q
                                    __global const RcBvh8Node* nd, uint c, float16* tn,
                                    float16* tf) {
     if (q->usable) {
-        const float16 nx =
-            fma((float16)(q->positive[0] ? nd->loX[c] : nd->hiX[c]), p->ix, q->nearOff[0]);
-        const float16 ny =
-            fma((float16)(q->positive[1] ? nd->loY[c] : nd->hiY[c]), p->iy, q->nearOff[1]);
-        const float16 nz =
-            fma((float16)(q->positive[2] ? nd->loZ[c] : nd->hiZ[c]), p->iz, q->nearOff[2]);
-        const float16 fx =
-            fma((float16)(q->positive[0] ? nd->hiX[c] : nd->loX[c]), p->ix, q->farOff[0]);
-        const float16 fy =
-            fma((float16)(q->positive[1] ? nd->hiY[c] : nd->loY[c]), p->iy, q->farOff[1]);
-        const float16 fz =
-            fma((float16)(q->positive[2] ? nd->hiZ[c] : nd->loZ[c]), p->iz, q->farOff[2]);
+        __global const float* planes = rc_bvh_planes(nd) + c;
+        const float16 nx = fma((float16)(planes[q->nearPlanes[0]]), p->ix, q->nearOff[0]);
+        const float16 ny = fma((float16)(planes[q->nearPlanes[1]]), p->iy, q->nearOff[1]);
+        const float16 nz = fma((float16)(planes[q->nearPlanes[2]]), p->iz, q->nearOff[2]);
+        const float16 fx = fma((float16)(planes[q->farPlanes[0]]), p->ix, q->farOff[0]);
+        const float16 fy = fma((float16)(planes[q->farPlanes[1]]), p->iy, q->farOff[1]);
+        const float16 fz = fma((float16)(planes[q->farPlanes[2]]), p->iz, q->farOff[2]);
         *tn = rc_max16(rc_max16(nx, ny), rc_max16(nz, p->tmin));
         *tf = rc_min16(rc_min16(fx, fy), fz) * 1.0000004f;
         return;
