@@ -54,12 +54,12 @@ typedef struct RcLanes16 {
 /* The shuffles of rc_transpose_pairs, a pair per round: from two vectors, the positions whose
  * bit 2 (1, 0) is clear (_LO) or set (_HI), the first vector's and the second's in turn; that
  * bit of the position then tells which vector the element came from. */
-#define RC_BIT2_LO (uint16)(0, 1, 2, 3, 16, 17, 18, 19, 8, 9, 10, 11, 24, 25, 26, 27)
-#define RC_BIT2_HI (uint16)(4, 5, 6, 7, 20, 21, 22, 23, 12, 13, 14, 15, 28, 29, 30, 31)
-#define RC_BIT1_LO (uint16)(0, 1, 16, 17, 4, 5, 20, 21, 8, 9, 24, 25, 12, 13, 28, 29)
-#define RC_BIT1_HI (uint16)(2, 3, 18, 19, 6, 7, 22, 23, 10, 11, 26, 27, 14, 15, 30, 31)
-#define RC_BIT0_LO (uint16)(0, 16, 2, 18, 4, 20, 6, 22, 8, 24, 10, 26, 12, 28, 14, 30)
-#define RC_BIT0_HI (uint16)(1, 17, 3, 19, 5, 21, 7, 23, 9, 25, 11, 27, 13, 29, 15, 31)
+#define RC_BIT2_LO 0, 1, 2, 3, 16, 17, 18, 19, 8, 9, 10, 11, 24, 25, 26, 27
+#define RC_BIT2_HI 4, 5, 6, 7, 20, 21, 22, 23, 12, 13, 14, 15, 28, 29, 30, 31
+#define RC_BIT1_LO 0, 1, 16, 17, 4, 5, 20, 21, 8, 9, 24, 25, 12, 13, 28, 29
+#define RC_BIT1_HI 2, 3, 18, 19, 6, 7, 22, 23, 10, 11, 26, 27, 14, 15, 30, 31
+#define RC_BIT0_LO 0, 16, 2, 18, 4, 20, 6, 22, 8, 24, 10, 26, 12, 28, 14, 30
+#define RC_BIT0_HI 1, 17, 3, 19, 5, 21, 7, 23, 9, 25, 11, 27, 13, 29, 15, 31
 
 /* The 8 fields of 16 rays as lanes, from v[j] = rays a_j and b_j whole (position 8 r + f: field
  * f of a_j for r = 0, of b_j for r = 1): lane j holds a_j, lane 8 + j b_j. Three rounds, each
@@ -68,21 +68,21 @@ RC_SHADE_INLINE void rc_transpose_pairs(float16* v) {
     float16 w[8];
 #pragma unroll
     for (uint k = 0; k < 4; ++k) {
-        w[k] = shuffle2(v[k], v[k + 4], RC_BIT2_LO);
-        w[k + 4] = shuffle2(v[k], v[k + 4], RC_BIT2_HI);
+        w[k] = RC_SHUFFLE2(v[k], v[k + 4], RC_BIT2_LO);
+        w[k + 4] = RC_SHUFFLE2(v[k], v[k + 4], RC_BIT2_HI);
     }
 #pragma unroll
     for (uint h = 0; h < 8; h += 4) {
 #pragma unroll
         for (uint k = 0; k < 2; ++k) {
-            v[h + k] = shuffle2(w[h + k], w[h + k + 2], RC_BIT1_LO);
-            v[h + k + 2] = shuffle2(w[h + k], w[h + k + 2], RC_BIT1_HI);
+            v[h + k] = RC_SHUFFLE2(w[h + k], w[h + k + 2], RC_BIT1_LO);
+            v[h + k + 2] = RC_SHUFFLE2(w[h + k], w[h + k + 2], RC_BIT1_HI);
         }
     }
 #pragma unroll
     for (uint k = 0; k < 8; k += 2) {
-        w[k] = shuffle2(v[k], v[k + 1], RC_BIT0_LO);
-        w[k + 1] = shuffle2(v[k], v[k + 1], RC_BIT0_HI);
+        w[k] = RC_SHUFFLE2(v[k], v[k + 1], RC_BIT0_LO);
+        w[k + 1] = RC_SHUFFLE2(v[k], v[k + 1], RC_BIT0_HI);
     }
 #pragma unroll
     for (uint k = 0; k < 8; ++k) v[k] = w[k];
@@ -340,10 +340,10 @@ RC_SHADE_INLINE uint rc_fragment_nearest(const RcLanes16* L, RcLeaf leaf,
     return c;
 }
 
-#define RC_PAIRS_LO (uint16)(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23)
-#define RC_PAIRS_HI (uint16)(8, 24, 9, 25, 10, 26, 11, 27, 12, 28, 13, 29, 14, 30, 15, 31)
-#define RC_QUADS_LO (uint16)(0, 1, 16, 17, 2, 3, 18, 19, 4, 5, 20, 21, 6, 7, 22, 23)
-#define RC_QUADS_HI (uint16)(8, 9, 24, 25, 10, 11, 26, 27, 12, 13, 28, 29, 14, 15, 30, 31)
+#define RC_PAIRS_LO 0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23
+#define RC_PAIRS_HI 8, 24, 9, 25, 10, 26, 11, 27, 12, 28, 13, 29, 14, 30, 15, 31
+#define RC_QUADS_LO 0, 1, 16, 17, 2, 3, 18, 19, 4, 5, 20, 21, 6, 7, 22, 23
+#define RC_QUADS_HI 8, 9, 24, 25, 10, 11, 26, 27, 12, 13, 28, 29, 14, 15, 30, 31
 
 /* Lane k's hit (RcHit: t, prim, u, v from the lanes of t, prim's bits, u and v) to
  * hits[ids[k]], k < count: the four lane vectors transposed into four vectors of four hits each
@@ -351,11 +351,11 @@ RC_SHADE_INLINE uint rc_fragment_nearest(const RcLanes16* L, RcLeaf leaf,
  * went through a private array). */
 RC_SHADE_INLINE void rc_store_hits(__global RcHit* hits, const uint* ids, uint count, float16 t,
                                    float16 prim, float16 u, float16 v) {
-    const float16 tp0 = shuffle2(t, prim, RC_PAIRS_LO), tp1 = shuffle2(t, prim, RC_PAIRS_HI);
-    const float16 uv0 = shuffle2(u, v, RC_PAIRS_LO), uv1 = shuffle2(u, v, RC_PAIRS_HI);
+    const float16 tp0 = RC_SHUFFLE2(t, prim, RC_PAIRS_LO), tp1 = RC_SHUFFLE2(t, prim, RC_PAIRS_HI);
+    const float16 uv0 = RC_SHUFFLE2(u, v, RC_PAIRS_LO), uv1 = RC_SHUFFLE2(u, v, RC_PAIRS_HI);
     /* h[q]: the hits of lanes 4 q to 4 q + 3. */
-    const float16 h[4] = {shuffle2(tp0, uv0, RC_QUADS_LO), shuffle2(tp0, uv0, RC_QUADS_HI),
-                          shuffle2(tp1, uv1, RC_QUADS_LO), shuffle2(tp1, uv1, RC_QUADS_HI)};
+    const float16 h[4] = {RC_SHUFFLE2(tp0, uv0, RC_QUADS_LO), RC_SHUFFLE2(tp0, uv0, RC_QUADS_HI),
+                          RC_SHUFFLE2(tp1, uv1, RC_QUADS_LO), RC_SHUFFLE2(tp1, uv1, RC_QUADS_HI)};
 #pragma unroll
     for (uint q = 0; q < 4; ++q) {
         __global float* at0 = (__global float*)(hits + ids[4 * q]);

@@ -84,6 +84,19 @@ RC_V16_INLINE float rc_hmax16_ordered(float16 a) {
 #endif
 #endif
 
+/* shuffle2(a, b, (uint16)(indices)) for constant indices. PoCL's shuffle2 builds its result
+ * element by element, which LLVM turns back into a cascade of partial permutes and, where the
+ * operands are loads, into loads of 8-byte pieces; Clang's builtin is one shuffle, which stays
+ * one or two permute instructions of a float16 pair. */
+#if defined(__clang__) && defined(__has_builtin)
+#if __has_builtin(__builtin_shufflevector)
+#define RC_SHUFFLE2(a, b, ...) __builtin_shufflevector(a, b, __VA_ARGS__)
+#endif
+#endif
+#ifndef RC_SHUFFLE2
+#define RC_SHUFFLE2(a, b, ...) shuffle2(a, b, (uint16)(__VA_ARGS__))
+#endif
+
 /* Whether any lane of the mask is set. */
 RC_V16_INLINE int rc_any16(int16 m) {
 #ifdef RC_HAVE_REDUCE_MASK
