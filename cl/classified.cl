@@ -411,12 +411,16 @@ RC_SHADE_INLINE uint rc_fragment_any(const RcLanes16* L, RcLeaf leaf,
                                      __global const RcSphere* spheres,
                                      __global const RcQuadric* quadrics, uint nT, uint nS,
                                      const bool trianglesOnly, float16 endX, int16* hit) {
+    /* endX, and -infinity once the lane is blocked: one compare with a candidate's nearX (a
+     * finite number) then tells both ways a lane is done, a mask the exit tests at once, where
+     * ORing the blocked lanes' vector in took a chain of shuffles and tests. */
+    float16 liveEndX = endX;
     uint c = 0;
     for (; c < leaf.candCount; ++c) {
         const RcCandidate cand = candidates[leaf.candBegin + c];
+        if (rc_all16(cand.nearX > liveEndX)) break;
         /* Lists are sorted by nearX: a lane that has passed its end stays past it. */
         const int16 beyond = cand.nearX > endX;
-        if (all(*hit | beyond)) break;
         const uint prim = cand.prim;
         if (trianglesOnly) rc_prefetch_triangle(candidates, triangles, leaf, c);
         if (trianglesOnly || prim < nT) {
@@ -434,6 +438,7 @@ RC_SHADE_INLINE uint rc_fragment_any(const RcLanes16* L, RcLeaf leaf,
                                                      &u, &v)
                                    : rc_packet_quadric(L, q, L->tmax, &t));
         }
+        liveEndX = select(liveEndX, (float16)(-INFINITY), *hit);
     }
     return c;
 }
