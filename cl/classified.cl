@@ -423,22 +423,24 @@ RC_SHADE_INLINE uint rc_fragment_any(const RcLanes16* L, RcLeaf leaf,
         const int16 beyond = cand.nearX > endX;
         const uint prim = cand.prim;
         if (trianglesOnly) rc_prefetch_triangle(candidates, triangles, leaf, c);
+        int16 blocks;
         if (trianglesOnly || prim < nT) {
             float16 t, u, v;
-            *hit |= ~beyond & rc_packet_triangle(L, triangles[prim], &t, &u, &v);
+            blocks = rc_packet_triangle(L, triangles[prim], &t, &u, &v);
         } else if (prim < nT + nS) {
             float16 t;
-            *hit |= ~beyond & rc_packet_sphere(L, spheres[prim - nT].centerRadius, L->tmax, &t);
+            blocks = rc_packet_sphere(L, spheres[prim - nT].centerRadius, L->tmax, &t);
         } else {
             __global const RcQuadric* q = quadrics + (prim - nT - nS);
             float16 t, u, v;
-            *hit |= ~beyond & (q->kind == RC_ANALYTIC_PATCH_BOX
-                                   ? rc_packet_patch(L, (__global const float4*)quadrics,
-                                                     (__global const RcPatchBox*)q, L->tmax, &t,
-                                                     &u, &v)
-                                   : rc_packet_quadric(L, q, L->tmax, &t));
+            blocks = q->kind == RC_ANALYTIC_PATCH_BOX
+                         ? rc_packet_patch(L, (__global const float4*)quadrics,
+                                           (__global const RcPatchBox*)q, L->tmax, &t, &u, &v)
+                         : rc_packet_quadric(L, q, L->tmax, &t);
         }
-        liveEndX = select(liveEndX, (float16)(-INFINITY), *hit);
+        blocks &= ~beyond;
+        *hit |= blocks;
+        liveEndX = select(liveEndX, (float16)(-INFINITY), blocks);
     }
     return c;
 }
