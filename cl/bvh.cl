@@ -443,6 +443,7 @@ typedef struct RcBvhSlabs {
     float nearP[3], farP[3]; /* the points the entry and the exit distances are taken from */
     float iLo[3], iHi[3];
     int positive[3], bounded[3];
+    int nearPlanes[3], farPlanes[3]; /* the boxes' sides they are taken to, in rc_bvh_planes */
 } RcBvhSlabs;
 
 static inline void rc_slabs_axis(float lo, float hi, float iLo, float iHi, int a, RcBvhSlabs* s) {
@@ -452,6 +453,8 @@ static inline void rc_slabs_axis(float lo, float hi, float iLo, float iHi, int a
     s->bounded[a] = s->positive[a] || iHi < 0.0f;
     s->nearP[a] = s->positive[a] ? hi : lo;
     s->farP[a] = s->positive[a] ? lo : hi;
+    s->nearPlanes[a] = rc_bvh_near_planes(s->positive[a], a);
+    s->farPlanes[a] = rc_bvh_far_planes(s->nearPlanes[a]);
 }
 
 /* Whether every axis bounds the distances (the inverse directions in one octant). */
@@ -460,13 +463,15 @@ static inline int rc_slabs_one_octant(const RcBvhSlabs* s) {
 }
 
 /* The least entry and the largest exit distance over the intervals' rays through the slabs
- * [lo, hi] of one axis, eight boxes, folded into *tn and *tf. The walks call it per axis: the
- * three calls wrapped in one more function made both walks slower on PoCL. */
-static inline void rc_slabs_test(const RcBvhSlabs* s, int a, float8 lo, float8 hi, float8* tn,
-                                 float8* tf) {
+ * of one axis of nd's eight boxes, folded into *tn and *tf: only the sides the intervals enter
+ * and leave by are loaded. The walks call it per axis: the three calls wrapped in one more
+ * function made both walks slower on PoCL. */
+static inline void rc_slabs_test(const RcBvhSlabs* s, int a, __global const RcBvh8Node* nd,
+                                 float8* tn, float8* tf) {
     if (!s->bounded[a]) return;
-    const float8 nearSide = s->positive[a] ? lo : hi, farSide = s->positive[a] ? hi : lo;
-    const float8 n = nearSide - s->nearP[a], f = farSide - s->farP[a];
+    __global const float* planes = rc_bvh_planes(nd);
+    const float8 n = vload8(0, planes + s->nearPlanes[a]) - s->nearP[a];
+    const float8 f = vload8(0, planes + s->farPlanes[a]) - s->farP[a];
     *tn = rc_max8(*tn, n * select((float8)(s->iHi[a]), (float8)(s->iLo[a]), n >= 0.0f));
     *tf = rc_min8(*tf, f * select((float8)(s->iLo[a]), (float8)(s->iHi[a]), f >= 0.0f));
 }
@@ -599,9 +604,9 @@ static inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
             const float16 reach = rc_min16(p->tmax, bt);
             /* Only the children some lane may enter take the per-lane test. */
             float8 sn = (float8)(spanTmin), sf = (float8)(INFINITY);
-            rc_slabs_test(&span, 0, vload8(0, nd->loX), vload8(0, nd->hiX), &sn, &sf);
-            rc_slabs_test(&span, 1, vload8(0, nd->loY), vload8(0, nd->hiY), &sn, &sf);
-            rc_slabs_test(&span, 2, vload8(0, nd->loZ), vload8(0, nd->hiZ), &sn, &sf);
+            rc_slabs_test(&span, 0, nd, &sn, &sf);
+            rc_slabs_test(&span, 1, nd, &sn, &sf);
+            rc_slabs_test(&span, 2, nd, &sn, &sf);
             const int8 may = (sn <= rc_min8(sf * 1.0000004f, (float8)(far))) &
                              (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
             const int4 m4 = may.lo | may.hi;
@@ -732,9 +737,9 @@ static inline uint16 rc_bvh_occlude_beam(const RcBvhPacket* p, const RcBvhBeam* 
         } else {
             __global const RcBvh8Node* nd = nodes + ref;
             float8 tn = (float8)(0.0f), tf = (float8)(beam->reach);
-            rc_slabs_test(&beam->slabs, 0, vload8(0, nd->loX), vload8(0, nd->hiX), &tn, &tf);
-            rc_slabs_test(&beam->slabs, 1, vload8(0, nd->loY), vload8(0, nd->hiY), &tn, &tf);
-            rc_slabs_test(&beam->slabs, 2, vload8(0, nd->loZ), vload8(0, nd->hiZ), &tn, &tf);
+            rc_slabs_test(&beam->slabs, 0, nd, &tn, &tf);
+            rc_slabs_test(&beam->slabs, 1, nd, &tn, &tf);
+            rc_slabs_test(&beam->slabs, 2, nd, &tn, &tf);
             const int8 enters =
                 (tn <= tf * 1.0000004f) & (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
             const int4 m4 = enters.lo | enters.hi;
