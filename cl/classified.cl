@@ -303,13 +303,15 @@ RC_SHADE_INLINE uint rc_fragment_nearest(const RcLanes16* L, RcLeaf leaf,
                                          __global const RcQuadric* quadrics, uint nT, uint nS,
                                          const bool trianglesOnly, float16* bestT,
                                          float16* bestU, float16* bestV, uint16* bestPrim) {
+    /* Each lane's hit's X, +infinity while it has none: one compare with a candidate's nearX then
+     * tells whether the lane is done (its hit strictly nearer than the candidate's box), a mask
+     * the exit tests at once, where the lanes without a hit took a second compare. */
+    float16 reachX = select((float16)(INFINITY), L->x + *bestT * L->speed,
+                            *bestPrim != (uint16)(RC_NO_HIT));
     uint c = 0;
     for (; c < leaf.candCount; ++c) {
         const RcCandidate cand = candidates[leaf.candBegin + c];
-        /* Every lane done: its hit is strictly nearer than this candidate's box. */
-        const int16 done =
-            (*bestPrim != (uint16)(RC_NO_HIT)) & (L->x + *bestT * L->speed < cand.nearX);
-        if (rc_all16(done)) break;
+        if (rc_all16(reachX < cand.nearX)) break;
         const uint prim = cand.prim;
         float16 t, u = 0.0f, v = 0.0f;
         int16 inside;
@@ -336,6 +338,7 @@ RC_SHADE_INLINE uint rc_fragment_nearest(const RcLanes16* L, RcLeaf leaf,
         *bestU = select(*bestU, u, better);
         *bestV = select(*bestV, v, better);
         *bestPrim = select(*bestPrim, (uint16)(prim), as_uint16(better));
+        reachX = select(reachX, L->x + *bestT * L->speed, better);
     }
     return c;
 }
