@@ -808,11 +808,13 @@ static inline void rc_ray_store_answer(int anyHit, uint i, RcHit best, __global 
 
 /* The active lanes heading within 30 degrees of the lane before them, the first lane among them
  * (their squared lengths len2). */
+#define RC_LANE_BEFORE 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14
 static inline int16 rc_packet_smooth(const RcBvhPacket* p, float16 len2) {
-    const uint16 before = (uint16)(0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14);
-    const float16 dd = p->dx * shuffle(p->dx, before) + p->dy * shuffle(p->dy, before) +
-                       p->dz * shuffle(p->dz, before);
-    return p->active & (dd > 0.0f) & (dd * dd > 0.75f * len2 * shuffle(len2, before));
+    const float16 dd = p->dx * RC_SHUFFLE2(p->dx, p->dx, RC_LANE_BEFORE) +
+                       p->dy * RC_SHUFFLE2(p->dy, p->dy, RC_LANE_BEFORE) +
+                       p->dz * RC_SHUFFLE2(p->dz, p->dz, RC_LANE_BEFORE);
+    return p->active & (dd > 0.0f) &
+           (dd * dd > 0.75f * len2 * RC_SHUFFLE2(len2, len2, RC_LANE_BEFORE));
 }
 
 /* Whether the nearest-hit packet of rays [first, first + 16) below n walks the tree as one: at
