@@ -22,6 +22,22 @@ constexpr float kStepMargin = 1.0f / 32.0f;
 
 #if defined(RC_AVX512_PATHS)
 
+// Whether a filter of `in` by `t` may skip the blocks whose box `t` cannot reach: `in` has a
+// summary, and the test's values are finite and small enough that no difference or product in
+// it overflows (no infinity or NaN), so each step of the test is monotone in the box's bounds
+// and a block's box yields a range [lo, hi] that holds each of its entries' ranges.
+bool SkipsBlocks(const BeamTest& t, const ListView& in) {
+    if (in.blocks.x0 == nullptr) return false;
+    constexpr float kCoordMax = 0x1p24f, kReciprocalMax = 0x1p100f;
+    const bool coords = std::abs(t.x0) <= kCoordMax && std::abs(t.x1) <= kCoordMax &&
+                        std::abs(t.y0) <= kCoordMax && std::abs(t.y1) <= kCoordMax &&
+                        std::abs(t.z0) <= kCoordMax && std::abs(t.z1) <= kCoordMax &&
+                        std::abs(t.reach) <= kCoordMax;
+    const bool slopes = std::abs(t.ru1) <= kReciprocalMax && std::abs(t.ru0) <= kReciprocalMax &&
+                        std::abs(t.rv1) <= kReciprocalMax && std::abs(t.rv0) <= kReciprocalMax;
+    return coords && slopes;
+}
+
 // 16 boxes' coordinate in steps, as floats (maskz: see avx512.h).
 RC_AVX512 inline __m512 Widen16(__m256i steps) {
     return _mm512_maskz_cvtepi32_ps(__mmask16(0xFFFF),
@@ -88,16 +104,44 @@ RC_AVX512 inline void Load16(const ListView& in, size_t i, __mmask16 live, __m25
         b[a] = Widen16(q[a]);
     }
 }
+// The blocks of entries i .. i + 16 kListBlock - 1 of `in` (the live ones) whose box the beam
+// may reach: bit j for the block of entries from i + 16 j on.
+template <int kSigns>
+RC_AVX512 inline unsigned ReachedBlocks16(const BeamLanes& t, const ListView& in, size_t i) {
+    static_assert(kListBlock == 16);
+    const ListBlocks& blocks = in.blocks;
+    const uint16_t* const src[6] = {blocks.x0, blocks.x1, blocks.y0,
+                                    blocks.y1, blocks.z0, blocks.z1};
+    const size_t first = i / kListBlock;
+    const __mmask16 live = LiveLanes16(BlockCount(in.n), first);
+    __m512 b[6];
+    for (int a = 0; a < 6; ++a) b[a] = Widen16(_mm256_maskz_loadu_epi16(live, src[a] + first));
+    return Keep16<kSigns>(t, b, live);
+}
+// FilterAvx512's loop over the blocks of entries that `blocks` (ReachedBlocks16 of the block
+// groups) says some beam may reach: `body(i)` filters entries i .. i + 15.
+template <typename Blocks, typename Body>
+RC_AVX512 inline void ForReachedBlocks(const ListView& in, Blocks&& blocks, Body&& body) {
+    for (size_t i = 0; i < in.n; i += 16 * kListBlock) {
+        for (unsigned m = blocks(i); m; m &= m - 1) body(i + size_t(std::countr_zero(m)) * 16);
+    }
+}
 template <int kSigns>
 RC_AVX512 size_t FilterAvx512(const BeamTest& t, const ListView& in, const ListOut& out) {
     const BeamLanes beam = Lanes(t);
     size_t k = 0;
-    for (size_t i = 0; i < in.n; i += 16) {
+    auto filter16 = [&](size_t i) RC_AVX512 {
         const __mmask16 live = LiveLanes16(in.n, i);
         __m256i q[6];
         __m512 b[6];
         Load16(in, i, live, q, b);
         k = Append16(q, in.prim + i, live, Keep16<kSigns>(beam, b, live), out, k);
+    };
+    if (SkipsBlocks(t, in)) {
+        ForReachedBlocks(
+            in, [&](size_t i) RC_AVX512 { return ReachedBlocks16<kSigns>(beam, in, i); }, filter16);
+    } else {
+        for (size_t i = 0; i < in.n; i += 16) filter16(i);
     }
     return k;
 }
@@ -107,13 +151,24 @@ RC_AVX512 void FilterPairAvx512(const BeamTest t[2], const ListView& in, const L
                                 size_t kept[2]) {
     const BeamLanes beam[2] = {Lanes(t[0]), Lanes(t[1])};
     size_t k[2] = {0, 0};
-    for (size_t i = 0; i < in.n; i += 16) {
+    auto filter16 = [&](size_t i) RC_AVX512 {
         const __mmask16 live = LiveLanes16(in.n, i);
         __m256i q[6];
         __m512 b[6];
         Load16(in, i, live, q, b);
         for (int j = 0; j < 2; ++j)
             k[j] = Append16(q, in.prim + i, live, Keep16<kSigns>(beam[j], b, live), out[j], k[j]);
+    };
+    if (SkipsBlocks(t[0], in) && SkipsBlocks(t[1], in)) {
+        ForReachedBlocks(
+            in,
+            [&](size_t i) RC_AVX512 {
+                return ReachedBlocks16<kSigns>(beam[0], in, i) |
+                       ReachedBlocks16<kSigns>(beam[1], in, i);
+            },
+            filter16);
+    } else {
+        for (size_t i = 0; i < in.n; i += 16) filter16(i);
     }
     kept[0] = k[0];
     kept[1] = k[1];
@@ -238,6 +293,100 @@ void FillFaceList(int face, const ListFrame& frame, const Bounds3f* boxes, const
         }
         out.prim[i] = order[i];
     }
+}
+
+namespace {
+
+#if defined(RC_AVX512_PATHS)
+// The halves of each block's lanes when two vectors of 32 16-bit lanes, each of 32 / lanes blocks
+// of `lanes` lanes, become one of twice the blocks of half the lanes, in order: `second` picks
+// the upper half.
+RC_AVX512 __m512i HalfLanes(int lanes, bool second) {
+    alignas(64) uint16_t idx[32];
+    const int blocks = 32 / lanes, half = lanes / 2;
+    for (int o = 0; o < 32; ++o) {
+        const int t = o / half, l = o % half;
+        idx[o] = uint16_t((t < blocks ? 0 : 32) + (t % blocks) * lanes + l + (second ? half : 0));
+    }
+    return _mm512_load_si512(idx);
+}
+
+// The lanewise least (kMax: greatest) of 32 16-bit lanes.
+template <bool kMax>
+RC_AVX512 inline __m512i Pick32(__m512i a, __m512i b) {
+    constexpr __mmask32 kAll32 = 0xFFFFFFFFu;
+    return kMax ? _mm512_maskz_max_epu16(kAll32, a, b) : _mm512_maskz_min_epu16(kAll32, a, b);
+}
+// The least (kMax: greatest) of each block of 16 of `src`'s entries i .. i + 255 (those below n),
+// the blocks' results in order, by halving the lanes of each block three times and then once
+// within 32-bit lanes.
+template <bool kMax>
+RC_AVX512 __m256i Blocks16(const uint16_t* src, size_t n, size_t i, const __m512i halves[3][2]) {
+    constexpr __mmask32 kAll32 = 0xFFFFFFFFu;
+    const __m512i fill = _mm512_set1_epi16(kMax ? 0 : -1);
+    __m512i v[8];
+    for (size_t j = 0; j < 8; ++j) {
+        const size_t at = i + 32 * j;
+        const __mmask32 live = at >= n        ? __mmask32(0)
+                               : n - at >= 32 ? kAll32
+                                              : __mmask32((1u << (n - at)) - 1u);
+        v[j] = _mm512_mask_loadu_epi16(fill, live, src + at);
+    }
+    for (int step = 0, count = 8; count > 1; ++step, count /= 2) {
+        for (int j = 0; j < count / 2; ++j) {
+            v[j] = Pick32<kMax>(_mm512_permutex2var_epi16(v[2 * j], halves[step][0], v[2 * j + 1]),
+                                _mm512_permutex2var_epi16(v[2 * j], halves[step][1], v[2 * j + 1]));
+        }
+    }
+    const __m512i both = Pick32<kMax>(v[0], _mm512_maskz_srli_epi32(__mmask16(0xFFFF), v[0], 16));
+    return _mm512_maskz_cvtepi32_epi16(__mmask16(0xFFFF), both);
+}
+
+RC_AVX512 void FillBlocks16(const ListView& list, const ListOut& out) {
+    __m512i halves[3][2];
+    for (int step = 0; step < 3; ++step) {
+        for (int s = 0; s < 2; ++s) halves[step][s] = HalfLanes(16 >> step, s == 1);
+    }
+    const size_t nBlocks = BlockCount(list.n);
+    for (size_t i = 0; i < list.n; i += 16 * kListBlock) {
+        const size_t b = i / kListBlock;
+        const __mmask16 live = LiveLanes16(nBlocks, b);
+        _mm256_mask_storeu_epi16(out.x0 + b, live, Blocks16<false>(list.x0, list.n, i, halves));
+        _mm256_mask_storeu_epi16(out.x1 + b, live, Blocks16<true>(list.x1, list.n, i, halves));
+        _mm256_mask_storeu_epi16(out.y0 + b, live, Blocks16<false>(list.y0, list.n, i, halves));
+        _mm256_mask_storeu_epi16(out.y1 + b, live, Blocks16<true>(list.y1, list.n, i, halves));
+        _mm256_mask_storeu_epi16(out.z0 + b, live, Blocks16<false>(list.z0, list.n, i, halves));
+        _mm256_mask_storeu_epi16(out.z1 + b, live, Blocks16<true>(list.z1, list.n, i, halves));
+    }
+}
+#endif
+
+}  // namespace
+
+void FillBlocks(const ListView& list, const ListOut& out) {
+    static_assert(kListBlock == 16);
+#if defined(RC_AVX512_PATHS)
+    if (UseAvx512()) return FillBlocks16(list, out);
+#endif
+    const uint16_t* const lower[3] = {list.x0, list.y0, list.z0};
+    const uint16_t* const upper[3] = {list.x1, list.y1, list.z1};
+    uint16_t* const lo[3] = {out.x0, out.y0, out.z0};
+    uint16_t* const hi[3] = {out.x1, out.y1, out.z1};
+    for (size_t b = 0; b < BlockCount(list.n); ++b) {
+        const size_t first = b * kListBlock, last = std::min(list.n, first + kListBlock);
+        for (int k = 0; k < 3; ++k) {
+            lo[k][b] = *std::min_element(lower[k] + first, lower[k] + last);
+            hi[k][b] = *std::max_element(upper[k] + first, upper[k] + last);
+        }
+    }
+}
+
+bool FilterSkipsBlocks() {
+#if defined(RC_AVX512_PATHS)
+    return UseAvx512();
+#else
+    return false;
+#endif
 }
 
 namespace {

@@ -79,6 +79,13 @@ BeamTest MakeBeamTest(const ListFrame& frame, const Box5& box, float reach);
 bool BeamMayReach(const BeamTest& t, float bx0, float bx1, float by0, float by1, float bz0,
                   float bz1);
 
+// The boxes of the blocks of `list` (see ListBlocks), as the first BlockCount(list.n) entries of
+// `out` (prim untouched).
+void FillBlocks(const ListView& list, const ListOut& out);
+// Whether the filter reads lists' block summaries: the vector filter skips the blocks a beam
+// cannot reach, the generic loop tests every entry.
+bool FilterSkipsBlocks();
+
 // Keeps the boxes of `in` that `t` may reach, in order, in out[0, result). `out` must have room
 // for in.n entries.
 size_t FilterList(const BeamTest& t, const ListView& in, const ListOut& out);

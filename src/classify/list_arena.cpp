@@ -10,6 +10,10 @@ namespace {
 
 // Entries per chunk (a longer list gets a chunk of its own).
 constexpr size_t kListChunk = size_t(1) << 18;
+// Filtered lists of this many entries or more get a summary of their blocks: the nodes below
+// filter them again (a node whose beam keeps most of its list passes it on whole), and their
+// filters then skip the blocks their beams cannot reach.
+constexpr size_t kSummarisedMin = size_t(1) << 14;
 
 // Room for n entries at the end of `arena`: in its current chunk, else in the next one.
 ListOut Take(ListArena& arena, size_t n) {
@@ -22,6 +26,17 @@ ListOut Take(ListArena& arena, size_t n) {
     // Only an empty chunk is too small here, and nothing points into an empty chunk.
     if (c.Size() < arena.used + n) c.Resize(std::max(n, kListChunk));
     return Out(c, arena.used);
+}
+
+// The summary of `list`'s blocks, pushed onto `arena`, where it is long enough and the filter
+// reads summaries.
+void Summarise(ListArena& arena, ListView& list) {
+    if (list.n < kSummarisedMin || !FilterSkipsBlocks()) return;
+    const size_t n = BlockCount(list.n);
+    const ListOut out = Take(arena, n);
+    FillBlocks(list, out);
+    arena.used += n;
+    list.blocks = BlocksOf(out);
 }
 
 }  // namespace
@@ -44,7 +59,9 @@ ListView FilterOnto(ListArena& arena, const Bounds6& tight, const ListView& list
     const size_t kept = FilterList(MakeBeamTest(*list.frame, tight.ToBox5(), reach), in, out);
     boxTests += in.n;
     arena.used += kept;
-    return {out.x0, out.x1, out.y0, out.y1, out.z0, out.z1, out.prim, kept, list.frame};
+    ListView own{out.x0, out.x1, out.y0, out.y1, out.z0, out.z1, out.prim, kept, list.frame};
+    Summarise(arena, own);
+    return own;
 }
 
 bool FilterPairOnto(ListArena& arena, const Bounds6 tight[2], const ListView& list,
@@ -65,9 +82,11 @@ bool FilterPairOnto(ListArena& arena, const Bounds6 tight[2], const ListView& li
     FilterPair(t, in, out, kept);
     boxTests += 2 * in.n;
     arena.used += kept[1];
-    for (int j = 0; j < 2; ++j)
+    for (int j = 0; j < 2; ++j) {
         own[j] = {out[j].x0, out[j].x1,   out[j].y0, out[j].y1, out[j].z0,
                   out[j].z1, out[j].prim, kept[j],   list.frame};
+        Summarise(arena, own[j]);
+    }
     return true;
 }
 

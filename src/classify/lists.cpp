@@ -57,6 +57,9 @@ void BuildFace(int face, const std::vector<Bounds3f>& boxes, const Bounds3f& all
     FaceList& l = out.list[face];
     l.Resize(nPrims);
     FillFaceList(face, frame, boxes.data(), order.data(), nPrims, Out(l, 0));
+    FaceList& blocks = out.blocks[face];
+    blocks.Resize(BlockCount(nPrims));
+    FillBlocks(View(l, nPrims, &frame), Out(blocks, 0));
 }
 
 }  // namespace
@@ -69,6 +72,7 @@ void FaceList::Resize(size_t n) {
 size_t FaceLists::Bytes() const {
     size_t bytes = 0;
     for (const FaceList& l : list) bytes += l.Bytes();
+    for (const FaceList& b : blocks) bytes += b.Bytes();
     return bytes;
 }
 

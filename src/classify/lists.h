@@ -25,7 +25,24 @@ struct ListFrame {
     float step = 1.0f;  // world units per step: the largest extent / 65534, rounded up
 };
 
-// The first n entries of a candidate list (in `frame`'s steps, sorted by x0).
+// Entries of a list that a block summary (ListBlocks) bounds together.
+constexpr size_t kListBlock = 16;
+
+// Per block of kListBlock consecutive entries of a list (the last one may be shorter), the box of
+// its boxes in steps: the least lower and greatest upper bound on each axis. The beam test only
+// grows with the box, so a beam that cannot reach a block's box reaches none of its entries.
+// x0 is null where a list has no summary.
+struct ListBlocks {
+    const uint16_t* x0 = nullptr;
+    const uint16_t* x1 = nullptr;
+    const uint16_t* y0 = nullptr;
+    const uint16_t* y1 = nullptr;
+    const uint16_t* z0 = nullptr;
+    const uint16_t* z1 = nullptr;
+};
+
+// The first n entries of a candidate list (in `frame`'s steps, sorted by x0), and the summary of
+// its blocks where it has one (a cut list keeps its blocks).
 struct ListView {
     const uint16_t* x0;
     const uint16_t* x1;
@@ -36,6 +53,7 @@ struct ListView {
     const uint32_t* prim;
     size_t n;
     const ListFrame* frame;
+    ListBlocks blocks = {};
 };
 
 // Storage of a list.
@@ -69,13 +87,27 @@ inline ListOut Out(FaceList& l, size_t at) {
             l.z0.data() + at, l.z1.data() + at, l.prim.data() + at};
 }
 
-// Every primitive of the scene, presorted per face: the roots' lists. Read-only once built, so
-// copies of a hierarchy share them.
+// The blocks of a list of n entries.
+inline size_t BlockCount(size_t n) { return (n + kListBlock - 1) / kListBlock; }
+
+// The blocks' boxes of a list, stored as a list whose entries are the blocks (prim unused).
+inline ListBlocks BlocksOf(const ListOut& b) { return {b.x0, b.x1, b.y0, b.y1, b.z0, b.z1}; }
+inline ListBlocks BlocksOf(const FaceList& b) {
+    return {b.x0.data(), b.x1.data(), b.y0.data(), b.y1.data(), b.z0.data(), b.z1.data()};
+}
+
+// Every primitive of the scene, presorted per face: the roots' lists, with their blocks'
+// summaries. Read-only once built, so copies of a hierarchy share them.
 struct FaceLists {
     std::array<FaceList, kFaceCount> list;
+    std::array<FaceList, kFaceCount> blocks;
     ListFrame frame[kFaceCount];
 
-    ListView Whole(int face) const { return View(list[face], list[face].Size(), &frame[face]); }
+    ListView Whole(int face) const {
+        ListView v = View(list[face], list[face].Size(), &frame[face]);
+        v.blocks = BlocksOf(blocks[face]);
+        return v;
+    }
     size_t Bytes() const;
 };
 

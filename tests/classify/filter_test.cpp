@@ -233,6 +233,118 @@ TEST(Filter, PairKeepsForEachBeamWhatTheScalarTestKeeps) {
     EXPECT_LT(sameSigns, 200u);
 }
 
+// n small boxes along a line through [-4, 6]^3, sorted by near X: consecutive entries lie close
+// in Y and Z too, so blocks of them have small boxes that narrow beams miss (as the face lists of
+// a scene's meshes do).
+QuantizedList LineList(std::mt19937& rng, size_t n) {
+    QuantizedList q = RandomList(rng, n);
+    std::uniform_real_distribution<float> along(0.0f, 1.0f), jitter(-0.2f, 0.2f), size(0.0f, 0.3f);
+    for (WorldBox& b : q.world) {
+        const float t = along(rng);
+        const float at[3] = {-4.0f + 10.0f * t, 6.0f - 10.0f * t, -4.0f + 10.0f * t * t};
+        for (int k = 0; k < 3; ++k) {
+            b.lo[k] = at[k] + jitter(rng);
+            b.hi[k] = b.lo[k] + size(rng);
+        }
+    }
+    std::sort(q.world.begin(), q.world.end(),
+              [](const WorldBox& a, const WorldBox& b) { return a.lo[0] < b.lo[0]; });
+    uint16_t* const l[3] = {q.list.x0.data(), q.list.y0.data(), q.list.z0.data()};
+    uint16_t* const h[3] = {q.list.x1.data(), q.list.y1.data(), q.list.z1.data()};
+    for (size_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            l[k][i] = StepsBelow(q.frame, k, q.world[i].lo[k]);
+            h[k][i] = StepsAbove(q.frame, k, q.world[i].hi[k]);
+        }
+    }
+    return q;
+}
+
+// The entries of the first n of q's list that the scalar test of t keeps.
+std::vector<uint32_t> ScalarKept(const BeamTest& t, const QuantizedList& q, size_t n) {
+    std::vector<uint32_t> kept;
+    for (size_t i = 0; i < n; ++i) {
+        if (BeamMayReach(t, q.list.x0[i], q.list.x1[i], q.list.y0[i], q.list.y1[i], q.list.z0[i],
+                         q.list.z1[i]))
+            kept.push_back(q.list.prim[i]);
+    }
+    return kept;
+}
+
+// A block summary holds each block's least lower and greatest upper bounds (a plain loop is the
+// oracle), and filters of a summarised list, whole or cut short, keep exactly what the scalar
+// test keeps from its entries, in order, for one beam and for a pair.
+TEST(Filter, BlockSummariesBoundTheirBlocksAndFiltersThatSkipBlocksKeepWhatTheScalarTestKeeps) {
+    std::mt19937 rng(17);
+    size_t missedBlocks = 0, blocksTested = 0;
+    for (int trial = 0; trial < 120; ++trial) {
+        const size_t n = size_t(1 + trial % 29) * (trial % 3 == 0 ? 97 : 13);
+        const QuantizedList q = trial % 4 == 0 ? RandomList(rng, n) : LineList(rng, n);
+        FaceList blocks;
+        blocks.Resize(BlockCount(n));
+        FillBlocks(View(q.list, n, &q.frame), Out(blocks, 0));
+        const uint16_t* const lower[3] = {q.list.x0.data(), q.list.y0.data(), q.list.z0.data()};
+        const uint16_t* const upper[3] = {q.list.x1.data(), q.list.y1.data(), q.list.z1.data()};
+        const uint16_t* const lo[3] = {blocks.x0.data(), blocks.y0.data(), blocks.z0.data()};
+        const uint16_t* const hi[3] = {blocks.x1.data(), blocks.y1.data(), blocks.z1.data()};
+        for (size_t b = 0; b < BlockCount(n); ++b) {
+            for (int k = 0; k < 3; ++k) {
+                uint16_t least = 65535, greatest = 0;
+                for (size_t i = b * kListBlock; i < std::min(n, (b + 1) * kListBlock); ++i) {
+                    least = std::min(least, lower[k][i]);
+                    greatest = std::max(greatest, upper[k][i]);
+                }
+                ASSERT_EQ(lo[k][b], least) << "trial " << trial << ", block " << b;
+                ASSERT_EQ(hi[k][b], greatest) << "trial " << trial << ", block " << b;
+            }
+        }
+        // Narrow beams (some slopes exactly zero), a list cut short on some trials.
+        Box5 beam[2] = {RandomBeam(rng), RandomBeam(rng)};
+        for (Box5& b : beam) {
+            for (int k = 3; k < 5; ++k) b.hi[k] = b.lo[k] + (b.hi[k] - b.lo[k]) * 0.1f;
+        }
+        beam[1].lo[3] = beam[0].lo[3];  // often the same signs: the pair's one-pass path
+        beam[1].hi[3] = beam[0].hi[3];
+        const float reach = std::uniform_real_distribution<float>(0.5f, 12.0f)(rng);
+        ListView view = View(q.list, trial % 5 == 1 ? n - n / 3 : n, &q.frame);
+        view.blocks = BlocksOf(blocks);
+        BeamTest t[2];
+        FaceList outs[2];
+        ListOut out[2];
+        for (int j = 0; j < 2; ++j) {
+            t[j] = MakeBeamTest(q.frame, beam[j], reach);
+            outs[j].Resize(n);
+            out[j] = Out(outs[j], 0);
+        }
+        const size_t k = FilterList(t[0], view, out[0]);
+        ASSERT_EQ(std::vector<uint32_t>(outs[0].prim.begin(), outs[0].prim.begin() + long(k)),
+                  ScalarKept(t[0], q, view.n))
+            << "trial " << trial;
+        size_t kept[2];
+        FilterPair(t, view, out, kept);
+        for (int j = 0; j < 2; ++j) {
+            ASSERT_EQ(
+                std::vector<uint32_t>(outs[j].prim.begin(), outs[j].prim.begin() + long(kept[j])),
+                ScalarKept(t[j], q, view.n))
+                << "trial " << trial << ", beam " << j;
+            for (size_t e = 0; e < kept[j]; ++e) {
+                const uint32_t i = outs[j].prim[e];
+                ASSERT_EQ(outs[j].y1[e], q.list.y1[i]);
+                ASSERT_EQ(outs[j].z0[e], q.list.z0[i]);
+            }
+        }
+        for (size_t b = 0; b < BlockCount(view.n); ++b) {
+            missedBlocks +=
+                BeamMayReach(t[0], lo[0][b], hi[0][b], lo[1][b], hi[1][b], lo[2][b], hi[2][b]) ? 0
+                                                                                               : 1;
+            ++blocksTested;
+        }
+    }
+    // The beams miss many blocks (the filters skip them) and reach others.
+    EXPECT_GT(missedBlocks, blocksTested / 4);
+    EXPECT_LT(missedBlocks, blocksTested);
+}
+
 TEST(Filter, StepsRoundOutwardsAndTheNearXOfACandidateNeverExceedsItsBox) {
     std::mt19937 rng(12);
     const QuantizedList q = RandomList(rng, 5000);
