@@ -531,9 +531,11 @@ uint64_t Frame::AccumulateRange(const Batch& b, const ShadowSlots& shadow, const
 }
 
 // Copies the batch's live secondary rays, in ListLive's order, to the end of the next
-// generation's pages (new pages from the pool); the batch's own page goes back to the pool,
-// answered and shaded.
+// generation's pages (new pages from the pool). The batch's own page, answered and shaded, goes
+// back to the pool first: the next page taken is then one whose ray pages were written before,
+// not a fresh one.
 void Frame::Compact(const Batch& b) {
+    pool_.Give(rays_.pages[b.page]);
     const size_t pageRays = pool_.PageRays();
     const size_t count = next_.pixels.size() - live_.size();  // rays on the pages before these
     const RayBuffers& secondary = buffers_.shade.secondary;
@@ -552,7 +554,6 @@ void Frame::Compact(const Batch& b) {
         Launch(ctx_, compactKernel_, m, timer_);
         done += m;
     }
-    pool_.Give(rays_.pages[b.page]);
 }
 
 // A progress line on stderr, at most once a second.
