@@ -57,12 +57,23 @@ constexpr uint32_t kMaxDepth = 60;
 // narrower nodes slow the traversal of eye and shadow rays.
 constexpr uint32_t kStackEntries = 128;
 
+// The SAH costs Collapse minimises, relative to a wide node's visit (one slab test of its eight
+// boxes and the sort of those entered, cl/bvh.cl): a leaf's visit (a pop and its run's first
+// cache lines) and each of its primitives (tested eight lanes at a time by one ray, but one at a
+// time by a packet, whose nodes cost little more than one ray's).
+constexpr float kWideNodeCost = 1.0f;
+constexpr float kLeafCost = 0.2f;
+constexpr float kLeafPrimCost = 0.6f;
+
 // The binary tree collapsed to nodes of up to eight children, nodes[0] the root, over the same
-// primIndex: each node takes the children of its binary node, then repeatedly replaces the inner
-// child of the largest surface with that child's two children. A node has fewer children where
-// more would let a walk push more than `stackEntries` entries. Fails (std::runtime_error) on a
-// leaf of more than RC_BVH8_MAX_LEAF primitives, on more than RC_BVH8_FIRST_MASK + 1 primitives
-// and on a tree higher than `stackEntries` (Build's trees are at most kMaxDepth high).
+// primIndex: the collapse of least SAH cost (Ylitie, Karras and Laine 2017), whose leaves are
+// binary leaves or whole subtrees of at most RC_BVH8_MAX_LEAF primitives (one run of primIndex,
+// as Build's depth-first trees give). Where its walks could push more than `stackEntries`
+// entries, a node takes instead the children of its binary node, then repeatedly replaces the
+// inner child of the largest surface with that child's two children, and has fewer children
+// where more would let a walk push more than `stackEntries` entries. Fails (std::runtime_error)
+// on a binary leaf of more than RC_BVH8_MAX_LEAF primitives, on more than RC_BVH8_FIRST_MASK + 1
+// primitives and on a tree higher than `stackEntries` (Build's trees are at most kMaxDepth high).
 std::vector<RcBvh8Node> Collapse(const Bvh& tree, uint32_t stackEntries = kStackEntries);
 
 }  // namespace rayclass::bvh
