@@ -47,6 +47,22 @@ struct QuantizedList {
     std::vector<WorldBox> world;  // in list order (sorted by near X)
 };
 
+// q's world boxes sorted by near X, and its list from them in q's frame, as the face lists
+// quantize them; ids are positions.
+void FillSteps(QuantizedList& q) {
+    std::sort(q.world.begin(), q.world.end(),
+              [](const WorldBox& a, const WorldBox& b) { return a.lo[0] < b.lo[0]; });
+    uint16_t* const l[3] = {q.list.x0.data(), q.list.y0.data(), q.list.z0.data()};
+    uint16_t* const h[3] = {q.list.x1.data(), q.list.y1.data(), q.list.z1.data()};
+    for (size_t i = 0; i < q.world.size(); ++i) {
+        for (int k = 0; k < 3; ++k) {
+            l[k][i] = StepsBelow(q.frame, k, q.world[i].lo[k]);
+            h[k][i] = StepsAbove(q.frame, k, q.world[i].hi[k]);
+        }
+        q.list.prim[i] = uint32_t(i);
+    }
+}
+
 // n random boxes around [-4, 6]^3: from points (zero extent) to wide ones, some touching the
 // frame's bounds, quantized as the face lists are.
 QuantizedList RandomList(std::mt19937& rng, size_t n) {
@@ -60,8 +76,6 @@ QuantizedList RandomList(std::mt19937& rng, size_t n) {
             b.hi[k] = point(rng) ? b.lo[k] : b.lo[k] + size(rng);
         }
     }
-    std::sort(q.world.begin(), q.world.end(),
-              [](const WorldBox& a, const WorldBox& b) { return a.lo[0] < b.lo[0]; });
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (const WorldBox& b : q.world) {
         for (int k = 0; k < 3; ++k) {
@@ -71,15 +85,7 @@ QuantizedList RandomList(std::mt19937& rng, size_t n) {
     }
     q.frame = MakeListFrame(lo, hi);
     q.list.Resize(n);
-    uint16_t* const l[3] = {q.list.x0.data(), q.list.y0.data(), q.list.z0.data()};
-    uint16_t* const h[3] = {q.list.x1.data(), q.list.y1.data(), q.list.z1.data()};
-    for (size_t i = 0; i < n; ++i) {
-        for (int k = 0; k < 3; ++k) {
-            l[k][i] = StepsBelow(q.frame, k, q.world[i].lo[k]);
-            h[k][i] = StepsAbove(q.frame, k, q.world[i].hi[k]);
-        }
-        q.list.prim[i] = uint32_t(i);
-    }
+    FillSteps(q);
     return q;
 }
 
@@ -130,6 +136,17 @@ Box5 GrazingBeam(std::mt19937& rng, const WorldBox& b, int variant) {
     return beam;
 }
 
+// The entries of the first n of q's list that the scalar test of t keeps.
+std::vector<uint32_t> ScalarKept(const BeamTest& t, const QuantizedList& q, size_t n) {
+    std::vector<uint32_t> kept;
+    for (size_t i = 0; i < n; ++i) {
+        if (BeamMayReach(t, q.list.x0[i], q.list.x1[i], q.list.y0[i], q.list.y1[i], q.list.z0[i],
+                         q.list.z1[i]))
+            kept.push_back(q.list.prim[i]);
+    }
+    return kept;
+}
+
 TEST(Filter, KeepsEveryBoxTheBeamMeetsAndMatchesTheScalarTest) {
     std::mt19937 rng(11);
     size_t met = 0, kept = 0;
@@ -144,13 +161,9 @@ TEST(Filter, KeepsEveryBoxTheBeamMeetsAndMatchesTheScalarTest) {
         FaceList out;
         out.Resize(n);
         const size_t k = FilterList(t, View(q.list, n, &q.frame), Out(out, 0));
-        // The kept boxes, in order: exactly those the scalar test keeps.
-        std::vector<uint32_t> scalar;
-        for (size_t i = 0; i < n; ++i) {
-            if (BeamMayReach(t, q.list.x0[i], q.list.x1[i], q.list.y0[i], q.list.y1[i],
-                             q.list.z0[i], q.list.z1[i]))
-                scalar.push_back(uint32_t(i));
-        }
+        // The kept boxes, in order: exactly those the scalar test keeps (RandomList's ids are
+        // the entries' positions).
+        const std::vector<uint32_t> scalar = ScalarKept(t, q, n);
         ASSERT_EQ(std::vector<uint32_t>(out.prim.begin(), out.prim.begin() + long(k)), scalar)
             << "trial " << trial;
         for (size_t j = 0; j < k; ++j) {
@@ -247,28 +260,8 @@ QuantizedList LineList(std::mt19937& rng, size_t n) {
             b.hi[k] = b.lo[k] + size(rng);
         }
     }
-    std::sort(q.world.begin(), q.world.end(),
-              [](const WorldBox& a, const WorldBox& b) { return a.lo[0] < b.lo[0]; });
-    uint16_t* const l[3] = {q.list.x0.data(), q.list.y0.data(), q.list.z0.data()};
-    uint16_t* const h[3] = {q.list.x1.data(), q.list.y1.data(), q.list.z1.data()};
-    for (size_t i = 0; i < n; ++i) {
-        for (int k = 0; k < 3; ++k) {
-            l[k][i] = StepsBelow(q.frame, k, q.world[i].lo[k]);
-            h[k][i] = StepsAbove(q.frame, k, q.world[i].hi[k]);
-        }
-    }
+    FillSteps(q);
     return q;
-}
-
-// The entries of the first n of q's list that the scalar test of t keeps.
-std::vector<uint32_t> ScalarKept(const BeamTest& t, const QuantizedList& q, size_t n) {
-    std::vector<uint32_t> kept;
-    for (size_t i = 0; i < n; ++i) {
-        if (BeamMayReach(t, q.list.x0[i], q.list.x1[i], q.list.y0[i], q.list.y1[i], q.list.z0[i],
-                         q.list.z1[i]))
-            kept.push_back(q.list.prim[i]);
-    }
-    return kept;
 }
 
 // A block summary holds each block's least lower and greatest upper bounds (a plain loop is the
