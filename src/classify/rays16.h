@@ -119,49 +119,46 @@ RC_AVX512 inline Rays16 Gather16(const float* at, __m512i idx, __mmask16 live) {
 }
 
 // The same for `live` consecutive rays of 32 bytes each (classify::Ray, RcRay): plain loads of two
-// rays a vector, then three rounds of two-source permutes that transpose both 256-bit halves
-// (8 x 8 floats each) at once, instead of eight gathers.
+// rays a vector, whose 128-bit quarters (four fields of a ray) one shuffle of whole quarters
+// a register puts in the order rays k, k + 4, k + 8, k + 12; then a 4 x 4 transpose within each
+// quarter, of shuffles that stay in their 128-bit lanes, instead of eight gathers.
 RC_AVX512 inline Rays16 Load16Packed(const float* at, size_t live) {
-    __m512 a[8];  // rays k (low half) and k + 8 (high half)
-    for (size_t k = 0; k < 8; ++k) {
-        const __m256 lo = k < live ? _mm256_loadu_ps(at + 8 * k) : _mm256_setzero_ps();
-        const __m256 hi = k + 8 < live ? _mm256_loadu_ps(at + 8 * (k + 8)) : _mm256_setzero_ps();
-        a[k] = _mm512_insertf32x8(_mm512_castps256_ps512(lo), hi, 1);
+    // (The zero-masked forms: see Min16.)
+    constexpr __mmask16 kAll = 0xFFFF;
+    auto ray = [&](size_t k) RC_AVX512 {
+        return k < live ? _mm256_loadu_ps(at + 8 * k) : _mm256_setzero_ps();
+    };
+    __m512 lo[4], hi[4];  // ox, oy, oz, tmin and dx, dy, dz, tmax of rays k, k + 4, k + 8, k + 12
+    for (size_t k = 0; k < 4; ++k) {
+        const __m512 near = _mm512_insertf32x8(_mm512_castps256_ps512(ray(k)), ray(k + 4), 1);
+        const __m512 far = _mm512_insertf32x8(_mm512_castps256_ps512(ray(k + 8)), ray(k + 12), 1);
+        lo[k] = _mm512_maskz_shuffle_f32x4(kAll, near, far, _MM_SHUFFLE(2, 0, 2, 0));
+        hi[k] = _mm512_maskz_shuffle_f32x4(kAll, near, far, _MM_SHUFFLE(3, 1, 3, 1));
     }
-    // Rays 2m and 2m + 1: their even fields and their odd fields, interleaved.
-    const __m512i even =
-        _mm512_setr_epi32(0, 16, 2, 18, 4, 20, 6, 22, 8, 24, 10, 26, 12, 28, 14, 30);
-    const __m512i odd = _mm512_add_epi32(even, _mm512_set1_epi32(1));
-    __m512 e[4], o[4];
-    for (int m = 0; m < 4; ++m) {
-        e[m] = _mm512_permutex2var_ps(a[2 * m], even, a[2 * m + 1]);
-        o[m] = _mm512_permutex2var_ps(a[2 * m], odd, a[2 * m + 1]);
-    }
-    // Four rays side by side: the first and third of each pair's four fields, and the second and
-    // fourth.
-    const __m512i f02 = _mm512_setr_epi32(0, 1, 16, 17, 4, 5, 20, 21, 8, 9, 24, 25, 12, 13, 28, 29);
-    const __m512i f13 = _mm512_add_epi32(f02, _mm512_set1_epi32(2));
-    __m512 q[2][4];
-    for (int n = 0; n < 2; ++n) {
-        q[n][0] = _mm512_permutex2var_ps(e[2 * n], f02, e[2 * n + 1]);  // ox, dx
-        q[n][1] = _mm512_permutex2var_ps(e[2 * n], f13, e[2 * n + 1]);  // oz, dz
-        q[n][2] = _mm512_permutex2var_ps(o[2 * n], f02, o[2 * n + 1]);  // oy, dy
-        q[n][3] = _mm512_permutex2var_ps(o[2 * n], f13, o[2 * n + 1]);  // tmin, tmax
-    }
-    // One field, eight rays a half.
-    const __m512i first =
-        _mm512_setr_epi32(0, 1, 2, 3, 16, 17, 18, 19, 8, 9, 10, 11, 24, 25, 26, 27);
-    const __m512i second = _mm512_add_epi32(first, _mm512_set1_epi32(4));
+    // Within each quarter: fields 0 and 1 of rays 0-1 and 2-3, then fields 2 and 3.
+    auto transpose = [](const __m512(&q)[4], __m512& f0, __m512& f1, __m512& f2,
+                        __m512& f3) RC_AVX512 {
+        constexpr __mmask16 kAll16 = 0xFFFF;
+        constexpr __mmask8 kAll8 = 0xFF;
+        const __m512d t0 = _mm512_castps_pd(_mm512_maskz_unpacklo_ps(kAll16, q[0], q[1]));
+        const __m512d t1 = _mm512_castps_pd(_mm512_maskz_unpacklo_ps(kAll16, q[2], q[3]));
+        const __m512d t2 = _mm512_castps_pd(_mm512_maskz_unpackhi_ps(kAll16, q[0], q[1]));
+        const __m512d t3 = _mm512_castps_pd(_mm512_maskz_unpackhi_ps(kAll16, q[2], q[3]));
+        f0 = _mm512_castpd_ps(_mm512_maskz_unpacklo_pd(kAll8, t0, t1));
+        f1 = _mm512_castpd_ps(_mm512_maskz_unpackhi_pd(kAll8, t0, t1));
+        f2 = _mm512_castpd_ps(_mm512_maskz_unpacklo_pd(kAll8, t2, t3));
+        f3 = _mm512_castpd_ps(_mm512_maskz_unpackhi_pd(kAll8, t2, t3));
+    };
     Rays16 r;
-    r.ox = _mm512_permutex2var_ps(q[0][0], first, q[1][0]);
-    r.dx = _mm512_permutex2var_ps(q[0][0], second, q[1][0]);
-    r.oz = _mm512_permutex2var_ps(q[0][1], first, q[1][1]);
-    r.dz = _mm512_permutex2var_ps(q[0][1], second, q[1][1]);
-    r.oy = _mm512_permutex2var_ps(q[0][2], first, q[1][2]);
-    r.dy = _mm512_permutex2var_ps(q[0][2], second, q[1][2]);
-    r.tmin = _mm512_permutex2var_ps(q[0][3], first, q[1][3]);
-    r.tmax = _mm512_permutex2var_ps(q[0][3], second, q[1][3]);
+    transpose(lo, r.ox, r.oy, r.oz, r.tmin);
+    transpose(hi, r.dx, r.dy, r.dz, r.tmax);
     return r;
+}
+
+// Prefetches 16 consecutive rays of 32 bytes each (their eight cache lines) for Load16Packed.
+RC_AVX512 inline void Prefetch16Packed(const float* at) {
+    const char* bytes = reinterpret_cast<const char*>(at);
+    for (int line = 0; line < 8; ++line) _mm_prefetch(bytes + 64 * line, _MM_HINT_T0);
 }
 
 // CommonEnds::Oriented for the live lanes of r, with the same float operations, so both paths
