@@ -52,6 +52,7 @@ struct PinholeSubdivision::Camera {
     uint32_t width = 1, height = 1;     // the camera window's: pixels are numbered in the window
     uint32_t originX = 0, originY = 0;  // the window's place in the image
     uint64_t first = 0, last = 0;       // the batch: pixels [first, last)
+    uint32_t yFirst = 0, yLast = 0;     // the rows of its first and last pixels
     float eye[kFaceCount][3];           // the position in each face's frame, as Convert maps it
     float end[kFaceCount];              // where each face's X leaves the scene box
 
@@ -79,7 +80,6 @@ struct PinholeSubdivision::Camera {
 
     // The batch's pixels in `r`: whole rows but for the batch's first and last.
     uint32_t Count(const PixelRect& r) const {
-        const uint32_t yFirst = uint32_t(first / width), yLast = uint32_t((last - 1) / width);
         const uint32_t y0 = std::max(r.y0, yFirst), y1 = std::min(r.y1, yLast + 1);
         if (y0 >= y1) return 0;
         uint64_t n = uint64_t(y1 - y0) * (r.x1 - r.x0);
@@ -103,23 +103,67 @@ struct PinholeSubdivision::Camera {
         return 2 * axis + (d[axis] < 0.0 ? 1 : 0);
     }
 
-    // The bounds of r's rays in the frame of `face`. False when a corner ray does not move
-    // forward there or, with `limit`, when a corner's slope exceeds kMaxSlope.
-    bool Bounds(const PixelRect& r, int face, bool limit, Bounds6& b) const {
+    // The slopes of pixel (x, y)'s ray in the frame of `face`; false when it does not move
+    // forward there.
+    bool Slopes(uint32_t x, uint32_t y, int face, double slope[2]) const {
         const int a = FaceAxis(face), ab = (a + 1) % 3, ac = (a + 2) % 3;
-        const double sign = FaceSign(face);
+        const glm::dvec3 d = Direction(x, y);
+        const double da = FaceSign(face) * d[a];
+        if (!(da > 0.0)) return false;
+        const double perDa = 1.0 / da;
+        slope[0] = d[ab] * perDa;
+        slope[1] = d[ac] * perDa;
+        return true;
+    }
+
+    // The bounds of r's rays in the frame of `face`, with its corners' slopes in `c`. False
+    // when a corner ray does not move forward there or, with `limit`, when a corner's slope
+    // exceeds kMaxSlope.
+    bool Bounds(const PixelRect& r, int face, bool limit, Bounds6& b, Corners& c) const {
+        for (int i = 0; i < 2; ++i) {
+            for (int j = 0; j < 2; ++j) {
+                double* const s = c.slope[i][j];
+                if (!Slopes(j ? r.x1 - 1 : r.x0, i ? r.y1 - 1 : r.y0, face, s)) return false;
+                if (limit && !(std::abs(s[0]) <= kMaxSlope && std::abs(s[1]) <= kMaxSlope))
+                    return false;
+            }
+        }
+        FromCorners(c, face, b);
+        return true;
+    }
+
+    // The bounds of the halves `half` of `r` (Halve), whose corners' slopes are `c`, in `beam`:
+    // each half shares two corners with r, so only the four along the cut are new. Within r's
+    // frame their rays move forward, as r's do.
+    void HalfBounds(const PixelRect& r, const Corners& c, const PixelRect half[2], int face,
+                    RectBeam beam[2]) const {
+        Corners& c0 = beam[0].corners;
+        Corners& c1 = beam[1].corners;
+        c0 = c1 = c;
+        if (half[0].x1 != r.x1) {
+            for (int i = 0; i < 2; ++i) {
+                const uint32_t y = i ? r.y1 - 1 : r.y0;
+                Slopes(half[0].x1 - 1, y, face, c0.slope[i][1]);
+                Slopes(half[1].x0, y, face, c1.slope[i][0]);
+            }
+        } else {
+            for (int j = 0; j < 2; ++j) {
+                const uint32_t x = j ? r.x1 - 1 : r.x0;
+                Slopes(x, half[0].y1 - 1, face, c0.slope[1][j]);
+                Slopes(x, half[1].y0, face, c1.slope[0][j]);
+            }
+        }
+        for (int h = 0; h < 2; ++h) FromCorners(beam[h].corners, face, beam[h].tight);
+    }
+
+    // The bounds of the rays between corners' slopes `c` in the frame of `face`, padded.
+    void FromCorners(const Corners& c, int face, Bounds6& b) const {
         double lo[2] = {HUGE_VAL, HUGE_VAL}, hi[2] = {-HUGE_VAL, -HUGE_VAL};
-        for (uint32_t y : {r.y0, r.y1 - 1}) {
-            for (uint32_t x : {r.x0, r.x1 - 1}) {
-                const glm::dvec3 d = Direction(x, y);
-                const double da = sign * d[a];
-                if (!(da > 0.0)) return false;
-                const double perDa = 1.0 / da;
-                const double slope[2] = {d[ab] * perDa, d[ac] * perDa};
+        for (int i = 0; i < 2; ++i) {
+            for (int j = 0; j < 2; ++j) {
                 for (int k = 0; k < 2; ++k) {
-                    if (limit && !(std::abs(slope[k]) <= kMaxSlope)) return false;
-                    lo[k] = std::min(lo[k], slope[k]);
-                    hi[k] = std::max(hi[k], slope[k]);
+                    lo[k] = std::min(lo[k], c.slope[i][j][k]);
+                    hi[k] = std::max(hi[k], c.slope[i][j][k]);
                 }
             }
         }
@@ -129,7 +173,6 @@ struct PinholeSubdivision::Camera {
             b.hi[3 + k] = float(hi[k] + kSlopePad * (1.0 + std::abs(hi[k])));
         }
         b.lo[kDims] = b.hi[kDims] = end[face];
-        return true;
     }
 
     // Whether pixel (x, y)'s ray (t >= 0) meets `reachable`: the slab test, in double.
@@ -215,6 +258,8 @@ bool PinholeSubdivision::Camera::Set(const RcCamera& camera, uint32_t firstPixel
     perHeight = 2.0 / double(camera.height);
     first = firstPixel;
     last = uint64_t(firstPixel) + n;
+    yFirst = uint32_t(first / width);
+    yLast = uint32_t((last - 1) / width);
     for (int face = 0; face < kFaceCount; ++face) {
         const int a = FaceAxis(face);
         eye[face][0] = FaceX(face, eyeAt);
@@ -252,8 +297,7 @@ void PinholeSubdivision::ClassifyBands(const Camera& cam, LeafBatch& out) {
     const int threads = pool.Start(n, kNoNode, out);
     // Bands of whole rows, taken in turn by whichever thread is free; band b's rays follow band
     // b - 1's.
-    const uint32_t yFirst = uint32_t(cam.first / cam.width),
-                   rows = uint32_t((cam.last - 1) / cam.width) + 1 - yFirst;
+    const uint32_t yFirst = cam.yFirst, rows = cam.yLast + 1 - yFirst;
     const uint32_t nBands = n < kBandedRaysMin ? 1 : std::min(rows, kBands);
     std::vector<PixelRect> bands;
     std::vector<uint32_t> slots;
@@ -307,7 +351,7 @@ void PinholeSubdivision::ProcessRect(Worker& w, const Camera& cam, const PixelRe
     ListView faceList;
     if (face < 0) {
         const int centre = cam.CentreFace(rect);
-        if (!cam.Bounds(rect, centre, true, beam.tight)) {
+        if (!cam.Bounds(rect, centre, true, beam.tight, beam.corners)) {
             // Too wide for one frame: its halves look again. (A single pixel fits its own face.)
             PixelRect half[2];
             Camera::Halve(rect, half);
@@ -319,7 +363,7 @@ void PinholeSubdivision::ProcessRect(Worker& w, const Camera& cam, const PixelRe
         list = &faceList;
     } else {
         // Within its parent's frame: its corners' slopes lie within the parent's.
-        cam.Bounds(rect, face, false, beam.tight);
+        cam.Bounds(rect, face, false, beam.tight, beam.corners);
     }
     beam.filtered = !KeepsMost(beam.tight, *list);
     beam.own = beam.filtered ? w.Filter(beam.tight, *list, false) : CutAtEnd(beam.tight, *list);
@@ -329,13 +373,13 @@ void PinholeSubdivision::ProcessRect(Worker& w, const Camera& cam, const PixelRe
 void PinholeSubdivision::ProcessNode(Worker& w, const Camera& cam, const PixelRect& rect, int face,
                                      int depth, const ListView& list, const RectBeam& beam,
                                      RectOut& out) {
+    // The node's box only for a leaf: ChooseSplit reads its face and depth.
     Node node;
-    node.box = beam.tight.ToBox5();
     node.face = uint8_t(face);
     node.depth = uint8_t(depth);
     int dim = 0;
     if (core_.cost.ChooseSplit(node, beam.tight, beam.nRays, beam.own, dim)) {
-        SplitRect(w, cam, rect, face, depth, beam.own, out);
+        SplitRect(w, cam, rect, beam.corners, face, depth, beam.own, out);
         return;
     }
     const ListView own = beam.filtered ? beam.own : w.Filter(beam.tight, list, false);
@@ -347,23 +391,24 @@ void PinholeSubdivision::ProcessNode(Worker& w, const Camera& cam, const PixelRe
                             : (cam.outside && !cam.AllReach(rect) ? Reach::kSome : Reach::kAll);
     if (reach == Reach::kSome && uint64_t(rect.x1 - rect.x0) * (rect.y1 - rect.y0) > kClipPixels) {
         // On the outline: halves, so that only pixels near it are tested one by one.
-        SplitRect(w, cam, rect, face, depth, own, out);
+        SplitRect(w, cam, rect, beam.corners, face, depth, own, out);
         return;
     }
+    node.box = beam.tight.ToBox5();
     EmitRect(w, cam, rect, node, own, beam.tight.hi[kDims], reach, out);
 }
 
-void PinholeSubdivision::SplitRect(Worker& w, const Camera& cam, const PixelRect& rect, int face,
-                                   int depth, const ListView& list, RectOut& out) {
+void PinholeSubdivision::SplitRect(Worker& w, const Camera& cam, const PixelRect& rect,
+                                   const Corners& corners, int face, int depth,
+                                   const ListView& list, RectOut& out) {
     PixelRect half[2];
     Camera::Halve(rect, half);
     const ArenaMark release(w.stack);
     RectBeam beam[2];
+    cam.HalfBounds(rect, corners, half, face, beam);
     bool both = true;
     for (int j = 0; j < 2; ++j) {
         beam[j].nRays = cam.Count(half[j]);
-        // Within its parent's frame: its corners' slopes lie within the parent's.
-        cam.Bounds(half[j], face, false, beam[j].tight);
         beam[j].filtered = !KeepsMost(beam[j].tight, list);
         both = both && beam[j].nRays > 0 && beam[j].filtered;
     }

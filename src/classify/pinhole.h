@@ -36,6 +36,11 @@ class PinholeSubdivision {
     // Which of a leaf's rays can reach its candidates: all, none, or some (from a camera outside
     // the scene box, a leaf on the box's outline: each ray is tested).
     enum class Reach { kAll, kNone, kSome };
+    // The slopes (u, v) in a face's frame of a rectangle's corner rays, [row][column]: top and
+    // bottom row, left and right column.
+    struct Corners {
+        double slope[2][2][2];
+    };
 
     // Classifies the rays of the camera's batch in bands of rows on the worker pool.
     void ClassifyBands(const Camera& cam, LeafBatch& out);
@@ -44,6 +49,7 @@ class PinholeSubdivision {
     struct RectBeam {
         uint32_t nRays;
         Bounds6 tight;
+        Corners corners;
         ListView own;
         bool filtered;
     };
@@ -56,9 +62,10 @@ class PinholeSubdivision {
     // a leaf.
     void ProcessNode(Worker& w, const Camera& cam, const PixelRect& rect, int face, int depth,
                      const ListView& list, const RectBeam& beam, RectOut& out);
-    // The halves of `rect` (of `face`, list `list`): where both filter the list, in one pass.
-    void SplitRect(Worker& w, const Camera& cam, const PixelRect& rect, int face, int depth,
-                   const ListView& list, RectOut& out);
+    // The halves of `rect` (of `face`, its corners' slopes `corners`, list `list`): where both
+    // filter the list, in one pass.
+    void SplitRect(Worker& w, const Camera& cam, const PixelRect& rect, const Corners& corners,
+                   int face, int depth, const ListView& list, RectOut& out);
     // A leaf of node `node`, `rect`'s rays that can reach a primitive with list `own`.
     void EmitRect(Worker& w, const Camera& cam, const PixelRect& rect, const Node& node,
                   const ListView& own, float endHi, Reach reach, RectOut& out);
