@@ -117,15 +117,13 @@ struct PinholeSubdivision::Camera {
     }
 
     // The bounds of r's rays in the frame of `face`, with its corners' slopes in `c`. False
-    // when a corner ray does not move forward there or, with `limit`, when a corner's slope
-    // exceeds kMaxSlope.
-    bool Bounds(const PixelRect& r, int face, bool limit, Bounds6& b, Corners& c) const {
+    // when a corner ray does not move forward there or a corner's slope exceeds kMaxSlope.
+    bool Bounds(const PixelRect& r, int face, Bounds6& b, Corners& c) const {
         for (int i = 0; i < 2; ++i) {
             for (int j = 0; j < 2; ++j) {
                 double* const s = c.slope[i][j];
                 if (!Slopes(j ? r.x1 - 1 : r.x0, i ? r.y1 - 1 : r.y0, face, s)) return false;
-                if (limit && !(std::abs(s[0]) <= kMaxSlope && std::abs(s[1]) <= kMaxSlope))
-                    return false;
+                if (!(std::abs(s[0]) <= kMaxSlope && std::abs(s[1]) <= kMaxSlope)) return false;
             }
         }
         FromCorners(c, face, b);
@@ -318,7 +316,7 @@ void PinholeSubdivision::ClassifyBands(const Camera& cam, LeafBatch& out) {
             // updating the bands' entries, which share cache lines, leaf by leaf from both
             // threads bounced the lines between the cores.
             RectOut band{slots[b], {}};
-            ProcessRect(w, cam, bands[b], -1, 0, nullptr, band);
+            ProcessRect(w, cam, bands[b], 0, band);
             done[b] = std::move(band);
         }));
     }
@@ -342,32 +340,24 @@ void PinholeSubdivision::ClassifyBands(const Camera& cam, LeafBatch& out) {
     pool.Finish(0, core_.counters);
 }
 
-void PinholeSubdivision::ProcessRect(Worker& w, const Camera& cam, const PixelRect& rect, int face,
-                                     int depth, const ListView* list, RectOut& out) {
+void PinholeSubdivision::ProcessRect(Worker& w, const Camera& cam, const PixelRect& rect, int depth,
+                                     RectOut& out) {
     RectBeam beam;
     beam.nRays = cam.Count(rect);
     if (beam.nRays == 0) return;
     const ArenaMark release(w.stack);
-    ListView faceList;
-    if (face < 0) {
-        const int centre = cam.CentreFace(rect);
-        if (!cam.Bounds(rect, centre, true, beam.tight, beam.corners)) {
-            // Too wide for one frame: its halves look again. (A single pixel fits its own face.)
-            PixelRect half[2];
-            Camera::Halve(rect, half);
-            for (const PixelRect& h : half) ProcessRect(w, cam, h, -1, depth + 1, nullptr, out);
-            return;
-        }
-        face = centre;
-        faceList = core_.faceLists->Whole(face);
-        list = &faceList;
-    } else {
-        // Within its parent's frame: its corners' slopes lie within the parent's.
-        cam.Bounds(rect, face, false, beam.tight, beam.corners);
+    const int face = cam.CentreFace(rect);
+    if (!cam.Bounds(rect, face, beam.tight, beam.corners)) {
+        // Too wide for one frame: its halves look again. (A single pixel fits its own face.)
+        PixelRect half[2];
+        Camera::Halve(rect, half);
+        for (const PixelRect& h : half) ProcessRect(w, cam, h, depth + 1, out);
+        return;
     }
-    beam.filtered = !KeepsMost(beam.tight, *list);
-    beam.own = beam.filtered ? w.Filter(beam.tight, *list, false) : CutAtEnd(beam.tight, *list);
-    ProcessNode(w, cam, rect, face, depth, *list, beam, out);
+    const ListView list = core_.faceLists->Whole(face);
+    beam.filtered = !KeepsMost(beam.tight, list);
+    beam.own = beam.filtered ? w.Filter(beam.tight, list, false) : CutAtEnd(beam.tight, list);
+    ProcessNode(w, cam, rect, face, depth, list, beam, out);
 }
 
 void PinholeSubdivision::ProcessNode(Worker& w, const Camera& cam, const PixelRect& rect, int face,

@@ -54,10 +54,9 @@ class PinholeSubdivision {
         bool filtered;
     };
 
-    // The subdivision of `rect` within the frame of `face` and `list`, or of no face yet
-    // (face < 0).
-    void ProcessRect(Worker& w, const Camera& cam, const PixelRect& rect, int face, int depth,
-                     const ListView* list, RectOut& out);
+    // The subdivision of `rect` in the frame of the face its centre ray looks at, from that
+    // face's whole list; a rectangle too wide for one frame halves first.
+    void ProcessRect(Worker& w, const Camera& cam, const PixelRect& rect, int depth, RectOut& out);
     // The node of `rect` (of `face`, its parent's list `list`) with its beam and list: halves or
     // a leaf.
     void ProcessNode(Worker& w, const Camera& cam, const PixelRect& rect, int face, int depth,
