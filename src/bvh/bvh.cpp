@@ -40,6 +40,7 @@ struct Collapser {
           need(tree_.nodes.size(), 0),
           optimalNeed(tree_.nodes.size(), 0),
           cost(tree_.nodes.size()),
+          share(tree_.nodes.size()),
           asLeaf(tree_.nodes.size(), 0),
           firstPrim(tree_.nodes.size(), 0),
           prims(tree_.nodes.size(), 0) {
@@ -71,6 +72,9 @@ struct Collapser {
     // Per binary node: cost[b][j - 1], the cheapest SAH cost of its subtree as at most j subtrees,
     // and whether the cheapest as one is a leaf.
     std::vector<std::array<float, 8>> cost;
+    // Per inner binary node: share[b][j - 1], its lower child's share of the cheapest split of
+    // exactly j subtrees between its children (j >= 2).
+    std::vector<std::array<uint8_t, 8>> share;
     std::vector<uint8_t> asLeaf;
     // Per binary node: its primitives are primIndex[firstPrim, firstPrim + prims), or prims is
     // ~0u where they do not form one run.
@@ -106,13 +110,18 @@ struct Collapser {
         const bool run =
             prims[lo] != ~0u && prims[hi] != ~0u && firstPrim[hi] == firstPrim[lo] + prims[lo];
         prims[b] = run ? prims[lo] + prims[hi] : ~0u;
-        const float wide = area * kWideNodeCost + Split(b, 8).first;
+        float exactly[8];
+        for (uint32_t j = 2; j <= 8; ++j) {
+            const auto [c, k] = Split(b, j);
+            exactly[j - 1] = c;
+            share[b][j - 1] = uint8_t(k);
+        }
+        const float wide = area * kWideNodeCost + exactly[7];
         const float leaf = prims[b] <= RC_BVH8_MAX_LEAF ? area * LeafCost(prims[b])
                                                         : std::numeric_limits<float>::infinity();
         asLeaf[b] = leaf <= wide;
         cost[b][0] = std::min(leaf, wide);
-        for (uint32_t j = 2; j <= 8; ++j)
-            cost[b][j - 1] = std::min(cost[b][j - 2], Split(b, j).first);
+        for (uint32_t j = 2; j <= 8; ++j) cost[b][j - 1] = std::min(cost[b][j - 2], exactly[j - 1]);
         uint32_t child[8];
         const uint32_t k = Distribute(b, 8, child, 0);
         uint32_t below = 0;
@@ -133,9 +142,9 @@ struct Collapser {
 
     // Slots of inner node b's children, j between them.
     uint32_t Distribute(uint32_t b, uint32_t j, uint32_t* child, uint32_t k) const {
-        const uint32_t share = Split(b, j).second;
-        k = Slots(b + 1, share, child, k);
-        return Slots(tree.nodes[b].first, j - share, child, k);
+        const uint32_t lower = share[b][j - 1];
+        k = Slots(b + 1, lower, child, k);
+        return Slots(tree.nodes[b].first, j - lower, child, k);
     }
 
     // Inner node b's children in its wide node: its binary children, then the widest inner child

@@ -215,12 +215,9 @@ RC_AVX512 size_t ConvertBlocks16(RayView rays, const CommonEnds& ends, const Bou
     const __m512 bhi[3] = {_mm512_set1_ps(sceneBox.hi.x), _mm512_set1_ps(sceneBox.hi.y),
                            _mm512_set1_ps(sceneBox.hi.z)};
     Bounds16 bounds;
-    // As in BlockKeys16: one read of each ray, in order, that the hardware's prefetch alone
-    // leaves waiting.
-    constexpr size_t kAhead = 64;
     for (; i < n; i += 16) {
         const __mmask16 live = LiveLanes16(n, i);
-        if (packed && i + kAhead + 16 <= n) Prefetch16Packed(rays.Floats(i + kAhead));
+        if (packed && i + kPackedAhead + 16 <= n) Prefetch16Packed(rays.Floats(i + kPackedAhead));
         Rays16 r = packed ? Load16Packed(rays.Floats(i), std::min<size_t>(16, n - i))
                           : Gather16(rays.Floats(i), idx, live);
         fromEnd += uint64_t(std::popcount(unsigned(Orient16(ends, live, r))));

@@ -233,13 +233,10 @@ RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f&
     const CellKeyer16 keyer(bits);
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const size_t n = rays.size();
-    // The pass reads each ray once, in order, with little work a ray: the hardware's prefetch
-    // alone leaves the loads waiting.
-    constexpr size_t kAhead = 64;
     size_t i = 0;
     for (; i < n; i += 16) {
         const __mmask16 live = LiveLanes16(n, i);
-        if (packed && i + kAhead + 16 <= n) Prefetch16Packed(rays.Floats(i + kAhead));
+        if (packed && i + kPackedAhead + 16 <= n) Prefetch16Packed(rays.Floats(i + kPackedAhead));
         Rays16 r = packed ? Load16Packed(rays.Floats(i), std::min<size_t>(16, n - i))
                           : Gather16(rays.Floats(i), idx, live);
         __m512i which = _mm512_setzero_si512();

@@ -57,6 +57,7 @@ void BuildFace(int face, const std::vector<Bounds3f>& boxes, const Bounds3f& all
     FaceList& l = out.list[face];
     l.Resize(nPrims);
     FillFaceList(face, frame, boxes.data(), order.data(), nPrims, Out(l, 0));
+    if (!FilterSkipsBlocks()) return;
     FaceList& blocks = out.blocks[face];
     blocks.Resize(BlockCount(nPrims));
     FillBlocks(View(l, nPrims, &frame), Out(blocks, 0));

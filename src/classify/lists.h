@@ -97,7 +97,8 @@ inline ListBlocks BlocksOf(const FaceList& b) {
 }
 
 // Every primitive of the scene, presorted per face: the roots' lists, with their blocks'
-// summaries. Read-only once built, so copies of a hierarchy share them.
+// summaries where the filter reads them (FilterSkipsBlocks). Read-only once built, so copies of
+// a hierarchy share them.
 struct FaceLists {
     std::array<FaceList, kFaceCount> list;
     std::array<FaceList, kFaceCount> blocks;
@@ -105,7 +106,7 @@ struct FaceLists {
 
     ListView Whole(int face) const {
         ListView v = View(list[face], list[face].Size(), &frame[face]);
-        v.blocks = BlocksOf(blocks[face]);
+        if (blocks[face].Size() > 0) v.blocks = BlocksOf(blocks[face]);
         return v;
     }
     size_t Bytes() const;
