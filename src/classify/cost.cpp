@@ -30,9 +30,9 @@ double CostModel::ListCost(const ListView& list) const {
 }
 
 bool CostModel::ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays,
-                            const ListView& list, int& dim) const {
+                            const ListView& list, uint32_t minCandidates, int& dim) const {
     const Params& p = params_;
-    if (nRays < 2 || list.n <= p.minCandidates || node.depth >= p.maxDepth) return false;
+    if (nRays < 2 || list.n <= minCandidates || node.depth >= p.maxDepth) return false;
     float extent[kDims];
     for (int k = 0; k < kDims; ++k) extent[k] = tight.hi[k] - tight.lo[k];
     dim = SplitDim(node.face, extent);

@@ -17,9 +17,10 @@ class CostModel {
     CostModel(const scene::Scene& scene, const Params& params, const Bounds3f& sceneBox);
 
     // Whether `node`, with `nRays` rays in bounds `tight` and candidate list `list`, is worth
-    // splitting; then `dim` is the dimension to split.
+    // splitting; then `dim` is the dimension to split. Lists of at most `minCandidates` entries
+    // are not (Params::minCandidates, or lightMinCandidates for the light cells).
     bool ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRays, const ListView& list,
-                     int& dim) const;
+                     uint32_t minCandidates, int& dim) const;
     // The dimension to split by the extents of a node's interval (-1: none is long enough).
     int SplitDim(int face, const float* extent) const;
 

@@ -665,7 +665,8 @@ void LightCellSubdivision::ProcessCells(Worker& w, CellAt at, const ListView& li
     int dim = 0;
     // A single cell is split further only when its list is long (see kRefineCandidates).
     const bool split = at.depth < bits2 || own.n >= kRefineCandidates;
-    if (split && core_.cost.ChooseSplit(node, tight, nRays, own, dim)) {
+    if (split &&
+        core_.cost.ChooseSplit(node, tight, nRays, own, core_.params.lightMinCandidates, dim)) {
         if (at.depth == bits2) {
             RefineCell(w, at.root, begin, nRays, at.depth, own);
             return;
@@ -728,7 +729,7 @@ void LightCellSubdivision::ProcessCellRays(Worker& w, uint32_t root, CellRay* ra
     node.face = uint8_t(face);
     node.depth = uint8_t(std::min(depth, 255));
     int dim = 0;
-    if (core_.cost.ChooseSplit(node, tight, n, own, dim)) {
+    if (core_.cost.ChooseSplit(node, tight, n, own, core_.params.lightMinCandidates, dim)) {
         const float value = Midpoint(tight.lo[dim], tight.hi[dim]);
         CellRay* mid = std::partition(
             rays, rays + n, [&](const CellRay& r) { return (dim == 3 ? r.u : r.v) < value; });

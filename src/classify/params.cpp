@@ -96,6 +96,7 @@ using Parser = ParamSetting (*)(const std::string& name, const std::string& valu
 const std::pair<const char*, Parser> kParsers[] = {
     {"min-rays", Count<&Params::minRays, 0>},
     {"min-candidates", Count<&Params::minCandidates, 0>},
+    {"light-min-candidates", Count<&Params::lightMinCandidates, 0>},
     {"splits-per-list",
      [](const std::string& n, const std::string& v) {
          return Set(&Params::splitsPerList, int(std::min<uint32_t>(ParseCount(n, v, 1), 64)));

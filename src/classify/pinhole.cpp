@@ -368,7 +368,8 @@ void PinholeSubdivision::ProcessNode(Worker& w, const Camera& cam, const PixelRe
     node.face = uint8_t(face);
     node.depth = uint8_t(depth);
     int dim = 0;
-    if (core_.cost.ChooseSplit(node, beam.tight, beam.nRays, beam.own, dim)) {
+    if (core_.cost.ChooseSplit(node, beam.tight, beam.nRays, beam.own, core_.params.minCandidates,
+                               dim)) {
         SplitRect(w, cam, rect, beam.corners, face, depth, beam.own, out);
         return;
     }

@@ -298,8 +298,10 @@ bool RaySubdivision::SplitRays(Worker& w, const Node& node, const NodeRays& r, c
                                Split& split, Bounds6 childBox[2], PlanAt childAt[2]) {
     const int face = node.face;
     int dim = 0;
-    if (!core_.cost.ChooseSplit(node, r.tight, r.end - r.begin, own, dim)) return false;
     const Params& p = core_.params;
+    if (!core_.cost.ChooseSplit(node, r.tight, r.end - r.begin, own, p.minCandidates, dim)) {
+        return false;
+    }
     PlanAt plan = r.plan;
     if (!plan.plan && p.planRays > 0 && r.end - r.begin >= p.planRays &&
         p.splitRule == SplitRule::kMidpoint) {

@@ -182,7 +182,8 @@ std::vector<Option> QueryOptions(RenderArgs& r) {
         {{"--classify"},
          "NAME=VALUE",
          "a cost-function setting of the classification (repeatable): min-rays,\n"
-         "min-candidates, splits-per-list, split (midpoint|median),\n"
+         "min-candidates, light-min-candidates (min-candidates of the light\n"
+         "cells' shadow rays), splits-per-list, split (midpoint|median),\n"
          "min-origin-fraction, min-dir-fraction, dir-weight, threads\n"
          "(classification threads, 0 = one per core), task-rays, plan-rays,\n"
          "light-cells (auto|off|N: shadow rays sorted by direction cells),\n"

@@ -56,6 +56,7 @@ inline Params DeepParams(const scene::Scene& s) {
     p.planRays = 256;
     p.minRays = 4;
     p.minCandidates = 2;
+    p.lightMinCandidates = 2;
     p.splitGain = 1.0f;
     p.boxTestCost = 0.01f;
     p.rayMoveCost = 0.01f;

@@ -13,6 +13,7 @@ TEST(SetParam, SetsEveryNamedParameter) {
     Params p;
     SetParam(p, "min-rays", "8");
     SetParam(p, "min-candidates", "0");
+    SetParam(p, "light-min-candidates", "3");
     SetParam(p, "splits-per-list", "2");
     SetParam(p, "split", "median");
     SetParam(p, "min-origin-fraction", "0.001");
@@ -29,6 +30,7 @@ TEST(SetParam, SetsEveryNamedParameter) {
     EXPECT_EQ(p.planRays, 0u);
     EXPECT_EQ(p.minRays, 8u);
     EXPECT_EQ(p.minCandidates, 0u);
+    EXPECT_EQ(p.lightMinCandidates, 3u);
     EXPECT_EQ(p.splitsPerList, 2);
     EXPECT_EQ(p.splitRule, SplitRule::kMedian);
     EXPECT_FLOAT_EQ(p.minOriginFraction, 0.001f);

@@ -46,6 +46,10 @@ struct Params {
     // (docs/bench/README.md, "Cost-function defaults"). Only the ratios matter to the decision.
     uint32_t minRays = 64;        // a work-group's worth of rays: smaller leaves cost extra
     uint32_t minCandidates = 16;  // the device tests 16 candidates at once: fewer gain nothing
+    // minCandidates of the light cells' shadow rays (light_cells.h), whose leaves the device
+    // answers by packets of 16 rays that test one candidate at a time: each candidate a shorter
+    // list drops is a test saved.
+    uint32_t lightMinCandidates = 8;
     float triangleCost = 13.9f;
     float sphereCost = 5.2f;
     float quadricCost = 12.4f;
