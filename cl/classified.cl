@@ -43,6 +43,22 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_writ
     hits[ids[i]] = rc_no_hit(INFINITY);
 }
 
+/* Each triangle as its first vertex and two edges (p0, v1 - p0, v2 - p0, each a float4 whose w
+ * is unused): rc_packet_triangle's subtractions, done once per triangle by the same device
+ * arithmetic, so the edges are bit for bit those the test would compute. rc_fragment_nearest's
+ * loop over a scene of triangles alone then reads each component from memory as a broadcast
+ * operand, where the edges computed in registers took a shuffle per component and candidate on
+ * the pipes the loop's multiplies need. */
+__kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_triangle_edges(
+    __global const RcTriangle* triangles, uint n, __global float4* edges) {
+    const uint i = get_global_id(0);
+    if (i >= n) return;
+    const float4 p0 = triangles[i].v0;
+    edges[3 * i] = p0;
+    edges[3 * i + 1] = triangles[i].v1 - p0;
+    edges[3 * i + 2] = triangles[i].v2 - p0;
+}
+
 /* --- fragment style ----------------------------------------------------------------------- */
 
 typedef struct RcLanes16 {
@@ -188,27 +204,25 @@ RC_SHADE_INLINE void rc_prefetch_hits(__global RcHit* hits, __global const uint*
 /* How many candidates ahead of the one tested the triangle loops fetch a triangle. */
 #define RC_TRIANGLE_PREFETCH 4
 
-/* Candidate c + RC_TRIANGLE_PREFETCH's triangle of `leaf`, fetched while candidate c is tested:
- * a leaf's candidates lie scattered over the scene's triangles, and the test waits on each
- * triangle's load otherwise. */
+/* Candidate c + RC_TRIANGLE_PREFETCH's triangle of `leaf` in `records` (three float4s a triangle:
+ * RcTriangle, or rc_triangle_edges' records), fetched while candidate c is tested: a leaf's
+ * candidates lie scattered over the scene's triangles, and the test waits on each triangle's
+ * load otherwise. */
 RC_SHADE_INLINE void rc_prefetch_triangle(__global const RcCandidate* candidates,
-                                          __global const RcTriangle* triangles, RcLeaf leaf,
-                                          uint c) {
+                                          __global const float4* records, RcLeaf leaf, uint c) {
 #if defined(__x86_64__)
     if (c + RC_TRIANGLE_PREFETCH < leaf.candCount) {
-        __builtin_prefetch(triangles + candidates[leaf.candBegin + c + RC_TRIANGLE_PREFETCH].prim);
+        __builtin_prefetch(records +
+                           3 * candidates[leaf.candBegin + c + RC_TRIANGLE_PREFETCH].prim);
     }
 #endif
 }
 
-/* rc_intersect_triangle for 16 rays against one triangle, the same operations lane by lane:
- * the lanes that hit inside (tmin, tmax), with t, u and v. */
-RC_SHADE_INLINE int16 rc_packet_triangle(const RcLanes16* L, RcTriangle tri, float16* t,
-                                         float16* u, float16* v) {
+/* rc_intersect_triangle for 16 rays against the triangle of first vertex p0 and edges e1, e2,
+ * the same operations lane by lane: the lanes that hit inside (tmin, tmax), with t, u and v. */
+RC_SHADE_INLINE int16 rc_packet_triangle_edges(const RcLanes16* L, float3 p0, float3 e1, float3 e2,
+                                               float16* t, float16* u, float16* v) {
     const float16 Ox = L->ox, Oy = L->oy, Oz = L->oz, Dx = L->dx, Dy = L->dy, Dz = L->dz;
-    const float3 p0 = tri.v0.xyz;
-    const float3 e1 = tri.v1.xyz - p0;
-    const float3 e2 = tri.v2.xyz - p0;
     const float16 pvx = Dy * e2.z - e2.y * Dz;
     const float16 pvy = Dz * e2.x - e2.z * Dx;
     const float16 pvz = Dx * e2.y - e2.x * Dy;
@@ -223,6 +237,22 @@ RC_SHADE_INLINE int16 rc_packet_triangle(const RcLanes16* L, RcTriangle tri, flo
     *t = (e2.x * qvx + e2.y * qvy + e2.z * qvz) * invDet;
     return (det != 0.0f) & (*u >= 0.0f) & (*u <= 1.0f) & (*v >= 0.0f) & (*u + *v <= 1.0f) &
            (*t > L->tmin) & (*t < L->tmax);
+}
+
+/* rc_packet_triangle_edges of triangle `tri`. */
+RC_SHADE_INLINE int16 rc_packet_triangle(const RcLanes16* L, RcTriangle tri, float16* t,
+                                         float16* u, float16* v) {
+    const float3 p0 = tri.v0.xyz;
+    return rc_packet_triangle_edges(L, p0, tri.v1.xyz - p0, tri.v2.xyz - p0, t, u, v);
+}
+
+/* rc_packet_triangle_edges of triangle `prim` of rc_triangle_edges' array, its components read
+ * one by one from memory. */
+RC_SHADE_INLINE int16 rc_packet_edges(const RcLanes16* L, __global const float* edges, uint prim,
+                                      float16* t, float16* u, float16* v) {
+    __global const float* e = edges + 12 * prim;
+    return rc_packet_triangle_edges(L, (float3)(e[0], e[1], e[2]), (float3)(e[4], e[5], e[6]),
+                                    (float3)(e[8], e[9], e[10]), t, u, v);
 }
 
 /* rc_intersect_sphere for 16 rays against one sphere, the same operations lane by lane, below
@@ -299,6 +329,7 @@ RC_SHADE_INLINE int16 rc_packet_quadric(const RcLanes16* L, __global const RcQua
 RC_SHADE_INLINE uint rc_fragment_nearest(const RcLanes16* L, RcLeaf leaf,
                                          __global const RcCandidate* candidates,
                                          __global const RcTriangle* triangles,
+                                         __global const float4* edges,
                                          __global const RcSphere* spheres,
                                          __global const RcQuadric* quadrics, uint nT, uint nS,
                                          const bool trianglesOnly, float16* bestT,
@@ -315,8 +346,10 @@ RC_SHADE_INLINE uint rc_fragment_nearest(const RcLanes16* L, RcLeaf leaf,
         const uint prim = cand.prim;
         float16 t, u = 0.0f, v = 0.0f;
         int16 inside;
-        if (trianglesOnly) rc_prefetch_triangle(candidates, triangles, leaf, c);
-        if (trianglesOnly || prim < nT) {
+        if (trianglesOnly) {
+            rc_prefetch_triangle(candidates, edges, leaf, c);
+            inside = rc_packet_edges(L, (__global const float*)edges, prim, &t, &u, &v);
+        } else if (prim < nT) {
             inside = rc_packet_triangle(L, triangles[prim], &t, &u, &v);
         } else {
             /* rc_intersect_primitive's bound: a hit at exactly bestT may still win on its id. */
@@ -378,8 +411,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     __global const RcRay* rays, __global const uint* rayIndex, __global const uint* packetLeaf,
     __global const uint* packetFirst, uint nPackets, __global const RcLeaf* leaves,
     __global const RcCandidate* candidates, __global const RcTriangle* triangles,
-    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-    __constant const RcRenderParams* params, __global RcHit* hits, __global uint* tests) {
+    __global const float4* edges, __global const RcSphere* spheres,
+    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
+    __global RcHit* hits, __global uint* tests) {
     const uint p = get_global_id(0);
     if (p >= nPackets) return;
     const RcLeaf leaf = leaves[packetLeaf[p]];
@@ -394,10 +428,10 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
     const uint nT = params->nTriangles, nS = params->nSpheres;
     const uint c =
         nS == 0 && params->nQuadrics == 0
-            ? rc_fragment_nearest(&L, leaf, candidates, triangles, spheres, quadrics, nT, nS, true,
-                                  &bestT, &bestU, &bestV, &bestPrim)
-            : rc_fragment_nearest(&L, leaf, candidates, triangles, spheres, quadrics, nT, nS,
-                                  false, &bestT, &bestU, &bestV, &bestPrim);
+            ? rc_fragment_nearest(&L, leaf, candidates, triangles, edges, spheres, quadrics, nT,
+                                  nS, true, &bestT, &bestU, &bestV, &bestPrim)
+            : rc_fragment_nearest(&L, leaf, candidates, triangles, edges, spheres, quadrics, nT,
+                                  nS, false, &bestT, &bestU, &bestV, &bestPrim);
     const float16 t = select(bestT, (float16)(INFINITY), bestPrim == (uint16)(RC_NO_HIT));
     rc_store_hits(hits, ids, count, t, as_float16(bestPrim), bestU, bestV);
     tests[p] = c * count;
@@ -425,7 +459,9 @@ RC_SHADE_INLINE uint rc_fragment_any(const RcLanes16* L, RcLeaf leaf,
         /* Lists are sorted by nearX: a lane that has passed its end stays past it. */
         const int16 beyond = cand.nearX > endX;
         const uint prim = cand.prim;
-        if (trianglesOnly) rc_prefetch_triangle(candidates, triangles, leaf, c);
+        if (trianglesOnly) {
+            rc_prefetch_triangle(candidates, (__global const float4*)triangles, leaf, c);
+        }
         int16 blocks;
         if (trianglesOnly || prim < nT) {
             float16 t, u, v;

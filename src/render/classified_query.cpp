@@ -77,7 +77,8 @@ class ClassifiedQuery final : public RayQuery {
           queryFragment_(program, "rc_query_fragment"),
           occludedFragment_(program, "rc_occluded_fragment"),
           shadeIds_(program, "rc_shade16_ids"),
-          writeMisses_(program, "rc_write_misses") {}
+          writeMisses_(program, "rc_write_misses"),
+          edges_(TriangleEdges(ctx, program, buffers, uint32_t(scene.triangles.size()))) {}
 
     std::string Name() const override {
         return "classify/" + std::string(NameOf(kKernelStyles, style_));
@@ -185,6 +186,22 @@ class ClassifiedQuery final : public RayQuery {
     }
 
   private:
+    // rc_triangle_edges' records of the scene's triangles, which the nearest-hit fragment
+    // kernel's loop over a scene of triangles alone reads (one record, unread, for a scene
+    // without triangles).
+    static cl::Buffer TriangleEdges(clrt::Context& ctx, const cl::Program& program,
+                                    const SceneBuffers& scene, uint32_t nTriangles) {
+        cl::Buffer edges =
+            DeviceBuffer(ctx, std::max<size_t>(nTriangles, 1) * 3 * sizeof(rc_float4));
+        if (nTriangles == 0) return edges;
+        cl::Kernel k(program, "rc_triangle_edges");
+        SetArgs(k, scene.triangles, nTriangles, edges);
+        KernelTimer timer;
+        Launch(ctx, k, nTriangles, timer);
+        clrt::Check("clFinish", [&] { ctx.queue().finish(); });
+        return edges;
+    }
+
     // Shadow rays' leaves all take one style; auto takes packets. Any-hit queries let each
     // vertex-style ray stop at its first blocker, yet on PoCL lockstep packets were as fast or
     // faster (raybench's shadow-ray query kernels).
@@ -409,9 +426,15 @@ class ClassifiedQuery final : public RayQuery {
         const cl::Buffer& packetFirst = packetFirstBuf_.Share(ctx_, packetFirst_);
         const cl::Buffer& testsBuf = fragmentTestsBuf_.Reserve(ctx_, nPackets * sizeof(uint32_t));
         cl::Kernel& k = shadow ? occludedFragment_ : queryFragment_;
-        SetArgs(k, rays, arrays.rayIndex, packetLeaf, packetFirst, nPackets, arrays.leaves,
-                arrays.candidates, scene_.triangles, scene_.spheres, scene_.quadrics, scene_.params,
-                out, testsBuf);
+        if (shadow) {
+            SetArgs(k, rays, arrays.rayIndex, packetLeaf, packetFirst, nPackets, arrays.leaves,
+                    arrays.candidates, scene_.triangles, scene_.spheres, scene_.quadrics,
+                    scene_.params, out, testsBuf);
+        } else {
+            SetArgs(k, rays, arrays.rayIndex, packetLeaf, packetFirst, nPackets, arrays.leaves,
+                    arrays.candidates, scene_.triangles, edges_, scene_.spheres, scene_.quadrics,
+                    scene_.params, out, testsBuf);
+        }
         AddHostSeconds(Seconds(t0));
         Launch(ctx_, k, nPackets, timer);
         return SumTests(testsBuf, nPackets);
@@ -480,6 +503,7 @@ class ClassifiedQuery final : public RayQuery {
     std::vector<uint32_t> allLeaves_, vertexSlots_, vertexRayLeaf_, blockLeaf_, blockFirst_,
         leafFirstBlock_, packetLeaf_, packetFirst_, testsHost_, unshaded_;
     std::vector<uint8_t> shadedByVertex_;
+    cl::Buffer edges_;  // TriangleEdges
     GrowingBuffer leavesBuf_, rayIndexBuf_, candidatesBuf_, rayLeafBuf_, testsBuf_, blockLeafBuf_,
         blockFirstBuf_, leafFirstBlockBuf_, slotsBuf_, blocksBuf_, packetLeafBuf_, packetFirstBuf_,
         fragmentTestsBuf_, unshadedBuf_, missedBuf_;
