@@ -45,10 +45,10 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_writ
 
 /* Each triangle as its first vertex and two edges (p0, v1 - p0, v2 - p0, each a float4 whose w
  * is unused): rc_packet_triangle's subtractions, done once per triangle by the same device
- * arithmetic, so the edges are bit for bit those the test would compute. rc_fragment_nearest's
- * loop over a scene of triangles alone then reads each component from memory as a broadcast
- * operand, where the edges computed in registers took a shuffle per component and candidate on
- * the pipes the loop's multiplies need. */
+ * arithmetic, so the edges are bit for bit those the test would compute. The fragment loops over
+ * a scene of triangles alone then read each component from memory as a broadcast operand, where
+ * the edges computed in registers took a shuffle per component and candidate on the pipes the
+ * loops' multiplies need. */
 __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_triangle_edges(
     __global const RcTriangle* triangles, uint n, __global float4* edges) {
     const uint i = get_global_id(0);
@@ -204,16 +204,14 @@ RC_SHADE_INLINE void rc_prefetch_hits(__global RcHit* hits, __global const uint*
 /* How many candidates ahead of the one tested the triangle loops fetch a triangle. */
 #define RC_TRIANGLE_PREFETCH 4
 
-/* Candidate c + RC_TRIANGLE_PREFETCH's triangle of `leaf` in `records` (three float4s a triangle:
- * RcTriangle, or rc_triangle_edges' records), fetched while candidate c is tested: a leaf's
- * candidates lie scattered over the scene's triangles, and the test waits on each triangle's
- * load otherwise. */
+/* Candidate c + RC_TRIANGLE_PREFETCH's triangle of `leaf` in rc_triangle_edges' array, fetched
+ * while candidate c is tested: a leaf's candidates lie scattered over the scene's triangles, and
+ * the test waits on each triangle's load otherwise. */
 RC_SHADE_INLINE void rc_prefetch_triangle(__global const RcCandidate* candidates,
-                                          __global const float4* records, RcLeaf leaf, uint c) {
+                                          __global const float4* edges, RcLeaf leaf, uint c) {
 #if defined(__x86_64__)
     if (c + RC_TRIANGLE_PREFETCH < leaf.candCount) {
-        __builtin_prefetch(records +
-                           3 * candidates[leaf.candBegin + c + RC_TRIANGLE_PREFETCH].prim);
+        __builtin_prefetch(edges + 3 * candidates[leaf.candBegin + c + RC_TRIANGLE_PREFETCH].prim);
     }
 #endif
 }
@@ -445,6 +443,7 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_quer
 RC_SHADE_INLINE uint rc_fragment_any(const RcLanes16* L, RcLeaf leaf,
                                      __global const RcCandidate* candidates,
                                      __global const RcTriangle* triangles,
+                                     __global const float4* edges,
                                      __global const RcSphere* spheres,
                                      __global const RcQuadric* quadrics, uint nT, uint nS,
                                      const bool trianglesOnly, float16 endX, int16* hit) {
@@ -459,11 +458,12 @@ RC_SHADE_INLINE uint rc_fragment_any(const RcLanes16* L, RcLeaf leaf,
         /* Lists are sorted by nearX: a lane that has passed its end stays past it. */
         const int16 beyond = cand.nearX > endX;
         const uint prim = cand.prim;
-        if (trianglesOnly) {
-            rc_prefetch_triangle(candidates, (__global const float4*)triangles, leaf, c);
-        }
         int16 blocks;
-        if (trianglesOnly || prim < nT) {
+        if (trianglesOnly) {
+            rc_prefetch_triangle(candidates, edges, leaf, c);
+            float16 t, u, v;
+            blocks = rc_packet_edges(L, (__global const float*)edges, prim, &t, &u, &v);
+        } else if (prim < nT) {
             float16 t, u, v;
             blocks = rc_packet_triangle(L, triangles[prim], &t, &u, &v);
         } else if (prim < nT + nS) {
@@ -491,8 +491,9 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     __global const RcRay* rays, __global const uint* rayIndex, __global const uint* packetLeaf,
     __global const uint* packetFirst, uint nPackets, __global const RcLeaf* leaves,
     __global const RcCandidate* candidates, __global const RcTriangle* triangles,
-    __global const RcSphere* spheres, __global const RcQuadric* quadrics,
-    __constant const RcRenderParams* params, __global uchar* blocked, __global uint* tests) {
+    __global const float4* edges, __global const RcSphere* spheres,
+    __global const RcQuadric* quadrics, __constant const RcRenderParams* params,
+    __global uchar* blocked, __global uint* tests) {
     const uint p = get_global_id(0);
     if (p >= nPackets) return;
     const RcLeaf leaf = leaves[packetLeaf[p]];
@@ -507,10 +508,10 @@ __kernel __attribute__((reqd_work_group_size(RC_LOCAL_SIZE, 1, 1))) void rc_occl
     /* Only a scene of triangles alone: a candidate c + RC_TRIANGLE_PREFETCH may be another
      * primitive, whose id does not index the triangles. */
     const uint c = nS == 0 && params->nQuadrics == 0
-                       ? rc_fragment_any(&L, leaf, candidates, triangles, spheres, quadrics, nT,
-                                         nS, true, endX, &hit)
-                       : rc_fragment_any(&L, leaf, candidates, triangles, spheres, quadrics, nT,
-                                         nS, false, endX, &hit);
+                       ? rc_fragment_any(&L, leaf, candidates, triangles, edges, spheres,
+                                         quadrics, nT, nS, true, endX, &hit)
+                       : rc_fragment_any(&L, leaf, candidates, triangles, edges, spheres,
+                                         quadrics, nT, nS, false, endX, &hit);
     const uchar16 flags = convert_uchar16(hit & 1);
 #pragma unroll
     for (uint k = 0; k < 16; ++k) {

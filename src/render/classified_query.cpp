@@ -186,9 +186,8 @@ class ClassifiedQuery final : public RayQuery {
     }
 
   private:
-    // rc_triangle_edges' records of the scene's triangles, which the nearest-hit fragment
-    // kernel's loop over a scene of triangles alone reads (one record, unread, for a scene
-    // without triangles).
+    // rc_triangle_edges' records of the scene's triangles, which the fragment kernels' loops
+    // over a scene of triangles alone read (one record, unread, for a scene without triangles).
     static cl::Buffer TriangleEdges(clrt::Context& ctx, const cl::Program& program,
                                     const SceneBuffers& scene, uint32_t nTriangles) {
         cl::Buffer edges =
@@ -426,15 +425,9 @@ class ClassifiedQuery final : public RayQuery {
         const cl::Buffer& packetFirst = packetFirstBuf_.Share(ctx_, packetFirst_);
         const cl::Buffer& testsBuf = fragmentTestsBuf_.Reserve(ctx_, nPackets * sizeof(uint32_t));
         cl::Kernel& k = shadow ? occludedFragment_ : queryFragment_;
-        if (shadow) {
-            SetArgs(k, rays, arrays.rayIndex, packetLeaf, packetFirst, nPackets, arrays.leaves,
-                    arrays.candidates, scene_.triangles, scene_.spheres, scene_.quadrics,
-                    scene_.params, out, testsBuf);
-        } else {
-            SetArgs(k, rays, arrays.rayIndex, packetLeaf, packetFirst, nPackets, arrays.leaves,
-                    arrays.candidates, scene_.triangles, edges_, scene_.spheres, scene_.quadrics,
-                    scene_.params, out, testsBuf);
-        }
+        SetArgs(k, rays, arrays.rayIndex, packetLeaf, packetFirst, nPackets, arrays.leaves,
+                arrays.candidates, scene_.triangles, edges_, scene_.spheres, scene_.quadrics,
+                scene_.params, out, testsBuf);
         AddHostSeconds(Seconds(t0));
         Launch(ctx_, k, nPackets, timer);
         return SumTests(testsBuf, nPackets);
