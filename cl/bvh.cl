@@ -652,6 +652,253 @@ static inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
     }
 }
 
+/* --- nearest-hit packets walked as two halves of eight lanes ----------------------------------
+ * A bundled packet's lanes share fewer nodes than a coherent one's: walked as one, each lane rides
+ * along into the nodes and leaves of the other fifteen. Its halves, walked one after the other,
+ * visit fewer per lane; on cores that split a 16-lane operation into two of eight lanes (Zen 4)
+ * a half costs about half the arithmetic of the whole packet. The operations lane by lane are
+ * those of rc_bvh_trace_packet (and so of the single-ray walk's tests), so the hits are the same.
+ */
+typedef struct RcBvhPacket8 {
+    float8 ox, oy, oz, dx, dy, dz, ix, iy, iz, tmin, tmax;
+    int8 active;
+} RcBvhPacket8;
+
+static inline int rc_any8(int8 m) {
+#ifdef RC_HAVE_REDUCE_MASK
+    return __builtin_reduce_or(m < 0) != 0;
+#else
+    const int4 m4 = m.lo | m.hi;
+    const int2 m2 = m4.lo | m4.hi;
+    return (m2.x | m2.y) < 0;
+#endif
+}
+static inline float rc_hmin8_ordered(float8 a) {
+    const float4 m4 = select(a.hi, a.lo, a.lo < a.hi);
+    const float2 m2 = select(m4.hi, m4.lo, m4.lo < m4.hi);
+    return m2.x < m2.y ? m2.x : m2.y;
+}
+static inline float rc_hmax8_ordered(float8 a) {
+    const float4 m4 = select(a.hi, a.lo, a.lo > a.hi);
+    const float2 m2 = select(m4.hi, m4.lo, m4.lo > m4.hi);
+    return m2.x > m2.y ? m2.x : m2.y;
+}
+static inline float rc_active_min8(float8 a, int8 active) {
+    const float8 m8 = select((float8)(INFINITY), a, active);
+    const float4 m4 = fmin(m8.lo, m8.hi);
+    const float2 m2 = fmin(m4.lo, m4.hi);
+    return fmin(m2.x, m2.y);
+}
+static inline float rc_active_max8(float8 a, int8 active) {
+    const float8 m8 = select((float8)(-INFINITY), a, active);
+    const float4 m4 = fmax(m8.lo, m8.hi);
+    const float2 m2 = fmax(m4.lo, m4.hi);
+    return fmax(m2.x, m2.y);
+}
+
+/* Lanes 8 * upper .. 8 * upper + 7 of p. */
+static inline RcBvhPacket8 rc_packet_half(const RcBvhPacket* p, int upper) {
+    RcBvhPacket8 h;
+#define RC_HALF(f) h.f = upper ? p->f.hi : p->f.lo
+    RC_HALF(ox), RC_HALF(oy), RC_HALF(oz), RC_HALF(dx), RC_HALF(dy), RC_HALF(dz);
+    RC_HALF(ix), RC_HALF(iy), RC_HALF(iz), RC_HALF(tmin), RC_HALF(tmax), RC_HALF(active);
+#undef RC_HALF
+    return h;
+}
+
+/* rc_bvh_packet_triangle on eight lanes. */
+static inline int8 rc_bvh_packet_triangle8(const RcBvhPacket8* p, __global const float* leaf,
+                                           uint count, uint k, float8* tOut, float8* uOut,
+                                           float8* vOut) {
+    __global const float* w = leaf + k;
+    const float e1x = w[3 * count], e1y = w[4 * count], e1z = w[5 * count];
+    const float e2x = w[6 * count], e2y = w[7 * count], e2z = w[8 * count];
+    const float8 pvx = p->dy * e2z - e2y * p->dz;
+    const float8 pvy = p->dz * e2x - e2z * p->dx;
+    const float8 pvz = p->dx * e2y - e2x * p->dy;
+    const float8 det = e1x * pvx + e1y * pvy + e1z * pvz;
+    const float8 invDet = 1.0f / det;
+    const float8 tvx = p->ox - w[0];
+    const float8 tvy = p->oy - w[count];
+    const float8 tvz = p->oz - w[2 * count];
+    const float8 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
+    const float8 qvx = tvy * e1z - e1y * tvz;
+    const float8 qvy = tvz * e1x - e1z * tvx;
+    const float8 qvz = tvx * e1y - e1x * tvy;
+    const float8 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
+    const float8 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
+    *tOut = t;
+    *uOut = u;
+    *vOut = v;
+    return (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) & (u + v <= 1.0f) &
+           (t > p->tmin) & (t < p->tmax);
+}
+
+/* rc_packet_slabs of the half's active lanes. */
+static inline RcBvhSlabs rc_packet_slabs8(const RcBvhPacket8* p) {
+    RcBvhSlabs s;
+    rc_slabs_axis(rc_active_min8(p->ox, p->active), rc_active_max8(p->ox, p->active),
+                  rc_active_min8(p->ix, p->active), rc_active_max8(p->ix, p->active), 0, &s);
+    rc_slabs_axis(rc_active_min8(p->oy, p->active), rc_active_max8(p->oy, p->active),
+                  rc_active_min8(p->iy, p->active), rc_active_max8(p->iy, p->active), 1, &s);
+    rc_slabs_axis(rc_active_min8(p->oz, p->active), rc_active_max8(p->oz, p->active),
+                  rc_active_min8(p->iz, p->active), rc_active_max8(p->iz, p->active), 2, &s);
+    return s;
+}
+
+/* RcPacketPlanes on eight lanes. */
+typedef struct RcPacketPlanes8 {
+    float8 nearOff[3], farOff[3];
+    int nearPlanes[3], farPlanes[3];
+    int usable;
+} RcPacketPlanes8;
+
+static inline int8 rc_planes_axis8(float8 o, float8 inv, int positive, int a, RcPacketPlanes8* q) {
+    const float8 oi = o * inv;
+    const float8 m = fabs(oi) * 0x1p-22f;
+    q->nearOff[a] = -oi - m;
+    q->farOff[a] = -oi + m;
+    q->nearPlanes[a] = rc_bvh_near_planes(positive, a);
+    q->farPlanes[a] = rc_bvh_far_planes(q->nearPlanes[a]);
+    return isfinite(q->nearOff[a]) & isfinite(q->farOff[a]);
+}
+
+static inline RcPacketPlanes8 rc_packet_planes8(const RcBvhPacket8* p, const RcBvhSlabs* s) {
+    RcPacketPlanes8 q;
+    const int8 finite = rc_planes_axis8(p->ox, p->ix, s->positive[0], 0, &q) &
+                        rc_planes_axis8(p->oy, p->iy, s->positive[1], 1, &q) &
+                        rc_planes_axis8(p->oz, p->iz, s->positive[2], 2, &q);
+    q.usable = rc_slabs_one_octant(s) && !rc_any8(p->active & ~finite);
+    return q;
+}
+
+/* rc_packet_child on eight lanes. */
+static inline void rc_packet_child8(const RcBvhPacket8* p, const RcPacketPlanes8* q,
+                                    __global const RcBvh8Node* nd, uint c, float8* tn, float8* tf) {
+    if (q->usable) {
+        __global const float* planes = rc_bvh_planes(nd) + c;
+        const float8 nx = fma((float8)(planes[q->nearPlanes[0]]), p->ix, q->nearOff[0]);
+        const float8 ny = fma((float8)(planes[q->nearPlanes[1]]), p->iy, q->nearOff[1]);
+        const float8 nz = fma((float8)(planes[q->nearPlanes[2]]), p->iz, q->nearOff[2]);
+        const float8 fx = fma((float8)(planes[q->farPlanes[0]]), p->ix, q->farOff[0]);
+        const float8 fy = fma((float8)(planes[q->farPlanes[1]]), p->iy, q->farOff[1]);
+        const float8 fz = fma((float8)(planes[q->farPlanes[2]]), p->iz, q->farOff[2]);
+        *tn = rc_max8(rc_max8(nx, ny), rc_max8(nz, p->tmin));
+        *tf = rc_min8(rc_min8(fx, fy), fz) * 1.0000004f;
+        return;
+    }
+    const float8 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
+    const float8 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
+    const float8 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
+    *tn = rc_max8(rc_max8(rc_min8(ax, bx), rc_min8(ay, by)), rc_max8(rc_min8(az, bz), p->tmin));
+    *tf = rc_min8(rc_min8(rc_max8(ax, bx), rc_max8(ay, by)), rc_max8(az, bz)) * 1.0000004f;
+}
+
+/* rc_bvh_trace_packet's nearest-hit walk on eight lanes. */
+static inline uint8 rc_bvh_trace_packet8(const RcBvhPacket8* p, __global const RcBvh8Node* nodes,
+                                         __global const float* leaves, float8* btOut, uint8* bpOut,
+                                         float8* buOut, float8* bvOut) {
+    uint stackRef[RC_BVH_STACK];
+    float stackT[RC_BVH_STACK];
+    int sp = 0;
+    uint ref = 0;
+    uint8 tests = (uint8)(0);
+    const int8 active = p->active;
+    float8 bt = *btOut, bu = *buOut, bv = *bvOut;
+    uint8 bp = *bpOut;
+    const RcBvhSlabs span = rc_packet_slabs8(p);
+    const RcPacketPlanes8 planes = rc_packet_planes8(p, &span);
+    const float spanTmin = rc_active_min8(p->tmin, p->active);
+    const int8 laneBit = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+    float far = rc_hmax8_ordered(select((float8)(-INFINITY), bt, active));
+    for (;;) {
+        if (ref & RC_BVH8_LEAF) {
+            const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
+            __global const float* leaf = leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN;
+            tests += as_uint8(active) & (uint8)(count);
+            for (uint k = 0; k < count; ++k) {
+                float8 t, u, v;
+                const int8 crosses = rc_bvh_packet_triangle8(p, leaf, count, k, &t, &u, &v);
+                const uint8 prim8 = (uint8)(rc_leaf_prim(leaf, count, k));
+                const int8 hit = active & crosses & ((t < bt) | ((t == bt) & (prim8 < bp)));
+                bt = select(bt, t, hit);
+                bp = select(bp, prim8, as_uint8(hit));
+                bu = select(bu, u, hit);
+                bv = select(bv, v, hit);
+            }
+            far = rc_hmax8_ordered(select((float8)(-INFINITY), bt, active));
+        } else {
+            __global const RcBvh8Node* nd = nodes + ref;
+            const float8 reach = rc_min8(p->tmax, bt);
+            float8 sn = (float8)(spanTmin), sf = (float8)(INFINITY);
+            rc_slabs_test(&span, 0, nd, &sn, &sf);
+            rc_slabs_test(&span, 1, nd, &sn, &sf);
+            rc_slabs_test(&span, 2, nd, &sn, &sf);
+            const int8 may = (sn <= rc_min8(sf * 1.0000004f, (float8)(far))) &
+                             (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
+            const int4 m4 = may.lo | may.hi;
+            const int2 m2 = m4.lo | m4.hi;
+            uint r[8];
+            float t[8];
+            int k = 0;
+            for (int mask = m2.x | m2.y; mask != 0; mask &= mask - 1) {
+                const int c = popcount((mask & -mask) - 1);
+                float8 tn, tf;
+                rc_packet_child8(p, &planes, nd, c, &tn, &tf);
+                const int8 enters = active & (tn <= rc_min8(tf, reach));
+                if (!rc_any8(enters)) continue;
+                const float near = rc_hmin8_ordered(select((float8)(INFINITY), tn, enters));
+                int j = k++;
+                for (; j > 0 && t[j - 1] > near; --j) {
+                    t[j] = t[j - 1];
+                    r[j] = r[j - 1];
+                }
+                t[j] = near;
+                r[j] = nd->child[c];
+            }
+            if (k > 0) {
+                for (int j = k - 1; j > 0; --j) {
+                    stackRef[sp] = r[j];
+                    stackT[sp++] = t[j];
+                }
+                ref = r[0];
+                continue;
+            }
+        }
+        for (;;) {
+            if (sp == 0) {
+                *btOut = bt, *bpOut = bp, *buOut = bu, *bvOut = bv;
+                return tests;
+            }
+            --sp;
+            if (stackT[sp] <= far) break;
+        }
+        ref = stackRef[sp];
+    }
+}
+
+/* The nearest hits of p's lanes by its two halves' walks. */
+static inline uint16 rc_bvh_trace_halves(const RcBvhPacket* p, __global const RcBvh8Node* nodes,
+                                         __global const float* leaves, float16* bt, uint16* bp,
+                                         float16* bu, float16* bv) {
+    float8 t[2], u[2], v[2];
+    uint8 prim[2], tests[2];
+    for (int h = 0; h < 2; ++h) {
+        const RcBvhPacket8 q = rc_packet_half(p, h);
+        t[h] = q.tmax;
+        u[h] = v[h] = (float8)(0.0f);
+        prim[h] = (uint8)(RC_NO_HIT);
+        tests[h] = (uint8)(0);
+        if (rc_any8(q.active))
+            tests[h] = rc_bvh_trace_packet8(&q, nodes, leaves, &t[h], &prim[h], &u[h], &v[h]);
+    }
+    *bt = (float16)(t[0], t[1]);
+    *bp = (uint16)(prim[0], prim[1]);
+    *bu = (float16)(u[0], u[1]);
+    *bv = (float16)(v[0], v[1]);
+    return (uint16)(tests[0], tests[1]);
+}
+
 /* --- shadow packets as one beam ------------------------------------------------------------
  * Shadow rays toward a point light all end there: walked backwards from their ends they leave
  * (nearly) one point, and a coherent packet of them is a narrow beam. One interval slab test of
@@ -837,10 +1084,10 @@ static inline int rc_bvh_packet_bundled(const RcBvhPacket* p, __global const RcR
 }
 
 /* The answers of rays [first, first + 16) (rays order[first + k] where order is given): nearest
- * hits, or with anyHit blocked flags; tests[ray] its primitive tests. A coherent packet, or a
- * bundled packet of nearest-hit rays, walks the tree once, other rays one by one. Shadow
- * packets whose ends meet (a point light) walk as a beam, whatever their origins' spread, when
- * sorted by their directions from the light (ShadowOrder): their directions then lie close. */
+ * hits, or with anyHit blocked flags; tests[ray] its primitive tests. A coherent packet walks
+ * the tree once, a bundled packet of nearest-hit rays as its two halves, other rays one by one.
+ * Shadow packets whose ends meet (a point light) walk as a beam, whatever their origins' spread,
+ * when sorted by their directions from the light (ShadowOrder): their directions then lie close. */
 static inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, __global const uint* order,
                                  uint first, uint n, __global const RcBvh8Node* nodes,
                                  __global const float* leaves, __global const RcTriangle* triangles,
@@ -864,7 +1111,15 @@ static inline void rc_bvh_answer(int anyHit, __global const RcRay* rays, __globa
             return;
         }
     }
-    if (coherent || (allowed && !anyHit && rc_bvh_packet_bundled(&p, rays, first, n))) {
+    if (!coherent && allowed && !anyHit && rc_bvh_packet_bundled(&p, rays, first, n)) {
+        float16 bt, bu, bv;
+        uint16 bp;
+        const uint16 count = rc_bvh_trace_halves(&p, nodes, leaves, &bt, &bp, &bu, &bv);
+        rc_packet_store_hits(first, n, bt, bp, bu, bv, order, hits);
+        rc_packet_store_counts(first, n, count, order, tests);
+        return;
+    }
+    if (coherent) {
         float16 bt = p.tmax, bu = (float16)(0.0f), bv = (float16)(0.0f);
         uint16 bp = (uint16)(RC_NO_HIT);
         int16 blocked = (int16)(0);

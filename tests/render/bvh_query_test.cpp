@@ -216,7 +216,8 @@ std::vector<RcRay> ScatteredRaysOfMixedReach(bool emptySlots) {
 // Packets of 16 rays from random points of the grid, each lane's direction turned 20 degrees
 // from the lane before it about a random axis: no 12 lanes lie within 30 degrees of the packet's
 // first or last ray, but every lane within 30 degrees of the one before it, so the nearest-hit
-// kernel walks each packet as one (rc_bvh_packet_bundled, cl/bvh.cl) over rays in every octant.
+// kernel walks each packet as bundled (rc_bvh_packet_bundled, cl/bvh.cl), as its two halves of
+// eight lanes (rc_bvh_trace_halves), over rays in every octant.
 std::vector<RcRay> TurningPackets() {
     std::mt19937 rng(29);
     std::uniform_real_distribution<float> pos(-0.5f, 3.5f), dir(-1.0f, 1.0f);
