@@ -281,11 +281,93 @@ static inline uint rc_bvh_trace(float3 o, float3 d, float tmin, float tmax, int 
 static inline float16 rc_min16(float16 a, float16 b) { return select(b, a, a < b); }
 static inline float16 rc_max16(float16 a, float16 b) { return select(b, a, a > b); }
 
-/* The rays of a packet, the lanes over the rays; inactive lanes hold a harmless ray. */
-typedef struct RcBvhPacket {
-    float16 ox, oy, oz, dx, dy, dz, ix, iy, iz, tmin, tmax;
-    int16 active;
-} RcBvhPacket;
+/* The reductions of vec16.cl on eight lanes, for the halves' walks. */
+static inline int rc_any8(int8 m) {
+#ifdef RC_HAVE_REDUCE_MASK
+    return __builtin_reduce_or(m < 0) != 0;
+#else
+    const int4 m4 = m.lo | m.hi;
+    const int2 m2 = m4.lo | m4.hi;
+    return (m2.x | m2.y) < 0;
+#endif
+}
+static inline float rc_hmin8_ordered(float8 a) {
+    const float4 m4 = select(a.hi, a.lo, a.lo < a.hi);
+    const float2 m2 = select(m4.hi, m4.lo, m4.lo < m4.hi);
+    return m2.x < m2.y ? m2.x : m2.y;
+}
+static inline float rc_hmax8_ordered(float8 a) {
+    const float4 m4 = select(a.hi, a.lo, a.lo > a.hi);
+    const float2 m2 = select(m4.hi, m4.lo, m4.lo > m4.hi);
+    return m2.x > m2.y ? m2.x : m2.y;
+}
+static inline float rc_active_min8(float8 a, int8 active) {
+    const float8 m8 = select((float8)(INFINITY), a, active);
+    const float4 m4 = fmin(m8.lo, m8.hi);
+    const float2 m2 = fmin(m4.lo, m4.hi);
+    return fmin(m2.x, m2.y);
+}
+static inline float rc_active_max8(float8 a, int8 active) {
+    const float8 m8 = select((float8)(-INFINITY), a, active);
+    const float4 m4 = fmax(m8.lo, m8.hi);
+    const float2 m2 = fmax(m4.lo, m4.hi);
+    return fmax(m2.x, m2.y);
+}
+
+/* Rays as intervals, for one slab test of a node's eight boxes that culls a box only when no
+ * ray can enter it: along each axis the points the distances are taken from within [lo, hi] and
+ * the inverse directions within [iLo, iHi]. Rounding to nearest is monotonic, so the slab test's
+ * own operations on the intervals' ends bound every ray's distances; an axis whose inverse
+ * directions differ in sign bounds nothing. */
+typedef struct RcBvhSlabs {
+    float nearP[3], farP[3]; /* the points the entry and the exit distances are taken from */
+    float iLo[3], iHi[3];
+    int positive[3], bounded[3];
+    int nearPlanes[3], farPlanes[3]; /* the boxes' sides they are taken to, in rc_bvh_planes */
+} RcBvhSlabs;
+
+static inline void rc_slabs_axis(float lo, float hi, float iLo, float iHi, int a, RcBvhSlabs* s) {
+    s->iLo[a] = iLo;
+    s->iHi[a] = iHi;
+    s->positive[a] = iLo > 0.0f;
+    s->bounded[a] = s->positive[a] || iHi < 0.0f;
+    s->nearP[a] = s->positive[a] ? hi : lo;
+    s->farP[a] = s->positive[a] ? lo : hi;
+    s->nearPlanes[a] = rc_bvh_near_planes(s->positive[a], a);
+    s->farPlanes[a] = rc_bvh_far_planes(s->nearPlanes[a]);
+}
+
+/* Whether every axis bounds the distances (the inverse directions in one octant). */
+static inline int rc_slabs_one_octant(const RcBvhSlabs* s) {
+    return s->bounded[0] && s->bounded[1] && s->bounded[2];
+}
+
+/* The least entry and the largest exit distance over the intervals' rays through the slabs
+ * of one axis of nd's eight boxes, folded into *tn and *tf: only the sides the intervals enter
+ * and leave by are loaded. The walks call it per axis: the three calls wrapped in one more
+ * function made both walks slower on PoCL. */
+static inline void rc_slabs_test(const RcBvhSlabs* s, int a, __global const RcBvh8Node* nd,
+                                 float8* tn, float8* tf) {
+    if (!s->bounded[a]) return;
+    __global const float* planes = rc_bvh_planes(nd);
+    const float8 n = vload8(0, planes + s->nearPlanes[a]) - s->nearP[a];
+    const float8 f = vload8(0, planes + s->farPlanes[a]) - s->farP[a];
+    *tn = rc_max8(*tn, n * select((float8)(s->iHi[a]), (float8)(s->iLo[a]), n >= 0.0f));
+    *tf = rc_min8(*tf, f * select((float8)(s->iLo[a]), (float8)(s->iHi[a]), f >= 0.0f));
+}
+
+/* The packet walk at 16 lanes (RcBvhPacket, rc_bvh_trace_packet, ...) and at eight
+ * (RcBvhPacket8, rc_bvh_trace_packet8, ...). */
+#define RC_W 16
+#define RC_W_NAME(name) name
+#include "bvh_packet.inc.cl"
+#undef RC_W
+#undef RC_W_NAME
+#define RC_W 8
+#define RC_W_NAME(name) name##8
+#include "bvh_packet.inc.cl"
+#undef RC_W
+#undef RC_W_NAME
 
 /* The packet's nearest hits (bt, bp, bu, bv) as the answers of rays [first, first + 16) below
  * n, a lane without a hit as t = inf. Lane k answers ray order[first + k] where order is given
@@ -403,298 +485,14 @@ static inline int rc_bvh_load_packet(__global const RcRay* rays, __global const 
     return coherent;
 }
 
-/* Triangle k of a leaf run of `count` primitives at `leaf` against the packet's rays,
- * rc_intersect_triangle's operations lane by lane: t, u and v per ray, and the rays that cross
- * the triangle between their tmin and tmax. */
-static inline int16 rc_bvh_packet_triangle(const RcBvhPacket* p, __global const float* leaf,
-                                           uint count, uint k, float16* tOut, float16* uOut,
-                                           float16* vOut) {
-    /* lane k of the run's arrays */
-    __global const float* w = leaf + k;
-    const float e1x = w[3 * count], e1y = w[4 * count], e1z = w[5 * count];
-    const float e2x = w[6 * count], e2y = w[7 * count], e2z = w[8 * count];
-    const float16 pvx = p->dy * e2z - e2y * p->dz;
-    const float16 pvy = p->dz * e2x - e2z * p->dx;
-    const float16 pvz = p->dx * e2y - e2x * p->dy;
-    const float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
-    const float16 invDet = 1.0f / det;
-    const float16 tvx = p->ox - w[0];
-    const float16 tvy = p->oy - w[count];
-    const float16 tvz = p->oz - w[2 * count];
-    const float16 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
-    const float16 qvx = tvy * e1z - e1y * tvz;
-    const float16 qvy = tvz * e1x - e1z * tvx;
-    const float16 qvz = tvx * e1y - e1x * tvy;
-    const float16 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
-    const float16 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
-    *tOut = t;
-    *uOut = u;
-    *vOut = v;
-    return (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) & (u + v <= 1.0f) &
-           (t > p->tmin) & (t < p->tmax);
-}
-
-/* Rays as intervals, for one slab test of a node's eight boxes that culls a box only when no
- * ray can enter it: along each axis the points the distances are taken from within [lo, hi] and
- * the inverse directions within [iLo, iHi]. Rounding to nearest is monotonic, so the slab test's
- * own operations on the intervals' ends bound every ray's distances; an axis whose inverse
- * directions differ in sign bounds nothing. */
-typedef struct RcBvhSlabs {
-    float nearP[3], farP[3]; /* the points the entry and the exit distances are taken from */
-    float iLo[3], iHi[3];
-    int positive[3], bounded[3];
-    int nearPlanes[3], farPlanes[3]; /* the boxes' sides they are taken to, in rc_bvh_planes */
-} RcBvhSlabs;
-
-static inline void rc_slabs_axis(float lo, float hi, float iLo, float iHi, int a, RcBvhSlabs* s) {
-    s->iLo[a] = iLo;
-    s->iHi[a] = iHi;
-    s->positive[a] = iLo > 0.0f;
-    s->bounded[a] = s->positive[a] || iHi < 0.0f;
-    s->nearP[a] = s->positive[a] ? hi : lo;
-    s->farP[a] = s->positive[a] ? lo : hi;
-    s->nearPlanes[a] = rc_bvh_near_planes(s->positive[a], a);
-    s->farPlanes[a] = rc_bvh_far_planes(s->nearPlanes[a]);
-}
-
-/* Whether every axis bounds the distances (the inverse directions in one octant). */
-static inline int rc_slabs_one_octant(const RcBvhSlabs* s) {
-    return s->bounded[0] && s->bounded[1] && s->bounded[2];
-}
-
-/* The least entry and the largest exit distance over the intervals' rays through the slabs
- * of one axis of nd's eight boxes, folded into *tn and *tf: only the sides the intervals enter
- * and leave by are loaded. The walks call it per axis: the three calls wrapped in one more
- * function made both walks slower on PoCL. */
-static inline void rc_slabs_test(const RcBvhSlabs* s, int a, __global const RcBvh8Node* nd,
-                                 float8* tn, float8* tf) {
-    if (!s->bounded[a]) return;
-    __global const float* planes = rc_bvh_planes(nd);
-    const float8 n = vload8(0, planes + s->nearPlanes[a]) - s->nearP[a];
-    const float8 f = vload8(0, planes + s->farPlanes[a]) - s->farP[a];
-    *tn = rc_max8(*tn, n * select((float8)(s->iHi[a]), (float8)(s->iLo[a]), n >= 0.0f));
-    *tf = rc_min8(*tf, f * select((float8)(s->iLo[a]), (float8)(s->iHi[a]), f >= 0.0f));
-}
-
-/* The packet's active lanes as intervals: their origins and inverse directions. */
-static inline RcBvhSlabs rc_packet_slabs(const RcBvhPacket* p) {
-    RcBvhSlabs s;
-    rc_slabs_axis(rc_active_min16(p->ox, p->active), rc_active_max16(p->ox, p->active),
-                  rc_active_min16(p->ix, p->active), rc_active_max16(p->ix, p->active), 0, &s);
-    rc_slabs_axis(rc_active_min16(p->oy, p->active), rc_active_max16(p->oy, p->active),
-                  rc_active_min16(p->iy, p->active), rc_active_max16(p->iy, p->active), 1, &s);
-    rc_slabs_axis(rc_active_min16(p->oz, p->active), rc_active_max16(p->oz, p->active),
-                  rc_active_min16(p->iz, p->active), rc_active_max16(p->iz, p->active), 2, &s);
-    return s;
-}
-
-/* The per-lane slab test of a packet whose active lanes share an octant (along each axis their
- * inverse directions have one sign), one multiply-add a plane: a box's entry
- * distance along axis a is fma(near side, inv, nearOff) with nearOff = -o * inv - m, its exit
- * fma(far side, inv, farOff) with farOff = -o * inv + m. The sign tells the near side, so no
- * min or max of the two planes is needed. The margin m = |o * inv| 2^-22 outweighs the rounding
- * of o * inv and of the offsets (2 ulp of |o * inv| together), so each distance is within one
- * rounding of the exact (side - o) * inv, entries below and exits above it: no farther from it
- * than the single-ray walk's own distances, which its far distance's widening covers. Packets
- * in several octants, or with an offset that overflows (a huge inverse), are not `usable`. */
-typedef struct RcPacketPlanes {
-    float16 nearOff[3], farOff[3];
-    int nearPlanes[3], farPlanes[3]; /* the near and far sides in rc_bvh_planes */
-    int usable;
-} RcPacketPlanes;
-
-/* Axis a of the planes; returns the lanes whose offsets are finite. */
-static inline int16 rc_planes_axis(float16 o, float16 inv, int positive, int a, RcPacketPlanes* q) {
-    const float16 oi = o * inv;
-    const float16 m = fabs(oi) * 0x1p-22f;
-    q->nearOff[a] = -oi - m;
-    q->farOff[a] = -oi + m;
-    q->nearPlanes[a] = rc_bvh_near_planes(positive, a);
-    q->farPlanes[a] = rc_bvh_far_planes(q->nearPlanes[a]);
-    return isfinite(q->nearOff[a]) & isfinite(q->farOff[a]);
-}
-
-static inline RcPacketPlanes rc_packet_planes(const RcBvhPacket* p, int px, int py, int pz,
-                                              int oneOctant) {
-    RcPacketPlanes q;
-    const int16 finite = rc_planes_axis(p->ox, p->ix, px, 0, &q) &
-                         rc_planes_axis(p->oy, p->iy, py, 1, &q) &
-                         rc_planes_axis(p->oz, p->iz, pz, 2, &q);
-    q.usable = oneOctant && !rc_any16(p->active & ~finite);
-    return q;
-}
-
-/* The lanes' entry (*tn, at least tmin) and widened exit (*tf) distances of child c of nd:
- * with one multiply-add a plane where the planes are usable, else with the single-ray walk's
- * operations lane by lane. */
-static inline void rc_packet_child(const RcBvhPacket* p, const RcPacketPlanes* q,
-                                   __global const RcBvh8Node* nd, uint c, float16* tn,
-                                   float16* tf) {
-    if (q->usable) {
-        __global const float* planes = rc_bvh_planes(nd) + c;
-        const float16 nx = fma((float16)(planes[q->nearPlanes[0]]), p->ix, q->nearOff[0]);
-        const float16 ny = fma((float16)(planes[q->nearPlanes[1]]), p->iy, q->nearOff[1]);
-        const float16 nz = fma((float16)(planes[q->nearPlanes[2]]), p->iz, q->nearOff[2]);
-        const float16 fx = fma((float16)(planes[q->farPlanes[0]]), p->ix, q->farOff[0]);
-        const float16 fy = fma((float16)(planes[q->farPlanes[1]]), p->iy, q->farOff[1]);
-        const float16 fz = fma((float16)(planes[q->farPlanes[2]]), p->iz, q->farOff[2]);
-        *tn = rc_max16(rc_max16(nx, ny), rc_max16(nz, p->tmin));
-        *tf = rc_min16(rc_min16(fx, fy), fz) * 1.0000004f;
-        return;
-    }
-    const float16 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
-    const float16 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
-    const float16 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
-    *tn =
-        rc_max16(rc_max16(rc_min16(ax, bx), rc_min16(ay, by)), rc_max16(rc_min16(az, bz), p->tmin));
-    *tf = rc_min16(rc_min16(rc_max16(ax, bx), rc_max16(ay, by)), rc_max16(az, bz)) * 1.0000004f;
-}
-
-/* Walks the tree once for the packet: nearest hits in (bt, bp, bu, bv), or with anyHit the lanes
- * that found a hit in *blocked (a lane stops at its first). Returns primitive tests per lane. */
-static inline uint16 rc_bvh_trace_packet(const RcBvhPacket* p, int anyHit,
-                                         __global const RcBvh8Node* nodes,
-                                         __global const float* leaves, float16* btOut,
-                                         uint16* bpOut, float16* buOut, float16* bvOut,
-                                         int16* blocked) {
-    uint stackRef[RC_BVH_STACK];
-    float stackT[RC_BVH_STACK];
-    int sp = 0;
-    uint ref = 0;
-    uint16 tests = (uint16)(0);
-    int16 active = p->active;
-    /* The answers stay in registers during the walk. */
-    float16 bt = *btOut, bu = *buOut, bv = *bvOut;
-    uint16 bp = *bpOut;
-    const RcBvhSlabs span = rc_packet_slabs(p);
-    const RcPacketPlanes planes = rc_packet_planes(p, span.positive[0], span.positive[1],
-                                                   span.positive[2], rc_slabs_one_octant(&span));
-    const float spanTmin = rc_active_min16(p->tmin, p->active);
-    const int8 laneBit = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
-    /* The farthest distance an active lane can still improve on. */
-    float far = rc_hmax16_ordered(select((float16)(-INFINITY), bt, active));
-    for (;;) {
-        if (ref & RC_BVH8_LEAF) {
-            const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
-            __global const float* leaf = leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN;
-            /* Without anyHit the lanes stay active through the leaf. */
-            if (!anyHit) tests += as_uint16(active) & (uint16)(count);
-            for (uint k = 0; k < count; ++k) {
-                if (anyHit) tests += as_uint16(active) & (uint16)(1);
-                float16 t, u, v;
-                const int16 crosses = rc_bvh_packet_triangle(p, leaf, count, k, &t, &u, &v);
-                const uint16 prim16 = (uint16)(rc_leaf_prim(leaf, count, k));
-                const int16 hit = active & crosses & ((t < bt) | ((t == bt) & (prim16 < bp)));
-                bt = select(bt, t, hit);
-                bp = select(bp, prim16, as_uint16(hit));
-                bu = select(bu, u, hit);
-                bv = select(bv, v, hit);
-                if (anyHit) {
-                    *blocked |= hit;
-                    active &= ~hit;
-                    if (!rc_any16(active)) {
-                        *btOut = bt, *bpOut = bp, *buOut = bu, *bvOut = bv;
-                        return tests;
-                    }
-                }
-            }
-            far = rc_hmax16_ordered(select((float16)(-INFINITY), bt, active));
-        } else {
-            __global const RcBvh8Node* nd = nodes + ref;
-            const float16 reach = rc_min16(p->tmax, bt);
-            /* Only the children some lane may enter take the per-lane test. */
-            float8 sn = (float8)(spanTmin), sf = (float8)(INFINITY);
-            rc_slabs_test(&span, 0, nd, &sn, &sf);
-            rc_slabs_test(&span, 1, nd, &sn, &sf);
-            rc_slabs_test(&span, 2, nd, &sn, &sf);
-            const int8 may = (sn <= rc_min8(sf * 1.0000004f, (float8)(far))) &
-                             (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
-            const int4 m4 = may.lo | may.hi;
-            const int2 m2 = m4.lo | m4.hi;
-            uint r[8];
-            float t[8];
-            int k = 0;
-            for (int mask = m2.x | m2.y; mask != 0; mask &= mask - 1) {
-                const int c = popcount((mask & -mask) - 1);
-                float16 tn, tf;
-                rc_packet_child(p, &planes, nd, c, &tn, &tf);
-                const int16 enters = active & (tn <= rc_min16(tf, reach));
-                if (!rc_any16(enters)) continue;
-                /* The nearest entry over the lanes that enter orders and culls the child. */
-                const float near = rc_hmin16_ordered(select((float16)(INFINITY), tn, enters));
-                int j = k++;
-                for (; !anyHit && j > 0 && t[j - 1] > near; --j) {
-                    t[j] = t[j - 1];
-                    r[j] = r[j - 1];
-                }
-                t[j] = near;
-                r[j] = nd->child[c];
-            }
-            if (k > 0) {
-                for (int j = k - 1; j > 0; --j) {
-                    stackRef[sp] = r[j];
-                    stackT[sp++] = t[j];
-                }
-                ref = r[0];
-                continue;
-            }
-        }
-        /* An entry no active lane can still improve on is dropped. */
-        for (;;) {
-            if (sp == 0) {
-                *btOut = bt, *bpOut = bp, *buOut = bu, *bvOut = bv;
-                return tests;
-            }
-            --sp;
-            if (stackT[sp] <= far) break;
-        }
-        ref = stackRef[sp];
-    }
-}
-
 /* --- nearest-hit packets walked as two halves of eight lanes ----------------------------------
  * A bundled packet's lanes share fewer nodes than a coherent one's: walked as one, each lane rides
  * along into the nodes and leaves of the other fifteen. Its halves, walked one after the other,
  * visit fewer per lane; on cores that split a 16-lane operation into two of eight lanes (Zen 4)
- * a half costs about half the arithmetic of the whole packet. The operations lane by lane are
- * those of rc_bvh_trace_packet (and so of the single-ray walk's tests), so the hits are the same.
+ * a half costs about half the arithmetic of the whole packet. A half walks as
+ * rc_bvh_trace_packet8, the nearest-hit walk of bvh_packet.inc.cl at eight lanes, so its lanes
+ * find the hits of the whole packet's walk (and of the single-ray walk).
  */
-typedef struct RcBvhPacket8 {
-    float8 ox, oy, oz, dx, dy, dz, ix, iy, iz, tmin, tmax;
-    int8 active;
-} RcBvhPacket8;
-
-static inline int rc_any8(int8 m) {
-#ifdef RC_HAVE_REDUCE_MASK
-    return __builtin_reduce_or(m < 0) != 0;
-#else
-    const int4 m4 = m.lo | m.hi;
-    const int2 m2 = m4.lo | m4.hi;
-    return (m2.x | m2.y) < 0;
-#endif
-}
-static inline float rc_hmin8_ordered(float8 a) {
-    const float4 m4 = select(a.hi, a.lo, a.lo < a.hi);
-    const float2 m2 = select(m4.hi, m4.lo, m4.lo < m4.hi);
-    return m2.x < m2.y ? m2.x : m2.y;
-}
-static inline float rc_hmax8_ordered(float8 a) {
-    const float4 m4 = select(a.hi, a.lo, a.lo > a.hi);
-    const float2 m2 = select(m4.hi, m4.lo, m4.lo > m4.hi);
-    return m2.x > m2.y ? m2.x : m2.y;
-}
-static inline float rc_active_min8(float8 a, int8 active) {
-    const float8 m8 = select((float8)(INFINITY), a, active);
-    const float4 m4 = fmin(m8.lo, m8.hi);
-    const float2 m2 = fmin(m4.lo, m4.hi);
-    return fmin(m2.x, m2.y);
-}
-static inline float rc_active_max8(float8 a, int8 active) {
-    const float8 m8 = select((float8)(-INFINITY), a, active);
-    const float4 m4 = fmax(m8.lo, m8.hi);
-    const float2 m2 = fmax(m4.lo, m4.hi);
-    return fmax(m2.x, m2.y);
-}
 
 /* Lanes 8 * upper .. 8 * upper + 7 of p. */
 static inline RcBvhPacket8 rc_packet_half(const RcBvhPacket* p, int upper) {
@@ -704,177 +502,6 @@ static inline RcBvhPacket8 rc_packet_half(const RcBvhPacket* p, int upper) {
     RC_HALF(ix), RC_HALF(iy), RC_HALF(iz), RC_HALF(tmin), RC_HALF(tmax), RC_HALF(active);
 #undef RC_HALF
     return h;
-}
-
-/* rc_bvh_packet_triangle on eight lanes. */
-static inline int8 rc_bvh_packet_triangle8(const RcBvhPacket8* p, __global const float* leaf,
-                                           uint count, uint k, float8* tOut, float8* uOut,
-                                           float8* vOut) {
-    __global const float* w = leaf + k;
-    const float e1x = w[3 * count], e1y = w[4 * count], e1z = w[5 * count];
-    const float e2x = w[6 * count], e2y = w[7 * count], e2z = w[8 * count];
-    const float8 pvx = p->dy * e2z - e2y * p->dz;
-    const float8 pvy = p->dz * e2x - e2z * p->dx;
-    const float8 pvz = p->dx * e2y - e2x * p->dy;
-    const float8 det = e1x * pvx + e1y * pvy + e1z * pvz;
-    const float8 invDet = 1.0f / det;
-    const float8 tvx = p->ox - w[0];
-    const float8 tvy = p->oy - w[count];
-    const float8 tvz = p->oz - w[2 * count];
-    const float8 u = (tvx * pvx + tvy * pvy + tvz * pvz) * invDet;
-    const float8 qvx = tvy * e1z - e1y * tvz;
-    const float8 qvy = tvz * e1x - e1z * tvx;
-    const float8 qvz = tvx * e1y - e1x * tvy;
-    const float8 v = (p->dx * qvx + p->dy * qvy + p->dz * qvz) * invDet;
-    const float8 t = (e2x * qvx + e2y * qvy + e2z * qvz) * invDet;
-    *tOut = t;
-    *uOut = u;
-    *vOut = v;
-    return (det != 0.0f) & (u >= 0.0f) & (u <= 1.0f) & (v >= 0.0f) & (u + v <= 1.0f) &
-           (t > p->tmin) & (t < p->tmax);
-}
-
-/* rc_packet_slabs of the half's active lanes. */
-static inline RcBvhSlabs rc_packet_slabs8(const RcBvhPacket8* p) {
-    RcBvhSlabs s;
-    rc_slabs_axis(rc_active_min8(p->ox, p->active), rc_active_max8(p->ox, p->active),
-                  rc_active_min8(p->ix, p->active), rc_active_max8(p->ix, p->active), 0, &s);
-    rc_slabs_axis(rc_active_min8(p->oy, p->active), rc_active_max8(p->oy, p->active),
-                  rc_active_min8(p->iy, p->active), rc_active_max8(p->iy, p->active), 1, &s);
-    rc_slabs_axis(rc_active_min8(p->oz, p->active), rc_active_max8(p->oz, p->active),
-                  rc_active_min8(p->iz, p->active), rc_active_max8(p->iz, p->active), 2, &s);
-    return s;
-}
-
-/* RcPacketPlanes on eight lanes. */
-typedef struct RcPacketPlanes8 {
-    float8 nearOff[3], farOff[3];
-    int nearPlanes[3], farPlanes[3];
-    int usable;
-} RcPacketPlanes8;
-
-static inline int8 rc_planes_axis8(float8 o, float8 inv, int positive, int a, RcPacketPlanes8* q) {
-    const float8 oi = o * inv;
-    const float8 m = fabs(oi) * 0x1p-22f;
-    q->nearOff[a] = -oi - m;
-    q->farOff[a] = -oi + m;
-    q->nearPlanes[a] = rc_bvh_near_planes(positive, a);
-    q->farPlanes[a] = rc_bvh_far_planes(q->nearPlanes[a]);
-    return isfinite(q->nearOff[a]) & isfinite(q->farOff[a]);
-}
-
-static inline RcPacketPlanes8 rc_packet_planes8(const RcBvhPacket8* p, const RcBvhSlabs* s) {
-    RcPacketPlanes8 q;
-    const int8 finite = rc_planes_axis8(p->ox, p->ix, s->positive[0], 0, &q) &
-                        rc_planes_axis8(p->oy, p->iy, s->positive[1], 1, &q) &
-                        rc_planes_axis8(p->oz, p->iz, s->positive[2], 2, &q);
-    q.usable = rc_slabs_one_octant(s) && !rc_any8(p->active & ~finite);
-    return q;
-}
-
-/* rc_packet_child on eight lanes. */
-static inline void rc_packet_child8(const RcBvhPacket8* p, const RcPacketPlanes8* q,
-                                    __global const RcBvh8Node* nd, uint c, float8* tn, float8* tf) {
-    if (q->usable) {
-        __global const float* planes = rc_bvh_planes(nd) + c;
-        const float8 nx = fma((float8)(planes[q->nearPlanes[0]]), p->ix, q->nearOff[0]);
-        const float8 ny = fma((float8)(planes[q->nearPlanes[1]]), p->iy, q->nearOff[1]);
-        const float8 nz = fma((float8)(planes[q->nearPlanes[2]]), p->iz, q->nearOff[2]);
-        const float8 fx = fma((float8)(planes[q->farPlanes[0]]), p->ix, q->farOff[0]);
-        const float8 fy = fma((float8)(planes[q->farPlanes[1]]), p->iy, q->farOff[1]);
-        const float8 fz = fma((float8)(planes[q->farPlanes[2]]), p->iz, q->farOff[2]);
-        *tn = rc_max8(rc_max8(nx, ny), rc_max8(nz, p->tmin));
-        *tf = rc_min8(rc_min8(fx, fy), fz) * 1.0000004f;
-        return;
-    }
-    const float8 ax = (nd->loX[c] - p->ox) * p->ix, bx = (nd->hiX[c] - p->ox) * p->ix;
-    const float8 ay = (nd->loY[c] - p->oy) * p->iy, by = (nd->hiY[c] - p->oy) * p->iy;
-    const float8 az = (nd->loZ[c] - p->oz) * p->iz, bz = (nd->hiZ[c] - p->oz) * p->iz;
-    *tn = rc_max8(rc_max8(rc_min8(ax, bx), rc_min8(ay, by)), rc_max8(rc_min8(az, bz), p->tmin));
-    *tf = rc_min8(rc_min8(rc_max8(ax, bx), rc_max8(ay, by)), rc_max8(az, bz)) * 1.0000004f;
-}
-
-/* rc_bvh_trace_packet's nearest-hit walk on eight lanes. */
-static inline uint8 rc_bvh_trace_packet8(const RcBvhPacket8* p, __global const RcBvh8Node* nodes,
-                                         __global const float* leaves, float8* btOut, uint8* bpOut,
-                                         float8* buOut, float8* bvOut) {
-    uint stackRef[RC_BVH_STACK];
-    float stackT[RC_BVH_STACK];
-    int sp = 0;
-    uint ref = 0;
-    uint8 tests = (uint8)(0);
-    const int8 active = p->active;
-    float8 bt = *btOut, bu = *buOut, bv = *bvOut;
-    uint8 bp = *bpOut;
-    const RcBvhSlabs span = rc_packet_slabs8(p);
-    const RcPacketPlanes8 planes = rc_packet_planes8(p, &span);
-    const float spanTmin = rc_active_min8(p->tmin, p->active);
-    const int8 laneBit = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
-    float far = rc_hmax8_ordered(select((float8)(-INFINITY), bt, active));
-    for (;;) {
-        if (ref & RC_BVH8_LEAF) {
-            const uint count = ((ref & ~RC_BVH8_LEAF) >> RC_BVH8_COUNT_SHIFT) + 1;
-            __global const float* leaf = leaves + (ref & RC_BVH8_FIRST_MASK) * RC_BVH_LEAF_ALIGN;
-            tests += as_uint8(active) & (uint8)(count);
-            for (uint k = 0; k < count; ++k) {
-                float8 t, u, v;
-                const int8 crosses = rc_bvh_packet_triangle8(p, leaf, count, k, &t, &u, &v);
-                const uint8 prim8 = (uint8)(rc_leaf_prim(leaf, count, k));
-                const int8 hit = active & crosses & ((t < bt) | ((t == bt) & (prim8 < bp)));
-                bt = select(bt, t, hit);
-                bp = select(bp, prim8, as_uint8(hit));
-                bu = select(bu, u, hit);
-                bv = select(bv, v, hit);
-            }
-            far = rc_hmax8_ordered(select((float8)(-INFINITY), bt, active));
-        } else {
-            __global const RcBvh8Node* nd = nodes + ref;
-            const float8 reach = rc_min8(p->tmax, bt);
-            float8 sn = (float8)(spanTmin), sf = (float8)(INFINITY);
-            rc_slabs_test(&span, 0, nd, &sn, &sf);
-            rc_slabs_test(&span, 1, nd, &sn, &sf);
-            rc_slabs_test(&span, 2, nd, &sn, &sf);
-            const int8 may = (sn <= rc_min8(sf * 1.0000004f, (float8)(far))) &
-                             (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
-            const int4 m4 = may.lo | may.hi;
-            const int2 m2 = m4.lo | m4.hi;
-            uint r[8];
-            float t[8];
-            int k = 0;
-            for (int mask = m2.x | m2.y; mask != 0; mask &= mask - 1) {
-                const int c = popcount((mask & -mask) - 1);
-                float8 tn, tf;
-                rc_packet_child8(p, &planes, nd, c, &tn, &tf);
-                const int8 enters = active & (tn <= rc_min8(tf, reach));
-                if (!rc_any8(enters)) continue;
-                const float near = rc_hmin8_ordered(select((float8)(INFINITY), tn, enters));
-                int j = k++;
-                for (; j > 0 && t[j - 1] > near; --j) {
-                    t[j] = t[j - 1];
-                    r[j] = r[j - 1];
-                }
-                t[j] = near;
-                r[j] = nd->child[c];
-            }
-            if (k > 0) {
-                for (int j = k - 1; j > 0; --j) {
-                    stackRef[sp] = r[j];
-                    stackT[sp++] = t[j];
-                }
-                ref = r[0];
-                continue;
-            }
-        }
-        for (;;) {
-            if (sp == 0) {
-                *btOut = bt, *bpOut = bp, *buOut = bu, *bvOut = bv;
-                return tests;
-            }
-            --sp;
-            if (stackT[sp] <= far) break;
-        }
-        ref = stackRef[sp];
-    }
 }
 
 /* The nearest hits of p's lanes by its two halves' walks. */
@@ -889,8 +516,10 @@ static inline uint16 rc_bvh_trace_halves(const RcBvhPacket* p, __global const Rc
         u[h] = v[h] = (float8)(0.0f);
         prim[h] = (uint8)(RC_NO_HIT);
         tests[h] = (uint8)(0);
+        int8 blocked = (int8)(0);
         if (rc_any8(q.active))
-            tests[h] = rc_bvh_trace_packet8(&q, nodes, leaves, &t[h], &prim[h], &u[h], &v[h]);
+            tests[h] =
+                rc_bvh_trace_packet8(&q, 0, nodes, leaves, &t[h], &prim[h], &u[h], &v[h], &blocked);
     }
     *bt = (float16)(t[0], t[1]);
     *bp = (uint16)(prim[0], prim[1]);

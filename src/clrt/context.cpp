@@ -82,12 +82,17 @@ std::string_view IncludedFile(std::string_view line) {
     return line.substr(0, close);
 }
 
+// Whether a file is appended at each of its includes: code written once for several
+// instantiations, each include under other macros (cl/bvh_packet.inc.cl, one per lane width).
+// Every other file is appended at its first include only, as if guarded.
+bool IncludedEachTime(std::string_view name) { return name.ends_with(".inc.cl"); }
+
 void AppendFile(const std::string& name, const std::string& sharedPrefix,
                 std::set<std::string>& included, std::string& out) {
     const auto& sources = EmbeddedKernelSources();
     auto it = sources.find(name);
     if (it == sources.end()) throw Error("kernel source '" + name + "' is not embedded");
-    if (!included.insert(name).second) return;
+    if (!included.insert(name).second && !IncludedEachTime(name)) return;
     out += "#line 1 \"" + name + "\"\n";
     std::string_view text = it->second;
     for (int lineNo = 1; !text.empty(); ++lineNo) {

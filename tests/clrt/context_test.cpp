@@ -270,6 +270,15 @@ TEST(AssembleProgramSource, ResolvesEachIncludeOnce) {
     EXPECT_THAT(source, HasSubstr("#line 5 \"brute.cl\"\n"));  // after intersect.cl (skipped)
 }
 
+TEST(AssembleProgramSource, ResolvesAnIncFileAtEachInclude) {
+    // bvh.cl includes bvh_packet.inc.cl twice, once per lane width; accel_common.cl includes
+    // bvh.cl again, which is skipped with its includes.
+    const std::string source = AssembleProgramSource({"bvh.cl", "accel_common.cl"});
+    EXPECT_EQ(Count(source, "#line 1 \"bvh_packet.inc.cl\"\n"), 2u);
+    EXPECT_EQ(Count(source, "#line 1 \"bvh.cl\"\n"), 1u);
+    EXPECT_EQ(Count(source, "#include \""), 0u);
+}
+
 // Every line of the assembled source is the line of the file that the #line directives say, and
 // every line of every file is there (except its #include lines), so build logs point right.
 TEST(AssembleProgramSource, LineDirectivesMapEveryLineToItsFile) {
