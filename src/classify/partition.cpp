@@ -389,7 +389,7 @@ void BucketRays(const PartitionIo& io, const bool* active, const CellRule& rule,
     std::vector<std::array<uint32_t, 16>> count(static_cast<size_t>(pieces));
     std::vector<std::array<Bounds6, 16>> bounds(static_cast<size_t>(pieces));
     std::barrier counted(pieces);
-    OnThreads(pieces, [&](int t) {
+    OnThreadsAtOnce(pieces, [&](int t) {
         const uint32_t b = std::min(end, begin + uint32_t(t) * step);
         const uint32_t e = std::min(end, b + step);
         count[size_t(t)].fill(0);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "rayclass/classify/ray5d.h"
+#include "rayclass/core/helper_threads.h"
 
 namespace rayclass::classify {
 
@@ -17,9 +18,17 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr float kFloatMax = 3.402823466e38f;
 constexpr int kCoords = kDims + 1;  // the 5D point and the X where the ray ends
 
-// Runs f(t) for t in [0, n), f(0) on the calling thread.
+// Runs f(t) for t in [0, n), f(0) on the calling thread, the others on helper threads where
+// one is free in time (see OnHelpers): the calls must not wait for each other.
 template <typename F>
 void OnThreads(int n, const F& f) {
+    OnHelpers(n, [&f](int t) { f(t); });
+}
+
+// Runs f(t) for t in [0, n) at once, each on a thread of its own (f(0) on the calling thread):
+// for calls that wait for each other.
+template <typename F>
+void OnThreadsAtOnce(int n, const F& f) {
     std::vector<std::future<void>> others;
     for (int t = 1; t < n; ++t) others.push_back(std::async(std::launch::async, [&f, t] { f(t); }));
     f(0);
