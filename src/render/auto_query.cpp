@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <limits>
 #include <vector>
 
@@ -44,7 +45,7 @@ class AutoQuery final : public RayQuery {
         classified_->BeginGeneration(generation, rays, n, timer);
         NextGeneration();
         if (!onBvh_) Sample(rays, n, timer);
-        lastReturn_ = Clock::now();
+        MarkReturn();
     }
 
     void DescribeGeneration(GenerationStats& gen) const override {
@@ -67,26 +68,28 @@ class AutoQuery final : public RayQuery {
         if (batch) classified_->Recycle(std::move(batch));
     }
 
-    // The classification's cost is what it costs the render thread: this call, and the wait for
-    // the batch's Prepare since the thread's last call here (an upper bound: that also holds
-    // the thread's own work between batches, a few ms). Summing Prepare's time and this call's
-    // instead counted twice the stretches where they overlap and compete for the same cores.
+    // The classification's cost is the process's CPU time over this call and the stretch since
+    // the render thread's last call here, where the worker thread prepared the batch (an upper
+    // bound: that also holds the render thread's own work between batches). Each thread's work
+    // counts once where Prepare and this call overlap, and time without a core not at all.
     QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
                           const cl::Buffer& hits, const ShadeBuffers& shade,
                           KernelTimer& timer) override {
         if (onBvh_) return bvh_->Intersect(rays, n, nullptr, hits, shade, timer);
         const double shading = ShadingSeconds(timer);
         const QueryResult result = classified_->Intersect(rays, n, prepared, hits, shade, timer);
-        seconds_ += SecondsSince(lastReturn_) - (ShadingSeconds(timer) - shading);
+        times_.wall += SecondsSince(lastReturn_);
+        times_.cpu += ProcessCpuSeconds() - lastReturnCpu_;
+        times_.shading += ShadingSeconds(timer) - shading;
         rays_ += n;
-        lastReturn_ = Clock::now();
+        MarkReturn();
         return result;
     }
 
     uint64_t Occluded(const cl::Buffer& shadowRays, std::span<const RcRay> hostRays,
                       const cl::Buffer& blocked, KernelTimer& timer) override {
         const uint64_t tests = classified_->Occluded(shadowRays, hostRays, blocked, timer);
-        lastReturn_ = Clock::now();
+        MarkReturn();
         return tests;
     }
 
@@ -96,11 +99,16 @@ class AutoQuery final : public RayQuery {
     void NextGeneration() {
         if (rays_ > 0 && !onBvh_) {
             costs_.classifiedBefore = costs_.classified;
-            costs_.classified = seconds_ / double(rays_);
+            costs_.classified = times_.QuerySeconds() / double(rays_);
         }
         costs_.bvhSample = 0;
-        seconds_ = 0;
+        times_ = {};
         rays_ = 0;
+    }
+
+    void MarkReturn() {
+        lastReturn_ = Clock::now();
+        lastReturnCpu_ = ProcessCpuSeconds();
     }
 
     // Times the BVH on a sample of the generation's first batch rays[0, n), once the
@@ -117,9 +125,10 @@ class AutoQuery final : public RayQuery {
         onBvh_ = costs_.PreferBvh();
     }
 
-    // Seconds per ray of the BVH on its cheapest sample group, each answered once on the otherwise
-    // idle device, the first sample's after one run that compiles the kernel and faults in the
-    // tree. The cheapest, because the machine's other work only ever adds to a group's time.
+    // CPU seconds per ray of the BVH on its cheapest sample group, each answered once on the
+    // otherwise idle device, the first sample's after one run that compiles the kernel and faults
+    // in the tree. The cheapest, because the machine's other work only ever adds to a group's time
+    // (in CPU time, through the caches it shares).
     double TimeSamples(KernelTimer& timer) {
         double best = std::numeric_limits<double>::infinity();
         for (const std::vector<RcRay>& group : samples_) {
@@ -134,9 +143,9 @@ class AutoQuery final : public RayQuery {
             clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
             if (!sampled_) run();
             sampled_ = true;
-            const auto t0 = Clock::now();
+            const double t0 = ProcessCpuSeconds();
             run();
-            best = std::min(best, SecondsSince(t0) / double(m));
+            best = std::min(best, (ProcessCpuSeconds() - t0) / double(m));
         }
         return best;
     }
@@ -150,17 +159,28 @@ class AutoQuery final : public RayQuery {
     std::unique_ptr<RayQuery> classified_, bvh_;
     std::function<std::unique_ptr<RayQuery>()> makeBvh_;
     Clock::time_point lastReturn_;  // when the render thread last returned from this query
+    double lastReturnCpu_ = 0;      // and the process's CPU seconds then
     bool onBvh_ = false;            // the BVH answers this generation's nearest hits, and the rest
     bool sampled_ = false;          // a sample has run (see TimeSamples)
     QueryCosts costs_;              // what this generation's choice compared
-    // The classification's cost on this generation to the render thread: seconds and rays.
-    double seconds_ = 0;
+    // The classification's seconds on this generation, and its rays.
+    ClassifiedTimes times_;
     uint64_t rays_ = 0;
     std::vector<std::vector<RcRay>> samples_;
     GrowingBuffer sampleRays_, sampleHits_;
 };
 
 }  // namespace
+
+double ProcessCpuSeconds() {
+    timespec t{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return double(t.tv_sec) + double(t.tv_nsec) * 1e-9;
+}
+
+double ClassifiedTimes::QuerySeconds() const {
+    return wall > 0 ? cpu * std::max(0.0, 1.0 - shading / wall) : 0.0;
+}
 
 std::vector<std::vector<RcRay>> PickBvhSample(std::span<const RcRay> rays) {
     const size_t runs = kSampleGroups * kSampleRuns;

@@ -5,10 +5,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "rayclass/clrt/context.h"
@@ -173,6 +176,37 @@ TEST(AutoQueryCosts, TheClassificationIsPredictedToGrowAsItDidLastTime) {
     EXPECT_DOUBLE_EQ((QueryCosts{1e-7, 2e-7, 0}.PredictedClassified()), 1e-7);
     // So a sample dearer than the last measurement can still win on a growing trend.
     EXPECT_TRUE((QueryCosts{3e-7, 2e-7, 4e-7}.PreferBvh()));
+}
+
+// The costs are read on the process's CPU clock: work on any of its threads counts (PoCL's
+// workers are threads of the process), time spent waiting does not (a loaded machine's
+// descheduled stretches, and idle workers, which would count if they spun).
+TEST(AutoQueryCosts, ProcessCpuTimeCountsOtherThreadsWork) {
+    double threadCpu = 0;
+    const double before = ProcessCpuSeconds();
+    std::thread([&] {
+        timespec t{};
+        do {
+            clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+            threadCpu = double(t.tv_sec) + double(t.tv_nsec) * 1e-9;
+        } while (threadCpu < 0.05);
+    }).join();
+    EXPECT_GE(ProcessCpuSeconds() - before, threadCpu);
+}
+
+TEST(AutoQueryCosts, ProcessCpuTimeLeavesOutTheDevicesIdleWorkers) {
+    RenderStats stats;
+    ClRenderer(SharedContext(), TestScene("cornell.json", 32, 32), QuietOptions()).Render(stats);
+    const double before = ProcessCpuSeconds();
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    EXPECT_LT(ProcessCpuSeconds() - before, 0.05);
+}
+
+TEST(AutoQueryCosts, TheClassificationsShadingIsItsShareOfTheWallTime) {
+    EXPECT_DOUBLE_EQ((ClassifiedTimes{2.0, 3.0, 0.5}.QuerySeconds()), 2.25);
+    EXPECT_DOUBLE_EQ((ClassifiedTimes{2.0, 3.0, 0.0}.QuerySeconds()), 3.0);
+    EXPECT_DOUBLE_EQ((ClassifiedTimes{1.0, 1.0, 1.5}.QuerySeconds()), 0.0);  // never negative
+    EXPECT_DOUBLE_EQ((ClassifiedTimes{}.QuerySeconds()), 0.0);               // nothing measured
 }
 
 // Rays numbered by their origin's x, and the numbers of a sample's rays group by group.
