@@ -30,7 +30,10 @@ class AutoQuery final : public RayQuery {
   public:
     AutoQuery(clrt::Context& ctx, std::unique_ptr<RayQuery> classified,
               std::function<std::unique_ptr<RayQuery>()> makeBvh)
-        : ctx_(ctx), classified_(std::move(classified)), makeBvh_(std::move(makeBvh)) {}
+        : ctx_(ctx),
+          cpuClock_(CostInProcessCpuTime(ctx.device().getInfo<CL_DEVICE_TYPE>())),
+          classified_(std::move(classified)),
+          makeBvh_(std::move(makeBvh)) {}
 
     std::string Name() const override { return "auto"; }
     QueryStats Stats() const override { return classified_->Stats(); }
@@ -68,10 +71,11 @@ class AutoQuery final : public RayQuery {
         if (batch) classified_->Recycle(std::move(batch));
     }
 
-    // The classification's cost is the process's CPU time over this call and the stretch since
-    // the render thread's last call here, where the worker thread prepared the batch (an upper
-    // bound: that also holds the render thread's own work between batches). Each thread's work
-    // counts once where Prepare and this call overlap, and time without a core not at all.
+    // The classification's cost is the cost clock's time over this call and the stretch since the
+    // render thread's last call here, where the worker thread prepared the batch (an upper bound:
+    // that also holds the render thread's own work between batches). In process CPU time each
+    // thread's work counts once where Prepare and this call overlap, and time without a core not
+    // at all.
     QueryResult Intersect(const cl::Buffer& rays, uint32_t n, const PreparedBatch* prepared,
                           const cl::Buffer& hits, const ShadeBuffers& shade,
                           KernelTimer& timer) override {
@@ -79,7 +83,7 @@ class AutoQuery final : public RayQuery {
         const double shading = ShadingSeconds(timer);
         const QueryResult result = classified_->Intersect(rays, n, prepared, hits, shade, timer);
         times_.wall += SecondsSince(lastReturn_);
-        times_.cpu += ProcessCpuSeconds() - lastReturnCpu_;
+        times_.cost += CostSeconds() - lastReturnCost_;
         times_.shading += ShadingSeconds(timer) - shading;
         rays_ += n;
         MarkReturn();
@@ -106,9 +110,14 @@ class AutoQuery final : public RayQuery {
         rays_ = 0;
     }
 
+    double CostSeconds() const {
+        return cpuClock_ ? ProcessCpuSeconds()
+                         : std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
+    }
+
     void MarkReturn() {
         lastReturn_ = Clock::now();
-        lastReturnCpu_ = ProcessCpuSeconds();
+        lastReturnCost_ = CostSeconds();
     }
 
     // Times the BVH on a sample of the generation's first batch rays[0, n), once the
@@ -125,10 +134,10 @@ class AutoQuery final : public RayQuery {
         onBvh_ = costs_.PreferBvh();
     }
 
-    // CPU seconds per ray of the BVH on its cheapest sample group, each answered once on the
+    // Cost-clock seconds per ray of the BVH on its cheapest sample group, each answered once on the
     // otherwise idle device, the first sample's after one run that compiles the kernel and faults
     // in the tree. The cheapest, because the machine's other work only ever adds to a group's time
-    // (in CPU time, through the caches it shares).
+    // (in process CPU time, through the caches it shares).
     double TimeSamples(KernelTimer& timer) {
         double best = std::numeric_limits<double>::infinity();
         for (const std::vector<RcRay>& group : samples_) {
@@ -143,9 +152,9 @@ class AutoQuery final : public RayQuery {
             clrt::Check("clFinish", [&] { ctx_.queue().finish(); });
             if (!sampled_) run();
             sampled_ = true;
-            const double t0 = ProcessCpuSeconds();
+            const double t0 = CostSeconds();
             run();
-            best = std::min(best, (ProcessCpuSeconds() - t0) / double(m));
+            best = std::min(best, (CostSeconds() - t0) / double(m));
         }
         return best;
     }
@@ -156,10 +165,11 @@ class AutoQuery final : public RayQuery {
     }
 
     clrt::Context& ctx_;
+    const bool cpuClock_;  // CostInProcessCpuTime of the device
     std::unique_ptr<RayQuery> classified_, bvh_;
     std::function<std::unique_ptr<RayQuery>()> makeBvh_;
     Clock::time_point lastReturn_;  // when the render thread last returned from this query
-    double lastReturnCpu_ = 0;      // and the process's CPU seconds then
+    double lastReturnCost_ = 0;     // and the cost clock's seconds then
     bool onBvh_ = false;            // the BVH answers this generation's nearest hits, and the rest
     bool sampled_ = false;          // a sample has run (see TimeSamples)
     QueryCosts costs_;              // what this generation's choice compared
@@ -178,8 +188,10 @@ double ProcessCpuSeconds() {
     return double(t.tv_sec) + double(t.tv_nsec) * 1e-9;
 }
 
+bool CostInProcessCpuTime(cl_device_type type) { return (type & CL_DEVICE_TYPE_CPU) != 0; }
+
 double ClassifiedTimes::QuerySeconds() const {
-    return wall > 0 ? cpu * std::max(0.0, 1.0 - shading / wall) : 0.0;
+    return wall > 0 ? cost * std::max(0.0, 1.0 - shading / wall) : 0.0;
 }
 
 std::vector<std::vector<RcRay>> PickBvhSample(std::span<const RcRay> rays) {

@@ -178,8 +178,15 @@ TEST(AutoQueryCosts, TheClassificationIsPredictedToGrowAsItDidLastTime) {
     EXPECT_TRUE((QueryCosts{3e-7, 2e-7, 4e-7}.PreferBvh()));
 }
 
-// The costs are read on the process's CPU clock: work on any of its threads counts (PoCL's
-// workers are threads of the process), time spent waiting does not (a loaded machine's
+// A GPU's kernels run off the process's threads: its costs are wall time.
+TEST(AutoQueryCosts, OnlyACpuDevicesCostsAreProcessCpuTime) {
+    EXPECT_TRUE(CostInProcessCpuTime(CL_DEVICE_TYPE_CPU));
+    EXPECT_FALSE(CostInProcessCpuTime(CL_DEVICE_TYPE_GPU));
+    EXPECT_FALSE(CostInProcessCpuTime(CL_DEVICE_TYPE_ACCELERATOR));
+}
+
+// A CPU device's costs are read on the process's CPU clock: work on any of its threads counts
+// (PoCL's workers are threads of the process), time spent waiting does not (a loaded machine's
 // descheduled stretches, and idle workers, which would count if they spun).
 TEST(AutoQueryCosts, ProcessCpuTimeCountsOtherThreadsWork) {
     double threadCpu = 0;

@@ -2,14 +2,14 @@
 // (--accel auto) for nearest hits. Coherent generations (eye rays, first bounces) are the
 // classification's; as rays scatter, its host work grows with every bounce, while the BVH's cost
 // per ray grows far less, so on deep mirror bounces the BVH wins. Each generation, the BVH
-// answers a sample of the new rays; when that costs less CPU time per ray than the
-// classification is predicted to (from the last two generations it answered), the BVH answers
-// this generation and every later one: the classification, measured on the less scattered rays of
-// earlier generations, has no cost to compare a BVH generation with, and one it took back cost
-// several times the BVH's. Shadow rays stay classified from their light, where they stay coherent
-// however scattered their origins, while the BVH's beam walk loses its coherence with them.
-// Both answer every ray exactly alike (the same primitive routines), so the choice changes the
-// time, never the image.
+// answers a sample of the new rays; when that costs less per ray (in process CPU time on a CPU
+// device, CostInProcessCpuTime) than the classification is predicted to (from the last two
+// generations it answered), the BVH answers this generation and every later one: the
+// classification, measured on the less scattered rays of earlier generations, has no cost to
+// compare a BVH generation with, and one it took back cost several times the BVH's. Shadow rays
+// stay classified from their light, where they stay coherent however scattered their origins, while
+// the BVH's beam walk loses its coherence with them. Both answer every ray exactly alike (the same
+// primitive routines), so the choice changes the time, never the image.
 #pragma once
 
 #include <algorithm>
@@ -22,23 +22,30 @@
 
 namespace rayclass::render {
 
-// The CPU seconds all the process's threads have run, PoCL's workers among them: the clock both
-// methods' costs are read on. Wall time also counts the stretches the machine's other work holds
-// the cores, which a whole generation suffers in full while a sample of a few ms often escapes
-// them, so on a loaded machine a wall-time comparison followed the load rather than the methods.
+// The CPU seconds all the process's threads have run, PoCL's workers among them. Wall time also
+// counts the stretches the machine's other work holds the cores, which a whole generation suffers
+// in full while a sample of a few ms often escapes them, so on a loaded machine a wall-time
+// comparison followed the load rather than the methods.
 double ProcessCpuSeconds();
+
+// Whether both methods' costs are read on ProcessCpuSeconds for a device of `type`: only a CPU
+// device runs its kernels on the process's threads. A GPU's kernels take no CPU time of the
+// process, so there a cost in CPU time would leave out the device's work and the costs are wall
+// seconds.
+bool CostInProcessCpuTime(cl_device_type type);
 
 // The classification's time on the render thread over a generation's batches.
 struct ClassifiedTimes {
-    double wall = 0, cpu = 0;  // wall and process CPU seconds
-    double shading = 0;        // the wall seconds of the shading kernel among them
-    // The CPU seconds less the shading's, which the BVH leaves to the renderer after its query:
+    double wall = 0;     // wall seconds
+    double cost = 0;     // the same stretches on the cost clock (CostInProcessCpuTime)
+    double shading = 0;  // the wall seconds of the shading kernel among them
+    // The cost less the shading's, which the BVH leaves to the renderer after its query:
     // shading's share of the wall time, as the kernel's own CPU time is not measured.
     double QuerySeconds() const;
 };
 
-// Cost per ray in CPU seconds of the two ways to answer nearest-hit queries, and the rule that
-// picks the BVH.
+// Cost per ray in seconds of the cost clock (CostInProcessCpuTime) of the two ways to answer
+// nearest-hit queries, and the rule that picks the BVH.
 struct QueryCosts {
     double classified = 0;        // the classification's, on the last generation it answered
     double classifiedBefore = 0;  // and on the one before that (0: not measured)

@@ -20,8 +20,9 @@ struct GenerationStats {
     uint64_t intersectionTests = 0;  // primitive tests of its nearest-hit and shadow queries
     // What answered its nearest-hit and shadow queries (RayQuery::Name(), or what auto chose).
     std::string query, shadowQuery;
-    // --accel auto: the costs per ray (process CPU ns) of nearest-hit queries its choice compared,
-    // the classification's as predicted (auto_query.h); 0: not measured.
+    // --accel auto: the costs per ray (ns; process CPU time on a CPU device, auto_query.h) of
+    // nearest-hit queries its choice compared, the classification's as predicted; 0: not
+    // measured.
     double classifiedNs = 0, bvhSampleNs = 0;
 };
 
