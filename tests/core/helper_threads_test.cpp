@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -27,6 +28,27 @@ TEST(OnHelpers, RunsCallZeroOnTheCallingThread) {
         if (t == 0) zero = std::this_thread::get_id();
     });
     EXPECT_EQ(zero, caller);
+}
+
+// Call 1 goes to a helper while the caller is still busy with call 0 (which waits for it, with
+// a bound, so that a serial OnHelpers fails instead of hanging).
+TEST(OnHelpers, AHelperTakesACallWhileTheCallerIsBusy) {
+    const std::thread::id caller = std::this_thread::get_id();
+    std::atomic<bool> begun{false};
+    std::thread::id one;
+    bool seenByZero = false;
+    OnHelpers(2, [&](int t) {
+        if (t == 1) {
+            one = std::this_thread::get_id();
+            begun = true;
+            return;
+        }
+        const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+        while (!begun && std::chrono::steady_clock::now() < until) std::this_thread::yield();
+        seenByZero = begun;
+    });
+    EXPECT_TRUE(seenByZero);
+    EXPECT_NE(one, caller);
 }
 
 TEST(OnHelpers, NestedAndConcurrentCallsRunEveryCallOnce) {
