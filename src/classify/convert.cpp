@@ -207,8 +207,7 @@ RC_AVX512 size_t ConvertBlocks16(RayView rays, const CommonEnds& ends, const Bou
                                  uint64_t& fromEnd) {
     const size_t n = rays.size();
     size_t i = 0;
-    const __m512i idx = RayOffsets16(rays);
-    const bool packed = rays.Stride() == 8 * sizeof(float);
+    const RayStream16 stream(rays);
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const __m512 blo[3] = {_mm512_set1_ps(sceneBox.lo.x), _mm512_set1_ps(sceneBox.lo.y),
                            _mm512_set1_ps(sceneBox.lo.z)};
@@ -217,9 +216,7 @@ RC_AVX512 size_t ConvertBlocks16(RayView rays, const CommonEnds& ends, const Bou
     Bounds16 bounds;
     for (; i < n; i += 16) {
         const __mmask16 live = LiveLanes16(n, i);
-        if (packed && i + kPackedAhead + 16 <= n) Prefetch16Packed(rays.Floats(i + kPackedAhead));
-        Rays16 r = packed ? Load16Packed(rays.Floats(i), std::min<size_t>(16, n - i))
-                          : Gather16(rays.Floats(i), idx, live);
+        Rays16 r = stream.Load(i, live);
         fromEnd += uint64_t(std::popcount(unsigned(Orient16(ends, live, r))));
         const Axis16 axis = DominantAxis16(r.dx, r.dy, r.dz);
         const Start16 s = Starts16(r, axis, live, blo, bhi);

@@ -224,8 +224,7 @@ RC_AVX512 void AddRuns16(__m512i k, __m512 e, __mmask16 live, uint32_t base, Key
 RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f& box, int bits,
                            uint32_t firstId, KeyOut& out, std::vector<rc_uint>& missed,
                            uint64_t& fromEnd, size_t& done) {
-    const __m512i idx = RayOffsets16(rays);
-    const bool packed = rays.Stride() == 8 * sizeof(float);
+    const RayStream16 stream(rays);
     const __m512 blo[3] = {_mm512_set1_ps(box.lo.x), _mm512_set1_ps(box.lo.y),
                            _mm512_set1_ps(box.lo.z)};
     const __m512 bhi[3] = {_mm512_set1_ps(box.hi.x), _mm512_set1_ps(box.hi.y),
@@ -236,9 +235,7 @@ RC_AVX512 bool BlockKeys16(RayView rays, const CommonEnds& ends, const Bounds3f&
     size_t i = 0;
     for (; i < n; i += 16) {
         const __mmask16 live = LiveLanes16(n, i);
-        if (packed && i + kPackedAhead + 16 <= n) Prefetch16Packed(rays.Floats(i + kPackedAhead));
-        Rays16 r = packed ? Load16Packed(rays.Floats(i), std::min<size_t>(16, n - i))
-                          : Gather16(rays.Floats(i), idx, live);
+        Rays16 r = stream.Load(i, live);
         __m512i which = _mm512_setzero_si512();
         const __mmask16 matched = Orient16(ends, live, r, &which);
         if (const __mmask16 other = __mmask16(live & ~matched)) {

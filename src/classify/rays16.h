@@ -4,6 +4,7 @@
 // its functions run only where UseAvx512() (avx512.h).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 
 #include "avx512.h"
@@ -155,16 +156,35 @@ RC_AVX512 inline Rays16 Load16Packed(const float* at, size_t live) {
     return r;
 }
 
-// How far ahead of its loads a pass that reads packed rays once, in order, prefetches them
-// (Prefetch16Packed): with little work a ray, the hardware's prefetch alone leaves the loads
-// waiting.
-constexpr size_t kPackedAhead = 64;
+// A pass that reads `rays` once, in order, 16 at a time: consecutive rays of 32 bytes are loaded
+// whole (Load16Packed) and prefetched kAhead rays ahead, since with little work a ray the
+// hardware's prefetch alone leaves the loads waiting; rays of another stride are gathered.
+class RayStream16 {
+  public:
+    RC_AVX512 explicit RayStream16(const RayView& rays)
+        : rays_(rays), idx_(RayOffsets16(rays)), packed_(rays.Stride() == 8 * sizeof(float)) {}
 
-// Prefetches 16 consecutive rays of 32 bytes each (their eight cache lines) for Load16Packed.
-RC_AVX512 inline void Prefetch16Packed(const float* at) {
-    const char* bytes = reinterpret_cast<const char*>(at);
-    for (int line = 0; line < 8; ++line) _mm_prefetch(bytes + 64 * line, _MM_HINT_T0);
-}
+    // Rays [i, i + 16) of rays.size() (lanes `live`: LiveLanes16).
+    RC_AVX512 Rays16 Load(size_t i, __mmask16 live) const {
+        const size_t n = rays_.size();
+        if (!packed_) return Gather16(rays_.Floats(i), idx_, live);
+        if (i + kAhead + 16 <= n) Prefetch(rays_.Floats(i + kAhead));
+        return Load16Packed(rays_.Floats(i), std::min<size_t>(16, n - i));
+    }
+
+  private:
+    static constexpr size_t kAhead = 64;
+
+    // The eight cache lines of 16 consecutive rays of 32 bytes.
+    RC_AVX512 static void Prefetch(const float* at) {
+        const char* bytes = reinterpret_cast<const char*>(at);
+        for (int line = 0; line < 8; ++line) _mm_prefetch(bytes + 64 * line, _MM_HINT_T0);
+    }
+
+    RayView rays_;
+    __m512i idx_;
+    bool packed_;
+};
 
 // CommonEnds::Oriented for the live lanes of r, with the same float operations, so both paths
 // take a ray alike. Returns the lanes taken from an end; `which`, when given, gets each such
