@@ -4,7 +4,6 @@
 #include <cstddef>
 #include <cstring>
 #include <mutex>
-#include <numeric>
 
 #include "rayclass/classify/hierarchy.h"
 #include "rayclass/clrt/mapped.h"
@@ -275,11 +274,10 @@ class ClassifiedQuery final : public RayQuery {
         std::span<const uint32_t> vertexLeaves = cb.vertexLeaves;
         std::span<const uint32_t> fragmentLeaves = cb.fragmentLeaves;
         if (shadow) {
-            allLeaves_.resize(cb.batch.leaves.size());
-            std::iota(allLeaves_.begin(), allLeaves_.end(), 0u);
+            ListShadowLeaves(cb);
             const bool packets = ShadowStyle() == KernelStyle::kFragment;
-            vertexLeaves = packets ? std::span<const uint32_t>() : allLeaves_;
-            fragmentLeaves = packets ? allLeaves_ : std::span<const uint32_t>();
+            vertexLeaves = packets ? std::span<const uint32_t>() : shadowLeaves_;
+            fragmentLeaves = packets ? shadowLeaves_ : std::span<const uint32_t>();
         }
         uint64_t tests = QueryVertex(cb, arrays, vertexLeaves, rays, out, shade, timer);
         if (!fragmentLeaves.empty()) {
@@ -288,6 +286,16 @@ class ClassifiedQuery final : public RayQuery {
         if (shadow) return {tests, false};
         ShadeUnshaded(cb, rays, out, *shade, timer);
         return {tests, true};
+    }
+
+    // The shadow batch's leaves that a kernel visits: those with candidates. A leaf without
+    // any blocks none of its rays, whose flags Occluded has already cleared, and its packets
+    // would only load rays (whole lights' views of a bare wall or floor on Conference).
+    void ListShadowLeaves(const ClassifiedBatch& cb) {
+        shadowLeaves_.clear();
+        for (uint32_t l = 0; l < cb.batch.leaves.size(); ++l) {
+            if (cb.batch.leaves[l].candCount > 0) shadowLeaves_.push_back(l);
+        }
     }
 
     // Every slot by the scalar kernel (host time counted from `t0`).
@@ -493,7 +501,7 @@ class ClassifiedQuery final : public RayQuery {
     cl::Kernel queryScalar_, occludedScalar_, gather_, queryVertexShade_, occludedVertex_,
         queryFragment_, occludedFragment_, shadeIds_, writeMisses_;
     ClassifiedBatch shadowBatch_;
-    std::vector<uint32_t> allLeaves_, vertexSlots_, vertexRayLeaf_, blockLeaf_, blockFirst_,
+    std::vector<uint32_t> shadowLeaves_, vertexSlots_, vertexRayLeaf_, blockLeaf_, blockFirst_,
         leafFirstBlock_, packetLeaf_, packetFirst_, testsHost_, unshaded_;
     std::vector<uint8_t> shadedByVertex_;
     cl::Buffer edges_;  // TriangleEdges

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <vector>
@@ -15,11 +17,13 @@
 #include "clrt/device.h"
 #include "quad.h"
 #include "query_io.h"
+#include "rayclass/classify/hierarchy.h"
 #include "rayclass/clrt/context.h"
 #include "rayclass/render/auto_query.h"
 #include "rayclass/render/brute_query.h"
 #include "rayclass/render/bvh_query.h"
 #include "rayclass/render/device_scene.h"
+#include "shadow_ray.h"
 
 namespace rayclass::render {
 namespace {
@@ -180,6 +184,62 @@ TEST(ClassifiedQuery, EachGenerationIsClassifiedAsByANewQuery) {
     EXPECT_EQ(f.Nearest(*a, second, &autoHits), fresh);
     ExpectSameHits(autoHits, bruteHits);
     EXPECT_EQ(f.Occluded(*a, secondShadow), freshShadow);
+}
+
+// Shadow rays toward the nested boxes' light: half from points just beside it, on the side away
+// from the inner box, whose segments reach no primitive (their leaves' lists are empty), half
+// from the inner box's walls, many of them blocked by the box itself.
+std::vector<RcRay> ShadowRaysNearAndFar(const scene::Scene& s, uint32_t n) {
+    const glm::vec3 light = s.lights[0].position;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f), near(0.05f, 0.3f);
+    std::vector<RcRay> rays;
+    while (rays.size() < n) {
+        glm::vec3 o(unit(rng), unit(rng), unit(rng));
+        if (rays.size() % 2 == 0) {
+            const glm::vec3 away(-std::abs(o.x), -std::abs(o.y), -std::abs(o.z));
+            if (glm::length(away) < 0.1f) continue;
+            o = light + near(rng) * glm::normalize(away);
+        } else {
+            o[int(rays.size() / 2 % 3)] = rays.size() % 4 == 1 ? 1.0f : -1.0f;
+        }
+        rays.push_back(ShadowRay(o, light));
+    }
+    return rays;
+}
+
+// The blocked flags of a shadow batch, the flags' buffer set before the query: every flag is
+// the query's, none left from before.
+std::vector<uint8_t> BlockedOverStaleFlags(RayQuery& q, const std::vector<RcRay>& rays) {
+    const uint32_t n = uint32_t(rays.size());
+    const cl::Buffer blocked(TestContext().context(), CL_MEM_READ_WRITE, n);
+    TestContext().queue().enqueueFillBuffer(blocked, uint8_t(1), 0, n);
+    KernelTimer timer;
+    q.Occluded(UploadVector(TestContext(), rays), rays, blocked, timer);
+    std::vector<uint8_t> out(n);
+    TestContext().queue().enqueueReadBuffer(blocked, CL_TRUE, 0, n, out.data());
+    return out;
+}
+
+TEST(ClassifiedQuery, ShadowRaysOfLeavesWithoutCandidatesAreUnblocked) {
+    const Fixture f;
+    const std::vector<RcRay> rays = ShadowRaysNearAndFar(f.scene, 8192);
+    // The classification does leave some rays with no candidates.
+    const classify::LeafBatch batch =
+        classify::Hierarchy(f.scene, classify::Params::ForScene(f.scene))
+            .Classify(classify::RayView(rays.data(), rays.size(), sizeof(RcRay)),
+                      classify::RayUse::kAnyHit);
+    size_t raysWithout = 0;
+    for (const RcLeaf& leaf : batch.leaves) raysWithout += leaf.candCount == 0 ? leaf.rayCount : 0;
+    ASSERT_GT(raysWithout, rays.size() / 4);
+
+    const std::unique_ptr<RayQuery> brute =
+        MakeBruteForceQuery(TestContext(), f.program, f.buffers);
+    const std::vector<uint8_t> want = BlockedAnswers(TestContext(), *brute, rays);
+    const size_t blocked = size_t(std::count(want.begin(), want.end(), uint8_t(1)));
+    ASSERT_GT(blocked, rays.size() / 8);
+    ASSERT_LT(blocked, rays.size() / 2);
+    EXPECT_EQ(BlockedOverStaleFlags(*f.NewQuery(), rays), want);
 }
 
 // Everything shading writes for a batch of eye rays: the hits, radiance and normals, the shadow
