@@ -33,17 +33,18 @@ bool CostModel::ChooseSplit(const Node& node, const Bounds6& tight, uint32_t nRa
                             const ListView& list, uint32_t minCandidates, int& dim) const {
     const Params& p = params_;
     if (nRays < 2 || list.n <= minCandidates || node.depth >= p.maxDepth) return false;
-    float extent[kDims];
-    for (int k = 0; k < kDims; ++k) extent[k] = tight.hi[k] - tight.lo[k];
-    dim = SplitDim(node.face, extent);
-    if (dim < 0) return false;
     const double saved = double(nRays) * ListCost(list) * p.splitGain;
     double cost = 2.0 * double(list.n) * p.boxTestCost + double(nRays) * p.rayMoveCost;
     // Below minRays the split also pays for the leaf it adds: the device runs each leaf as a
     // work-group, and one that is not full still costs about what a full one's first candidate
     // block does. So small groups split only for long lists, as long as the cost function says.
     if (nRays <= p.minRays) cost += double(p.minRays) * 16.0 * p.triangleCost;
-    return saved > cost;
+    // The dimension last: its divisions are wasted on the nodes the cost leaves whole.
+    if (!(saved > cost)) return false;
+    float extent[kDims];
+    for (int k = 0; k < kDims; ++k) extent[k] = tight.hi[k] - tight.lo[k];
+    dim = SplitDim(node.face, extent);
+    return dim >= 0;
 }
 
 int CostModel::SplitDim(int face, const float* extent) const {

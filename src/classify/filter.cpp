@@ -210,6 +210,9 @@ ListFrame MakeListFrame(const float lo[3], const float hi[3]) {
                      ? step
                      : std::nextafter(step, std::numeric_limits<float>::infinity());
     if (!(frame.step > 0.0f)) frame.step = 1.0f;  // every box a point: any step holds it
+    // A box's near X, at most hi[0], rounds down to at most floor(ToSteps(hi[0])), which an end
+    // at or beyond hi[0] reaches: its ToSteps is no less, and float rounding keeps integers.
+    frame.keepsAll = hi[0];
     return frame;
 }
 
@@ -428,10 +431,11 @@ void WriteCandidates(const ListView& list, size_t n, RcCandidate* out) {
 }
 
 size_t CountUpTo(const ListView& list, float endHi) {
-    const float limit = float(ToSteps(*list.frame, 0, endHi)) + kStepMargin;
     // Beams that run to the scene box's far side (eye rays' always) keep the whole list: no
-    // search through it, whose first probes miss the cache on a long list.
-    if (list.n == 0 || float(list.x0[list.n - 1]) <= limit) return list.n;
+    // search through it, whose first probes miss the cache on a long list, and no division.
+    if (list.n == 0 || endHi >= list.frame->keepsAll) return list.n;
+    const float limit = float(ToSteps(*list.frame, 0, endHi)) + kStepMargin;
+    if (float(list.x0[list.n - 1]) <= limit) return list.n;
     return size_t(std::upper_bound(list.x0, list.x0 + list.n, limit,
                                    [](float v, uint16_t q) { return v < float(q); }) -
                   list.x0);

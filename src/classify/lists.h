@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 
 #include "rayclass/classify/params.h"
@@ -23,6 +24,9 @@ namespace rayclass::classify {
 struct ListFrame {
     float base[3] = {0.0f, 0.0f, 0.0f};
     float step = 1.0f;  // world units per step: the largest extent / 65534, rounded up
+    // An end X at or beyond this keeps every entry of the frame's lists (CountUpTo): the frame's
+    // far X, as each box starts within the frame (infinite when there is none).
+    float keepsAll = std::numeric_limits<float>::infinity();
 };
 
 // Entries of a list that a block summary (ListBlocks) bounds together.

@@ -381,6 +381,12 @@ TEST(Filter, CutAtTheEndKeepsEveryBoxStartingBeforeIt) {
             }));
         ASSERT_LE(n, slack) << "end " << endHi;
     }
+    // An end at the boxes' far side or beyond (CountUpTo's shortcut) keeps them all.
+    float far = -INFINITY;
+    for (const WorldBox& b : q.world) far = std::max(far, b.hi[0]);
+    for (const float endHi : {far, std::nextafter(far, INFINITY), 2.0f * far, INFINITY}) {
+        EXPECT_EQ(CountUpTo(view, endHi), q.world.size()) << "end " << endHi;
+    }
 }
 
 // The set-up's list fill (16 boxes at a time where the vector path exists) against BoxInFace and
