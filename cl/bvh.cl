@@ -357,17 +357,23 @@ static inline void rc_slabs_test(const RcBvhSlabs* s, int a, __global const RcBv
 }
 
 /* The packet walk at 16 lanes (RcBvhPacket, rc_bvh_trace_packet, ...) and at eight
- * (RcBvhPacket8, rc_bvh_trace_packet8, ...). */
+ * (RcBvhPacket8, rc_bvh_trace_packet8, ...). The halves of eight lanes drop stack entries lane
+ * by lane: their lanes spread, so an entry often holds for a few of them only; a coherent
+ * packet's lanes share their entries, and its 16-lane entries cost more to keep than they cull. */
 #define RC_W 16
 #define RC_W_NAME(name) name
+#define RC_W_LANE_CULL 0
 #include "bvh_packet.inc.cl"
 #undef RC_W
 #undef RC_W_NAME
+#undef RC_W_LANE_CULL
 #define RC_W 8
 #define RC_W_NAME(name) name##8
+#define RC_W_LANE_CULL 1
 #include "bvh_packet.inc.cl"
 #undef RC_W
 #undef RC_W_NAME
+#undef RC_W_LANE_CULL
 
 /* The packet's nearest hits (bt, bp, bu, bv) as the answers of rays [first, first + 16) below
  * n, a lane without a hit as t = inf. Lane k answers ray order[first + k] where order is given

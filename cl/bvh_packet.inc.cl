@@ -1,9 +1,9 @@
 /* The packet walk of cl/bvh.cl written once for any lane width: included by bvh.cl once per
  * width, with RC_W the lanes (16 or 8, the widths of OpenCL's vectors and of vec16.cl's and
- * bvh.cl's reductions) and RC_W_NAME(name) the name of the packet's types and functions at that
- * width. Every lane takes the same operations at either width, so a lane's hits do not depend on
- * the width it is walked at. A file named *.inc.cl is appended at each of its includes (see
- * AssembleProgramSource). */
+ * bvh.cl's reductions), RC_W_NAME(name) the name of the packet's types and functions at that
+ * width and RC_W_LANE_CULL whether the walk drops stack entries lane by lane. Every lane takes
+ * the same operations at either width, so a lane's hits do not depend on the width it is walked
+ * at. A file named *.inc.cl is appended at each of its includes (see AssembleProgramSource). */
 
 #define RC_W_CAT_(a, b) a##b
 #define RC_W_CAT(a, b) RC_W_CAT_(a, b)
@@ -144,6 +144,12 @@ static inline uintW rc_bvh_trace_packetW(const RcBvhPacketW* p, int anyHit,
                                          floatW* buOut, floatW* bvOut, intW* blocked) {
     uint stackRef[RC_BVH_STACK];
     float stackT[RC_BVH_STACK];
+    /* With RC_W_LANE_CULL, per entry the entry distances of the lanes that entered it (NaN in
+     * the others, which no compare passes): a lane whose entry lies beyond its nearest hit found
+     * since cannot hit nearer in it (the child test's cull by reach), so an entry none of its
+     * lanes still reaches is dropped, where the packet's `far` keeps it for lanes that did not
+     * enter it. */
+    floatW stackLanesT[RC_BVH_STACK];
     int sp = 0;
     uint ref = 0;
     uintW tests = (uintW)(0);
@@ -196,8 +202,11 @@ static inline uintW rc_bvh_trace_packetW(const RcBvhPacketW* p, int anyHit,
                              (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
             const int4 m4 = may.lo | may.hi;
             const int2 m2 = m4.lo | m4.hi;
-            uint r[8];
+            /* The children taken (their slots in nd), nearest first, and per slot the entries of
+             * the lanes that enter it. */
+            uint slot[8];
             float t[8];
+            floatW lanesT[8];
             int k = 0;
             for (int mask = m2.x | m2.y; mask != 0; mask &= mask - 1) {
                 const int c = popcount((mask & -mask) - 1);
@@ -210,28 +219,30 @@ static inline uintW rc_bvh_trace_packetW(const RcBvhPacketW* p, int anyHit,
                 int j = k++;
                 for (; !anyHit && j > 0 && t[j - 1] > near; --j) {
                     t[j] = t[j - 1];
-                    r[j] = r[j - 1];
+                    slot[j] = slot[j - 1];
                 }
                 t[j] = near;
-                r[j] = nd->child[c];
+                slot[j] = c;
+                if (RC_W_LANE_CULL) lanesT[c] = select((floatW)(NAN), tn, enters);
             }
             if (k > 0) {
                 for (int j = k - 1; j > 0; --j) {
-                    stackRef[sp] = r[j];
+                    stackRef[sp] = nd->child[slot[j]];
+                    if (RC_W_LANE_CULL) stackLanesT[sp] = lanesT[slot[j]];
                     stackT[sp++] = t[j];
                 }
-                ref = r[0];
+                ref = nd->child[slot[0]];
                 continue;
             }
         }
-        /* An entry no active lane can still improve on is dropped. */
+        /* An entry no lane can still improve on is dropped. */
         for (;;) {
             if (sp == 0) {
                 *btOut = bt, *bpOut = bp, *buOut = bu, *bvOut = bv;
                 return tests;
             }
             --sp;
-            if (stackT[sp] <= far) break;
+            if (stackT[sp] <= far && (!RC_W_LANE_CULL || rc_anyW(stackLanesT[sp] <= bt))) break;
         }
         ref = stackRef[sp];
     }
