@@ -242,7 +242,11 @@ static inline uintW rc_bvh_trace_packetW(const RcBvhPacketW* p, int anyHit,
                 return tests;
             }
             --sp;
-            if (stackT[sp] <= far && (!RC_W_LANE_CULL || rc_anyW(stackLanesT[sp] <= bt))) break;
+#if RC_W_LANE_CULL
+            if (stackT[sp] <= far && rc_anyW(stackLanesT[sp] <= bt)) break;
+#else
+            if (stackT[sp] <= far) break;
+#endif
         }
         ref = stackRef[sp];
     }
