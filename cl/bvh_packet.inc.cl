@@ -144,12 +144,13 @@ static inline uintW rc_bvh_trace_packetW(const RcBvhPacketW* p, int anyHit,
                                          floatW* buOut, floatW* bvOut, intW* blocked) {
     uint stackRef[RC_BVH_STACK];
     float stackT[RC_BVH_STACK];
-    /* With RC_W_LANE_CULL, per entry the entry distances of the lanes that entered it (NaN in
-     * the others, which no compare passes): a lane whose entry lies beyond its nearest hit found
-     * since cannot hit nearer in it (the child test's cull by reach), so an entry none of its
-     * lanes still reaches is dropped, where the packet's `far` keeps it for lanes that did not
-     * enter it. */
+#if RC_W_LANE_CULL
+    /* Per entry the entry distances of the lanes that entered it (NaN in the others, which no
+     * compare passes): a lane whose entry lies beyond its nearest hit found since cannot hit
+     * nearer in it (the child test's cull by reach), so an entry none of its lanes still reaches
+     * is dropped, where the packet's `far` keeps it for lanes that did not enter it. */
     floatW stackLanesT[RC_BVH_STACK];
+#endif
     int sp = 0;
     uint ref = 0;
     uintW tests = (uintW)(0);
@@ -202,11 +203,12 @@ static inline uintW rc_bvh_trace_packetW(const RcBvhPacketW* p, int anyHit,
                              (laneBit < (int8)(1 << nd->nChildren)) & laneBit;
             const int4 m4 = may.lo | may.hi;
             const int2 m2 = m4.lo | m4.hi;
-            /* The children taken (their slots in nd), nearest first, and per slot the entries of
-             * the lanes that enter it. */
+            /* The children taken (their slots in nd), nearest first. */
             uint slot[8];
             float t[8];
-            floatW lanesT[8];
+#if RC_W_LANE_CULL
+            floatW lanesT[8]; /* per slot the entries of the lanes that enter it */
+#endif
             int k = 0;
             for (int mask = m2.x | m2.y; mask != 0; mask &= mask - 1) {
                 const int c = popcount((mask & -mask) - 1);
@@ -223,12 +225,16 @@ static inline uintW rc_bvh_trace_packetW(const RcBvhPacketW* p, int anyHit,
                 }
                 t[j] = near;
                 slot[j] = c;
-                if (RC_W_LANE_CULL) lanesT[c] = select((floatW)(NAN), tn, enters);
+#if RC_W_LANE_CULL
+                lanesT[c] = select((floatW)(NAN), tn, enters);
+#endif
             }
             if (k > 0) {
                 for (int j = k - 1; j > 0; --j) {
                     stackRef[sp] = nd->child[slot[j]];
-                    if (RC_W_LANE_CULL) stackLanesT[sp] = lanesT[slot[j]];
+#if RC_W_LANE_CULL
+                    stackLanesT[sp] = lanesT[slot[j]];
+#endif
                     stackT[sp++] = t[j];
                 }
                 ref = nd->child[slot[0]];
